@@ -1,0 +1,351 @@
+"""Triangle meshes (P1) with named boundary parts.
+
+`Mesh` wraps a `skfem.MeshTri` and names sets of its boundary facets ("parts").
+Meshes come from `half_disc` (the paper's half ball), `rectangle` or `read_mesh`
+(any 2D triangle file meshio reads, e.g. gmsh .msh 2.2 / 4.1).
+
+Facet and node indices are those of the wrapped skfem mesh. skfem sorts the node
+indices of every triangle (``MeshTri.sort_t``), so ``mesh.mesh.t`` has no fixed
+orientation; skfem's P1 assembly and facet normals do not depend on it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import cached_property
+
+import meshio
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import Delaunay
+import skfem
+
+from vpcontact.errors import CaseError
+
+NormalField = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """A triangle mesh with named boundary parts."""
+
+    mesh: skfem.MeshTri
+    """The scikit-fem mesh (p: (2, nnodes), t: (3, nelems)); its ``boundaries`` hold the parts too."""
+    parts: dict[str, np.ndarray]
+    """Part name -> sorted int64 indices of boundary facets (columns of ``mesh.facets``)."""
+    exact_normals: dict[str, NormalField]
+    """Part -> f(points (2, ...)) -> unit outward normals, same shape; only where the geometry is known exactly."""
+
+    def facets(self, part: str | int) -> np.ndarray:
+        """Facet indices of `part` (an int n means the part named str(n))."""
+        name = str(part)
+        if name not in self.parts:
+            raise CaseError(f"unknown part '{name}'; the mesh has parts: {', '.join(self.part_names)}")
+        return self.parts[name]
+
+    def nodes(self, part: str | int) -> np.ndarray:
+        """Sorted unique node indices of the facets of `part`."""
+        return np.unique(self.mesh.facets[:, self.facets(part)]).astype(np.int64)
+
+    @property
+    def part_names(self) -> list[str]:
+        """The part names, sorted."""
+        return sorted(self.parts)
+
+    @cached_property
+    def h(self) -> float:
+        """The longest edge length."""
+        p, f = self.mesh.p, self.mesh.facets
+        return float(np.sqrt(((p[:, f[0]] - p[:, f[1]]) ** 2).sum(axis=0)).max())
+
+    @property
+    def diameter(self) -> float:
+        """The diameter (diagonal length) of the bounding box of the nodes."""
+        p = self.mesh.p
+        return float(np.linalg.norm(p.max(axis=1) - p.min(axis=1)))
+
+
+def _positive(name: str, value: float) -> float:
+    """`value` as a float, or CaseError unless it is finite and > 0."""
+    value = float(value)
+    if not (np.isfinite(value) and value > 0):
+        raise CaseError(f"{name} must be a positive number, got {value}")
+    return value
+
+
+def _wrap(p: np.ndarray, t: np.ndarray, classify: Callable[[np.ndarray], dict[str, np.ndarray]],
+          exact_normals: dict[str, NormalField]) -> Mesh:
+    """Build a `Mesh` from nodes `p` (2, n) and triangles `t` (3, m).
+
+    `classify(midpoints (2, k))` returns part name -> boolean mask over the k boundary
+    facets; the masks must partition the boundary (checked).
+    """
+    tri = skfem.MeshTri(np.ascontiguousarray(p), np.ascontiguousarray(t))
+    boundary = tri.boundary_facets().astype(np.int64)
+    masks = classify(tri.p[:, tri.facets[:, boundary]].mean(axis=1))
+    if not np.array_equal(np.sum(list(masks.values()), axis=0), np.ones(boundary.size)):
+        raise RuntimeError("boundary facets do not split exactly into the parts")
+    parts = {name: boundary[mask] for name, mask in masks.items()}
+    return Mesh(tri.with_boundaries(parts), parts, exact_normals)
+
+
+def _signed_areas(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Signed areas of triangles `t` (positive when counter-clockwise)."""
+    a, b, c = p[:, t[0]], p[:, t[1]], p[:, t[2]]
+    return 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+
+def _smooth(p: np.ndarray, t: np.ndarray, movable: np.ndarray, sweeps: int) -> np.ndarray:
+    """Laplacian smoothing: each sweep moves the `movable` nodes to the mean of their
+    neighbours; a sweep that would make a triangle's signed area drop below a tenth of
+    its previous value (or invert it) is discarded and smoothing stops."""
+    n = p.shape[1]
+    i = np.concatenate((t[0], t[1], t[2]))
+    j = np.concatenate((t[1], t[2], t[0]))
+    adjacency = sp.coo_matrix((np.ones(i.size), (i, j)), shape=(n, n)).tocsr()
+    adjacency = ((adjacency + adjacency.T) > 0).astype(float)
+    averaging = sp.diags(1.0 / np.asarray(adjacency.sum(axis=1)).ravel()) @ adjacency
+    area = _signed_areas(p, t)
+    for _ in range(sweeps):
+        q = p.copy()
+        q[:, movable] = (averaging @ p.T).T[:, movable]
+        new_area = _signed_areas(q, t)
+        if np.any(new_area < 0.1 * area):
+            break
+        p, area = q, new_area
+    return p
+
+
+def half_disc(h: float, radius: float = 1.0) -> Mesh:
+    """Quasi-uniform mesh of the half disc {x > 0, x² + (y − R)² < R²} (center (0, R)).
+
+    Parts: "axis" (x = 0), "bottom_arc" (arc from (0, 0) to (R, R)), "top_arc" (arc from
+    (R, R) to (0, 2R)), all with exact outward normals. Requires 0 < h ≤ R.
+
+    Each quarter arc has ceil((π/2)·R/h) facets of equal arc length, the axis ceil(2R/h)
+    equal facets; (0, 0), (R, R) and (0, 2R) are nodes. Interior nodes: one layer parallel
+    to the arc at depth √3/2·h, staggered against the arc nodes, and inside it a hexagonal
+    lattice of spacing h. The triangulation is Delaunay (the lattice's own triangles away
+    from the boundary, scipy's Delaunay near it); the interior nodes are then Laplacian-
+    smoothed. Measured for R/h in [1, 300]: longest edge ≤ 1.45 h, smallest angle ≥ 27°;
+    for R/h ≥ 5 the triangle count is within 5 % of (πR²/2)/(√3 h²/4).
+    """
+    h = _positive("h", h)
+    R = _positive("radius", radius)
+    if h > R:
+        raise CaseError(f"h = {h} must not exceed the radius {R}")
+    n_arc = int(np.ceil(0.5 * np.pi * R / h))
+    n_axis = int(np.ceil(2.0 * R / h))
+
+    # Boundary: the arc counter-clockwise from (0, 0) to (0, 2R), then the axis downwards.
+    angle = np.linspace(-0.5 * np.pi, 0.5 * np.pi, 2 * n_arc + 1)
+    arc = np.vstack((R * np.cos(angle), R + R * np.sin(angle)))
+    arc[0, [0, -1]] = 0.0
+    arc[:, n_arc] = (R, R)
+    axis_y = 2.0 * R * np.arange(n_axis - 1, 0, -1) / n_axis
+    axis = np.vstack((np.zeros_like(axis_y), axis_y))
+
+    # A layer of nodes at depth √3/2·h below the arc, between the arc nodes (spacing ≥ 0.8 h
+    # when the mesh is so coarse that the inner circle is much shorter than the arc). Nodes
+    # nearer than √3/2·h to the axis (at the corners) are moved out to x = √3/2·h, and
+    # dropped if that brings them within h/2 of a node that was not moved.
+    dx = 0.5 * np.sqrt(3.0) * h
+    n_layer = max(0, min(2 * n_arc, int(np.ceil(np.pi * (R - dx) / (0.8 * h)))))
+    layer_angle = np.linspace(-0.5 * np.pi, 0.5 * np.pi, 2 * n_layer + 1)[1::2]
+    layer = np.vstack(((R - dx) * np.cos(layer_angle), R + (R - dx) * np.sin(layer_angle)))
+    clamped = layer[0] < dx
+    layer[0, clamped] = dx
+    gap = np.linalg.norm(layer[:, clamped, None] - layer[:, None, ~clamped], axis=0).min(axis=1, initial=np.inf)
+    layer = np.hstack((layer[:, ~clamped], layer[:, clamped][:, gap >= 0.5 * h]))
+
+    # Interior: hexagonal lattice of spacing h, point (k, i) at k·a + i·b + (0, R) with
+    # a = (√3/2·h, h/2), b = (0, h), k ≥ 1 (columns parallel to the axis); points closer
+    # than h/2 to the layer's circle are dropped.
+    n_col = int(R / dx)
+    i_min = int(np.floor(-R / h - 0.5 * n_col)) - 1
+    K, I = np.meshgrid(np.arange(1, n_col + 1), np.arange(i_min, int(np.ceil(R / h)) + 2), indexing="ij")
+    lattice = np.stack((K * dx, R + (0.5 * K + I) * h))
+    radius_of = np.hypot(lattice[0], lattice[1] - R)
+    kept = radius_of <= R - dx - 0.5 * h
+
+    p = np.hstack((arc, axis, layer, lattice[:, kept]))
+    n_boundary = arc.shape[1] + axis.shape[1]
+    index = np.full(kept.shape, -1, dtype=np.int64)
+    index[kept] = np.arange(n_boundary + layer.shape[1], p.shape[1])
+
+    # Far from the boundary the Delaunay triangulation is the lattice's own: take its
+    # triangles there ("core": all vertices of column ≥ 2, 2h inside the layer's circle) and
+    # triangulate only the remaining points. Cell (k, i) of the lattice holds the triangles
+    # (k,i),(k+1,i),(k,i+1) and (k+1,i),(k+1,i+1),(k,i+1), both counter-clockwise.
+    core_node = kept & (K >= 2) & (radius_of <= R - dx - 2.0 * h)
+    lower = core_node[:-1, :-1] & core_node[1:, :-1] & core_node[:-1, 1:]
+    upper = core_node[1:, :-1] & core_node[1:, 1:] & core_node[:-1, 1:]
+    core_t = np.hstack((
+        np.vstack((index[:-1, :-1][lower], index[1:, :-1][lower], index[:-1, 1:][lower])),
+        np.vstack((index[1:, :-1][upper], index[1:, 1:][upper], index[:-1, 1:][upper])),
+    ))
+    inner = np.bincount(core_t.ravel(), minlength=p.shape[1]) == 6
+    rest = np.flatnonzero(~inner)
+    t = rest[Delaunay(p[:, rest].T).simplices.T]
+    # drop the triangles filling the core: their centroid lies in a core lattice cell
+    kf = p[0, t].mean(axis=0) / dx
+    i_f = (p[1, t].mean(axis=0) - R) / h - 0.5 * kf
+    k0, i0 = np.floor(kf).astype(np.int64), np.floor(i_f).astype(np.int64)
+    in_upper = (kf - k0) + (i_f - i0) > 1.0
+    # cell (k, i) is entry (k, i - i_min + 1) of the padded masks; out of range -> False border
+    k0 = np.clip(k0, 0, lower.shape[0] + 1)
+    i0 = np.clip(i0 - i_min + 1, 0, lower.shape[1] + 1)
+    in_core = np.where(in_upper, np.pad(upper, 1)[k0, i0], np.pad(lower, 1)[k0, i0])
+    t = t[:, ~in_core]
+    flip = _signed_areas(p, t) < 0
+    t[1:, flip] = t[2:0:-1, flip]
+    t = np.hstack((core_t, t))
+    p = _smooth(p, t, np.arange(p.shape[1]) >= n_boundary, sweeps=6)
+
+    center = np.array([0.0, R])
+
+    def radial(x: np.ndarray) -> np.ndarray:
+        d = x - center.reshape((2,) + (1,) * (x.ndim - 1))
+        return d / np.sqrt((d**2).sum(axis=0))
+
+    def axis_normal(x: np.ndarray) -> np.ndarray:
+        out = np.zeros_like(x, dtype=float)
+        out[0] = -1.0
+        return out
+
+    def classify(mid: np.ndarray) -> dict[str, np.ndarray]:
+        on_axis = mid[0] < 1e-9 * h
+        return {"axis": on_axis, "bottom_arc": ~on_axis & (mid[1] < R), "top_arc": ~on_axis & (mid[1] > R)}
+
+    mesh = _wrap(p, t, classify, {"axis": axis_normal, "bottom_arc": radial, "top_arc": radial})
+    used = np.bincount(t.ravel(), minlength=p.shape[1]) > 0
+    if mesh.parts["bottom_arc"].size != n_arc or mesh.parts["axis"].size != n_axis or not used.all():
+        raise RuntimeError("half_disc: the triangulation does not follow the boundary nodes or misses a node")
+    return mesh
+
+
+def rectangle(width: float, height: float, h: float) -> Mesh:
+    """Structured mesh of [0, width] × [0, height] (`skfem.MeshTri.init_tensor`) with
+    ceil(width/h) × ceil(height/h) equal cells, each cut into two triangles.
+
+    Parts "left" (x = 0), "right" (x = width), "bottom" (y = 0), "top" (y = height),
+    all with exact normals.
+    """
+    width = _positive("width", width)
+    height = _positive("height", height)
+    h = _positive("h", h)
+    nx, ny = int(np.ceil(width / h)), int(np.ceil(height / h))
+    tensor = skfem.MeshTri.init_tensor(np.linspace(0.0, width, nx + 1), np.linspace(0.0, height, ny + 1))
+    tol = 1e-9 * min(width / nx, height / ny)
+
+    def classify(mid: np.ndarray) -> dict[str, np.ndarray]:
+        return {
+            "left": mid[0] < tol,
+            "right": mid[0] > width - tol,
+            "bottom": mid[1] < tol,
+            "top": mid[1] > height - tol,
+        }
+
+    def constant(normal: tuple[float, float]) -> NormalField:
+        def field(x: np.ndarray) -> np.ndarray:
+            out = np.empty_like(x, dtype=float)
+            out[0], out[1] = normal
+            return out
+
+        return field
+
+    normals = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "bottom": (0.0, -1.0), "top": (0.0, 1.0)}
+    return _wrap(tensor.p, tensor.t, classify, {name: constant(n) for name, n in normals.items()})
+
+
+def _edge_keys(nodes: np.ndarray, n: int) -> np.ndarray:
+    """Integer key min·n + max for each node pair (column) of `nodes` (2, k)."""
+    nodes = np.sort(nodes.astype(np.int64), axis=0)
+    return nodes[0] * n + nodes[1]
+
+
+def read_mesh(path: str | os.PathLike) -> Mesh:
+    """Read a 2D triangle mesh with meshio (gmsh .msh 2.2 / 4.1, or any format meshio reads).
+
+    Only linear "triangle" cells are used; nodes that no triangle uses are dropped and the
+    rest renumbered in their file order; a z coordinate must be zero and is dropped.
+    Every "line" cell with a "gmsh:physical" tag > 0 joins the part named by the tag number
+    (str) and, if the file names that dimension-1 physical group, by its name too; each
+    such line must be a boundary edge of the triangle mesh. Lines without a physical tag
+    (or tag 0, gmsh's "none") are ignored. No exact normals. skfem sorts each triangle's
+    nodes itself, so any orientation in the file is accepted. Any problem raises CaseError
+    naming the file.
+    """
+    label = os.fspath(path)
+    # meshio prints its per-format failures and then calls sys.exit(1) when no reader
+    # accepts the file; other problems surface as assorted exceptions.
+    with contextlib.redirect_stdout(io.StringIO()) as said, contextlib.redirect_stderr(said):
+        try:
+            data = meshio.read(path)
+        except (Exception, SystemExit) as exc:
+            failure = exc
+        else:
+            failure = None
+    if failure is not None:
+        reason = str(failure) if isinstance(failure, Exception) else said.getvalue()
+        reason = " ".join(reason.replace("Error:", "").split()) or type(failure).__name__
+        raise CaseError(f"cannot read mesh file '{label}': {reason}") from failure
+
+    triangles = [block.data for block in data.cells if block.type == "triangle"]
+    if not triangles:
+        raise CaseError(f"mesh file '{label}' has no triangles")
+    t = np.vstack(triangles).T.astype(np.int64)
+    used, t = np.unique(t, return_inverse=True)
+    t = t.reshape(3, -1)
+    renumber = np.full(len(data.points), -1, dtype=np.int64)
+    renumber[used] = np.arange(used.size)
+
+    points = np.asarray(data.points, dtype=float)[used].T
+    if points.shape[0] == 3:
+        scale = max(float(np.abs(points[:2]).max()), 1.0)
+        if np.abs(points[2]).max() > 1e-12 * scale:
+            raise CaseError(f"mesh file '{label}' is not a 2D mesh (nonzero z coordinates)")
+        points = points[:2]
+
+    tri = skfem.MeshTri(np.ascontiguousarray(points), np.ascontiguousarray(t))
+    boundary = tri.boundary_facets().astype(np.int64)
+    keys = _edge_keys(tri.facets[:, boundary], used.size)
+    order = np.argsort(keys)
+    keys, boundary = keys[order], boundary[order]
+
+    physical = data.cell_data.get("gmsh:physical", [None] * len(data.cells))
+    line_nodes, line_tags = [], []
+    for block, tags in zip(data.cells, physical):
+        if block.type == "line" and tags is not None:
+            tags = np.asarray(tags, dtype=np.int64)
+            line_nodes.append(block.data[tags > 0].T)
+            line_tags.append(tags[tags > 0])
+
+    parts: dict[str, np.ndarray] = {}
+    if line_nodes:
+        nodes = renumber[np.hstack(line_nodes)]
+        tags = np.concatenate(line_tags)
+        line_keys = _edge_keys(nodes, used.size)
+        where = np.minimum(np.searchsorted(keys, line_keys), keys.size - 1)
+        bad = np.flatnonzero((nodes < 0).any(axis=0) | (keys[where] != line_keys))
+        if bad.size:
+            raise CaseError(
+                f"mesh file '{label}': line of physical group {tags[bad[0]]} is not a boundary edge "
+                f"of the triangles ({bad.size} such lines)"
+            )
+        facets = boundary[where]
+        for tag in np.unique(tags):
+            parts[str(tag)] = np.unique(facets[tags == tag])
+        for name, (tag, dim) in ((k, v[:2]) for k, v in data.field_data.items()):
+            if dim != 1 or str(tag) not in parts:
+                continue
+            if name in parts and not np.array_equal(parts[name], parts[str(tag)]):
+                raise CaseError(
+                    f"mesh file '{label}': physical name '{name}' (group {tag}) clashes with physical group {name}"
+                )
+            parts[name] = parts[str(tag)]
+    return Mesh(tri.with_boundaries(parts), parts, {})

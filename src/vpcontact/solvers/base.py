@@ -1,0 +1,68 @@
+"""What every step solver shares: the step data, the solution record, and the contact residual.
+
+At step n the discrete problem (DESIGN §3) is: find u (free dofs) and λ (one per contact node) with
+    A u + Nᵀ (f(d) + λ) = b,                 f_i(d) = w_i ρ K(ξ_i^{n−1} + k d_i⁺) p(d_i),
+    C(d, λ) = λ − max(0, λ + r (d − g)) = 0  (Alart–Curnier: λ ≥ 0, d ≤ g, λ (d − g) = 0),
+with d = N u − g0. C / r = min(λ / r, g − d) is the complementarity error in length units.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..contact import ContactLaw
+
+
+@dataclass(frozen=True)
+class StepData:
+    """The data of one step problem: right-hand side b_n = F(t_n) − Bᵀz_n, law, history ξ^{n−1}, k."""
+
+    b: np.ndarray
+    law: ContactLaw
+    xi_prev: np.ndarray
+    k: float
+
+
+@dataclass(frozen=True)
+class StepSolution:
+    """A step solver's answer and how it got there."""
+
+    u: np.ndarray  # displacement at the free dofs
+    lam: np.ndarray  # rigid-base nodal force λ_i ≥ 0
+    d: np.ndarray  # penetration d_i
+    active: np.ndarray  # nodes held by the rigid base (λ + r (d − g) > 0)
+    iterations: int
+    residual: float  # ‖A u + Nᵀ(f + λ) − b‖ / max(‖b‖, ‖Nᵀ(f + λ)‖)
+    complementarity: float  # max_i |min(λ_i / r, g − d_i)|, a length
+    converged: bool
+    message: str = ""
+
+
+@dataclass(frozen=True)
+class ContactState:
+    """The contact law evaluated at (d, λ): nodal forces, tangents, active set and C."""
+
+    force: np.ndarray  # f_i(d), the soft layer's nodal force
+    tangent: np.ndarray  # ∂f_i/∂d_i (generalized)
+    active: np.ndarray
+    C: np.ndarray
+
+    @classmethod
+    def evaluate(cls, step: StepData, weights: np.ndarray, d: np.ndarray, lam: np.ndarray, r: float):
+        pressure, dpressure = step.law.pressure(d, step.xi_prev, step.k)
+        g = step.law.g
+        trial = lam + r * (d - g) if np.isfinite(g) else np.full_like(d, -np.inf)
+        C = lam - np.maximum(trial, 0.0)
+        return cls(weights * pressure, weights * dpressure, trial > 0.0, C)
+
+
+def default_augmentation(A, N) -> float:
+    """r = the median normal stiffness ν_iᵀ A_ii ν_i at the contact nodes: same units as the
+    problem, so no tuning is needed."""
+    if N.shape[0] == 0:
+        return 1.0
+    diagonal = np.asarray((N @ A).multiply(N).sum(axis=1)).ravel()
+    positive = diagonal[diagonal > 0.0]
+    return float(np.median(positive)) if positive.size else 1.0

@@ -1,0 +1,67 @@
+"""The quasistatic time loop (Sect. 3 of the paper, DESIGN §2).
+
+At t_n = n k:
+    z_n   = σ_0 − ℰε(u_0) + Σ_{j<n} k 𝒢(σ_j, ε(u_j))         (explicit viscoplastic history, per element)
+    b_n   = F(t_n) − Bᵀ z_n
+    (u_n, λ_n) solves the step problem with ξ^{n−1}             (one solver call)
+    ξ_n   = ξ_{n−1} + k (d_n)⁺                                  (implicit rectangle rule for (2.15))
+    σ_n   = ℰε(u_n) + z_n                                       (the discrete (2.28))
+"""
+
+from __future__ import annotations
+
+import time as clock
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from .assembly import element_strain, stress_force
+from .contact import node_status
+from .problem import Problem
+from .material import von_mises
+from .results import Fields, Result
+from .solvers import StepData, make_solver
+
+
+def solve_problem(problem: Problem, *, progress: bool = False) -> Result:
+    """Run the time loop of ``problem`` and return the result (status "failed" if a step fails)."""
+    started = clock.perf_counter()
+    case, free, surface, law = problem.case, problem.free, problem.surface, problem.law
+    options = case.solver
+    A = problem.A[free][:, free].tocsr()
+    N = surface.operator[:, free].tocsr()
+    solver = make_solver(options.method, A, N, surface.weights, surface.gap0, augmentation=options.augmentation,
+                         tolerance=options.tolerance, max_iterations=options.max_iterations,
+                         length_scale=problem.mesh.diameter)
+    result = Result.start(problem, solver)
+    nelements = problem.mesh.mesh.t.shape[1]
+    u = np.zeros(problem.basis.N)
+    lam = np.zeros(surface.size)
+    xi = np.zeros(surface.size)
+    z = np.zeros((2, 2, nelements))  # σ_0 − ℰε(u_0) with zero initial data
+
+    with tqdm(total=len(problem.times), disable=not progress, unit="step", desc="time steps") as bar:
+        for n, t in enumerate(problem.times, start=1):
+            b = problem.loads(t)
+            if problem.viscoplastic is not None:
+                b -= stress_force(problem.basis, z)
+            step = StepData(b[free], law, xi, problem.k)
+            solution = solver.solve(step, u[free], lam)
+            if not solution.converged:
+                result.fail(n, t, solution)
+                break
+            u[free], lam, d = solution.u, solution.lam, solution.d
+            compliance, _ = law.pressure(d, xi, problem.k)
+            xi = xi + problem.k * np.maximum(d, 0.0)
+            strain = element_strain(problem.basis, u)
+            sigma = problem.elasticity.stress(strain) + z
+            if problem.viscoplastic is not None:
+                z = z + problem.k * problem.viscoplastic(sigma, strain)
+            sigma33 = problem.elasticity.out_of_plane_stress(strain)
+            fields = Fields(displacement=u[problem.basis.nodal_dofs].T.copy(), stress=np.moveaxis(sigma, -1, 0),
+                            stress33=sigma33, von_mises=von_mises(sigma, sigma33))
+            result.record(n, t, solution, fields, xi=xi, K=law.K(xi), compliance=compliance,
+                          status=node_status(d, solution.active))
+            bar.update()
+    result.finish(clock.perf_counter() - started)
+    return result

@@ -1,0 +1,46 @@
+"""Shared helpers for the tests: small cases built as dicts."""
+
+import copy
+
+import pytest
+
+
+def rectangle_case(**contact) -> dict:
+    """A block [0, 1] × [0, 0.5] on rollers at its sides, pushed down by a uniform traction c·t on
+    its top onto the foundation under its bottom (the uniform state: every contact node alike)."""
+    stiffness = contact.pop("stiffness", {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": 1.0})
+    return {
+        "mesh": {"shape": "rectangle", "width": 1.0, "height": 0.5, "h": 0.125},
+        "material": {"E": 1000.0, "nu": 0.3},
+        "boundary": {
+            "dirichlet": [{"part": "left", "components": ["x"]}, {"part": "right", "components": ["x"]}],
+            "traction": [{"part": "top", "value": ["0", "-100*t"]}],
+        },
+        "contact": {"part": "bottom", "g": 0.2, "stiffness": stiffness, **contact},
+        "time": {"T": 1.1, "steps": 11},
+        "solver": {"tolerance": 1e-13},
+        "output": {"field_steps": "none"},
+    }
+
+
+def half_disc_case(h=0.1, **contact) -> dict:
+    """The paper's half disc (roller on the axis, vertical traction on the upper arc) on a coarse mesh."""
+    stiffness = contact.pop("stiffness", {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": 1.0})
+    load = contact.pop("load", 20.0)
+    return {
+        "mesh": {"shape": "half_disc", "h": h},
+        "material": {"E": 1000.0, "nu": 0.3},
+        "boundary": {
+            "dirichlet": [{"part": "axis", "components": ["x"]}],
+            "traction": [{"part": "top_arc", "value": ["0", f"-{load}*t"]}],
+        },
+        "contact": {"part": "bottom_arc", "g": 0.2, "probe": [0.0, 0.0], "stiffness": stiffness, **contact},
+        "time": {"T": 1.1, "steps": 11},
+        "solver": {"tolerance": 1e-12},
+        "output": {"field_steps": "none"},
+    }
+
+
+@pytest.fixture
+def deep_copy():
+    return copy.deepcopy
