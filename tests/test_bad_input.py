@@ -46,6 +46,7 @@ CASES = [
     (['boundary.traction[0].value=["0"]'], ["boundary.traction[0].value", "expected 2 values"]),
     (['contact.gap="t"'], ["contact.gap", "unknown name 't'"]),
     (['mesh.file="missing.msh"'], ["mesh: give exactly one of mesh.shape and mesh.file"]),
+    (["mesh.width=2"], ['mesh.width is not used with mesh.shape = "half_disc"']),
     (['contact.p="power"'], ["contact.exponent"]),
     (["output.field_steps=[20]"], ["output.field_steps", "after the last step"]),
 ]

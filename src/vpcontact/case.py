@@ -50,9 +50,9 @@ class MeshSection(_Section):
     shape: Optional[Literal["half_disc", "rectangle"]] = None
     file: Optional[str] = None
     h: Optional[PositiveFloat] = None
-    radius: PositiveFloat = 1.0  # half_disc
-    width: PositiveFloat = 1.0  # rectangle
-    height: PositiveFloat = 1.0  # rectangle
+    radius: Optional[PositiveFloat] = None  # half_disc, default 1
+    width: Optional[PositiveFloat] = None  # rectangle, default 1
+    height: Optional[PositiveFloat] = None  # rectangle, default 1
 
     @model_validator(mode="after")
     def _one_source(self):
@@ -60,6 +60,15 @@ class MeshSection(_Section):
             raise ValueError("mesh: give exactly one of mesh.shape and mesh.file")
         if self.shape is not None and self.h is None:
             raise ValueError(f"missing required value 'mesh.h' (the element size of mesh.shape = \"{self.shape}\")")
+        sizes = {"half_disc": ("radius",), "rectangle": ("width", "height"), None: ()}[self.shape]
+        for key in ("h", "radius", "width", "height"):
+            if key in sizes and getattr(self, key) is None:
+                setattr(self, key, 1.0)
+            elif key != "h" and key not in sizes and getattr(self, key) is not None:
+                where = f"mesh.shape = \"{self.shape}\"" if self.shape else "mesh.file"
+                raise ValueError(f"mesh.{key} is not used with {where}")
+        if self.file is not None and self.h is not None:
+            raise ValueError("mesh.h is not used with mesh.file (the file fixes the elements)")
         return self
 
 

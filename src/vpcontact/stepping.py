@@ -62,6 +62,9 @@ def solve_problem(problem: Problem, *, progress: bool = False) -> Result:
                             stress33=sigma33, von_mises=von_mises(sigma, sigma33))
             result.record(n, t, solution, fields, xi=xi, K=law.K(xi), compliance=compliance,
                           status=node_status(d, solution.active))
+            row = result.rows[-1]
+            bar.set_postfix(newton=row["newton_iterations"], residual=f"{row['residual']:.1e}",
+                            at_limit=row["nodes_at_limit"], refresh=False)
             bar.update()
     result.finish(clock.perf_counter() - started)
     return result
