@@ -20,6 +20,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 
 from .errors import CaseError
 from .expressions import parse_expression
+from .solvers.factorization import BACKENDS
 
 # --- value types ---------------------------------------------------------------------------------
 PositiveFloat = Annotated[float, Field(gt=0)]
@@ -181,10 +182,22 @@ class TimeSection(_Section):
 
 
 class SolverSection(_Section):
-    method: Literal["full"] = "full"
+    """The step solver: "full" (Newton on the whole system), "condensed" (factor once, Newton on the
+    contact nodes) or "auto" (condensed when its dense contact operator fits in memory)."""
+
+    method: Literal["auto", "condensed", "full"] = "auto"
+    factorization: str = "auto"  # sparse direct backend of "condensed"
     tolerance: Annotated[float, Field(gt=0, lt=1)] = 1e-10
     max_iterations: Annotated[int, Field(ge=1)] = 50
     augmentation: Optional[PositiveFloat] = None  # Alart–Curnier r; "auto": the median normal stiffness
+
+    @field_validator("factorization")
+    @classmethod
+    def _installed_backend(cls, value):
+        if value != "auto" and value not in BACKENDS:
+            raise ValueError(f"solver.factorization = \"{value}\": not available here; expected \"auto\" or one of "
+                             f"{', '.join(repr(b) for b in BACKENDS)}")
+        return value
 
     @field_validator("augmentation", mode="before")
     @classmethod

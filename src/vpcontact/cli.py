@@ -45,11 +45,11 @@ def main(argv: list[str] | None = None) -> int:
         if args.out.exists() and any(args.out.iterdir()) and not args.overwrite:
             raise CaseError(f"--out '{args.out}' is not empty (use --overwrite to replace it)")
         problem = build_problem(case)
+        progress = case.output.progress and not args.quiet and sys.stderr.isatty()
+        result = solve_problem(problem, progress=progress)
     except CaseError as error:
         print(f"vpcontact: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    progress = case.output.progress and not args.quiet and sys.stderr.isatty()
-    result = solve_problem(problem, progress=progress)
     write_run(result, args.out, overwrite=args.overwrite)
     summary = result.summary()
     if result.status != "complete":

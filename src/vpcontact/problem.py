@@ -6,6 +6,7 @@ here, before any computation and before anything is written.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -38,6 +39,7 @@ class Problem:
     law: ContactLaw
     probe: int | None  # index of the reported contact node
     viscoplastic: Callable | None = None  # 𝒢(σ, ε) over arrays (2, 2, nelements); None: 𝒢 = 0
+    timings: dict = field(default_factory=dict)  # seconds: mesh, assembly, build
     times: np.ndarray = field(init=False)
 
     def __post_init__(self):
@@ -55,7 +57,9 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     objects (see :mod:`vpcontact.contact` for the protocol: ``f(r)`` and ``f.derivative(r)``) and
     its traction or body force densities by callables ``f(x, y, t) -> (fx, fy)``; ``viscoplastic``
     is 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (2, 2, nelements)."""
+    started = time.perf_counter()
     mesh = _make_mesh(case)
+    meshed = time.perf_counter()
     basis = displacement_basis(mesh)
     elasticity = Elasticity(case.material.E, case.material.nu, case.material.hypothesis)
     A = stiffness(basis, elasticity)
@@ -84,7 +88,9 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
     _check_rigid_motions(mesh, basis, free, surface)
-    return Problem(case, mesh, basis, elasticity, A, free, loads, surface, law, probe, viscoplastic)
+    done = time.perf_counter()
+    timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
+    return Problem(case, mesh, basis, elasticity, A, free, loads, surface, law, probe, viscoplastic, timings)
 
 
 def _make_mesh(case: Case) -> meshes.Mesh:

@@ -52,6 +52,8 @@ class Result:
     status: str = "running"
     message: str = ""
     wall_time_s: float = 0.0
+    timings: dict = field(default_factory=dict)
+    method: str = ""
     problem: object = None  # the Problem solved: mesh, contact surface, operators
 
     @classmethod
@@ -61,11 +63,11 @@ class Result:
         wanted = {"all": set(range(1, count + 1)), "final": {count}, "none": set()}.get(steps) if isinstance(steps, str) else set(steps)
         return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
                    contact_nodes=problem.surface.size, probe=problem.probe, field_steps=wanted,
-                   augmentation=solver.r, problem=problem)
+                   augmentation=solver.r, method=solver.name, problem=problem)
 
     # --- filling in ------------------------------------------------------------------------------
-    def record(self, n, t, solution, fields: Fields, *, xi, K, compliance, status):
-        """Store step n: the solver report, the contact state and (if wanted) the fields."""
+    def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status):
+        """Store step n: the solver report, the contact state and the fields if computed."""
         w, normals = self.problem.surface.weights, self.problem.surface.normals
         rigid = np.divide(solution.lam, w, out=np.zeros_like(w), where=w > 0)
         d = solution.d
@@ -90,19 +92,22 @@ class Result:
             "contact_force_x": force[0], "contact_force_y": force[1],
         })
         self.times.append(t)
-        self.final = fields
-        if n in self.field_steps:
-            self.fields[n] = fields
+        if fields is not None:
+            self.final = fields
+            if n in self.field_steps:
+                self.fields[n] = fields
 
     def fail(self, n, t, solution) -> None:
         self.status = "failed"
         self.message = (f"step {n} (t = {t:g}) failed: {solution.message}; residual {solution.residual:.3e}, "
                         f"complementarity {solution.complementarity:.3e}, active nodes {int(solution.active.sum())}")
 
-    def finish(self, wall_time: float) -> None:
+    def finish(self, timings: dict[str, float]) -> None:
+        """Close the run with its timings in seconds (setup stages, time loop, total)."""
         if self.status == "running":
             self.status = "complete"
-        self.wall_time_s = wall_time
+        self.timings = timings
+        self.wall_time_s = timings["total"]
 
     # --- reading ---------------------------------------------------------------------------------
     @property
@@ -130,5 +135,6 @@ class Result:
             "status": self.status, "message": self.message, "dofs": self.dofs, "elements": self.elements,
             "nodes": self.nodes, "contact_nodes": self.contact_nodes, "steps": self.steps,
             "newton_iterations": int(sum(r["newton_iterations"] for r in self.rows)),
-            "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s, "final": final,
+            "solver_method": self.method, "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s,
+            "timings_s": self.timings, "final": final,
         }

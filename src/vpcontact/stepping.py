@@ -28,17 +28,17 @@ def solve_problem(problem: Problem, *, progress: bool = False) -> Result:
     started = clock.perf_counter()
     case, free, surface, law = problem.case, problem.free, problem.surface, problem.law
     options = case.solver
-    A = problem.A[free][:, free].tocsr()
-    N = surface.operator[:, free].tocsr()
-    solver = make_solver(options.method, A, N, surface.weights, surface.gap0, augmentation=options.augmentation,
+    solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
+                         surface.weights, surface.gap0, augmentation=options.augmentation,
                          tolerance=options.tolerance, max_iterations=options.max_iterations,
-                         length_scale=problem.mesh.diameter)
+                         length_scale=problem.mesh.diameter, factorization=options.factorization)
     result = Result.start(problem, solver)
+    loop_started = clock.perf_counter()
     nelements = problem.mesh.mesh.t.shape[1]
     u = np.zeros(problem.basis.N)
-    lam = np.zeros(surface.size)
     xi = np.zeros(surface.size)
     z = np.zeros((2, 2, nelements))  # σ_0 − ℰε(u_0) with zero initial data
+    previous = None
 
     with tqdm(total=len(problem.times), disable=not progress, unit="step", desc="time steps") as bar:
         for n, t in enumerate(problem.times, start=1):
@@ -46,25 +46,30 @@ def solve_problem(problem: Problem, *, progress: bool = False) -> Result:
             if problem.viscoplastic is not None:
                 b -= stress_force(problem.basis, z)
             step = StepData(b[free], law, xi, problem.k)
-            solution = solver.solve(step, u[free], lam)
+            solution = solver.solve(step, previous)
             if not solution.converged:
                 result.fail(n, t, solution)
                 break
-            u[free], lam, d = solution.u, solution.lam, solution.d
+            previous, d = solution, solution.d
             compliance, _ = law.pressure(d, xi, problem.k)
             xi = xi + problem.k * np.maximum(d, 0.0)
-            strain = element_strain(problem.basis, u)
-            sigma = problem.elasticity.stress(strain) + z
-            if problem.viscoplastic is not None:
-                z = z + problem.k * problem.viscoplastic(sigma, strain)
-            sigma33 = problem.elasticity.out_of_plane_stress(strain)
-            fields = Fields(displacement=u[problem.basis.nodal_dofs].T.copy(), stress=np.moveaxis(sigma, -1, 0),
-                            stress33=sigma33, von_mises=von_mises(sigma, sigma33))
+            fields = None
+            if problem.viscoplastic is not None or n in result.field_steps or n == len(problem.times):
+                u[free] = solver.displacement(step, solution)
+                strain = element_strain(problem.basis, u)
+                sigma = problem.elasticity.stress(strain) + z
+                if problem.viscoplastic is not None:
+                    z = z + problem.k * problem.viscoplastic(sigma, strain)
+                sigma33 = problem.elasticity.out_of_plane_stress(strain)
+                fields = Fields(displacement=u[problem.basis.nodal_dofs].T.copy(), stress=np.moveaxis(sigma, -1, 0),
+                                stress33=sigma33, von_mises=von_mises(sigma, sigma33))
             result.record(n, t, solution, fields, xi=xi, K=law.K(xi), compliance=compliance,
                           status=node_status(d, solution.active))
             row = result.rows[-1]
             bar.set_postfix(newton=row["newton_iterations"], residual=f"{row['residual']:.1e}",
                             at_limit=row["nodes_at_limit"], refresh=False)
             bar.update()
-    result.finish(clock.perf_counter() - started)
+    now = clock.perf_counter()
+    result.finish({**problem.timings, **solver.timings, "time_loop": now - loop_started,
+                   "total": problem.timings["build"] + now - started})
     return result

@@ -1,19 +1,38 @@
-"""Step solvers behind one interface: ``make_solver(name, ...)`` returns an object whose
-``solve(step, u, λ)`` returns a :class:`~vpcontact.solvers.base.StepSolution`."""
+"""Step solvers behind one interface.
+
+``make_solver(method, ...)`` returns an object with
+    solve(step, previous) -> StepSolution        (previous: the last step's solution or None)
+    displacement(step, solution) -> u            (at the free dofs)
+    r, name, timings
+Methods: "full" (Newton on the whole system, the reference), "condensed" (factor once, Newton on
+the contact nodes), "auto" (condensed when its dense contact operator fits in memory, else full).
+"""
 
 from __future__ import annotations
 
 from .base import StepData, StepSolution, default_augmentation
+from .condensed import CondensedNewton, check_condensed_memory
 from .full import FullNewton
+from ..errors import CaseError
 
-SOLVERS = {FullNewton.name: FullNewton}
+SOLVERS = {FullNewton.name: FullNewton, CondensedNewton.name: CondensedNewton}
+METHODS = ("auto", *SOLVERS)
 
 
 def make_solver(method: str, A, N, weights, gap0, *, augmentation: float | None, tolerance: float,
-                max_iterations: int, length_scale: float):
+                max_iterations: int, length_scale: float, factorization: str = "auto"):
     """The step solver ``method`` for stiffness A and contact operator N (both on the free dofs)."""
     r = default_augmentation(A, N) if augmentation is None else augmentation
-    return SOLVERS[method](A, N, weights, gap0, r, tolerance, max_iterations, length_scale)
+    if method == "auto":
+        try:
+            check_condensed_memory(N.shape[0], A.shape[0])
+            method = CondensedNewton.name
+        except CaseError:
+            method = FullNewton.name
+    common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale)
+    if method == CondensedNewton.name:
+        return CondensedNewton(*common, factorization=factorization)
+    return FullNewton(*common)
 
 
-__all__ = ["SOLVERS", "StepData", "StepSolution", "make_solver"]
+__all__ = ["METHODS", "SOLVERS", "StepData", "StepSolution", "make_solver"]

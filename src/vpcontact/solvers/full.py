@@ -1,13 +1,10 @@
-"""The paper's method: a generalized (semi-smooth) Newton method on the whole system (3.5)–(3.6).
+"""The paper's method: the generalized Newton method (3.6) on the whole system (3.5).
 
-Each iteration linearizes the step problem of ``base`` at (u, λ):
+Iterate (u, λ). Each iteration solves the linearization of the step problem of ``base``:
     (A + Nᵀ diag(T) N) Δu + N_𝒜ᵀ Δλ_𝒜 = −R_u + N_ℐᵀ λ_ℐ,     N_𝒜 Δu = g − d_𝒜,     Δλ_ℐ = −λ_ℐ,
-where 𝒜 = {λ + r(d − g) > 0} is the active (rigid) set, ℐ the rest and T_i = w_i [K p'(d) + K'(ξ) k H(d) p]
-the compliance tangent. The saddle-point matrix is factored by sparse LU at every iteration.
-
-Globalization: when the full step leaves the active set unchanged (the smooth regime of the
-compliance law) it is damped by backtracking on the merit ½(‖R_u‖² + ‖C‖²); a step that changes
-the active set is taken whole, as in primal–dual active set methods.
+with 𝒜 = {λ + r(d − g) > 0} the nodes on the rigid base, ℐ the others and T_i the compliance
+tangent w_i [K p'(d) + K'(ξ) k H(d) p(d)]. The saddle-point matrix is factored by sparse LU at every
+iteration: the reference method, simple and general, and slow on large meshes.
 """
 
 from __future__ import annotations
@@ -17,80 +14,53 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .base import ContactState, StepData, StepSolution
-
-#: Jacobian-only stiffness (relative to r) on inactive nodes with no compliance stiffness: keeps the
-#: Newton matrix of a body held only by contact nonsingular; the converged solution is unchanged.
-JACOBIAN_REGULARIZATION = 1e-10
-ARMIJO = 1e-4
-MAX_BACKTRACKS = 12
+from .newton import Evaluation, SemismoothNewton
 
 
-class FullNewton:
-    """Semi-smooth Newton on (u, λ) with the whole stiffness matrix: the reference method."""
+class FullNewton(SemismoothNewton):
+    """Semi-smooth Newton on (u, λ) with the whole stiffness matrix."""
 
     name = "full"
 
-    def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights: np.ndarray, gap0: np.ndarray, r: float,
-                 tolerance: float, max_iterations: int, length_scale: float):
-        self.A, self.N, self.weights, self.gap0, self.r = A, N.tocsr(), weights, gap0, r
-        self.tolerance, self.max_iterations, self.length_scale = tolerance, max_iterations, length_scale
+    def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations, length_scale):
+        super().__init__(weights, r, tolerance, max_iterations, length_scale)
+        self.A, self.N, self.gap0 = A, N.tocsr(), gap0
+        self.timings: dict[str, float] = {}
 
-    def _residuals(self, step: StepData, u: np.ndarray, lam: np.ndarray):
+    def initial(self, step: StepData, previous: StepSolution | None) -> tuple:
+        if previous is None:
+            return np.zeros(self.A.shape[0]), np.zeros(self.N.shape[0])
+        return previous.u, previous.lam
+
+    def evaluate(self, step: StepData, x: tuple) -> Evaluation:
+        u, lam = x
         d = self.N @ u - self.gap0
         state = ContactState.evaluate(step, self.weights, d, lam, self.r)
         contact = self.N.T @ (state.force + lam)
         R_u = self.A @ u + contact - step.b
         scale = max(np.linalg.norm(step.b), np.linalg.norm(contact))
-        return d, state, R_u, scale
+        residual = np.linalg.norm(R_u) / scale if scale > 0 else np.linalg.norm(R_u)
+        return Evaluation(d, lam, state, np.concatenate([R_u, state.C]), residual, self.complementarity(state))
 
-    def solve(self, step: StepData, u: np.ndarray, lam: np.ndarray) -> StepSolution:
-        """Newton iterations from (u, λ) until ‖R_u‖ ≤ tol·scale and |C/r| ≤ tol·L (L: body size)."""
-        d, state, R_u, scale = self._residuals(step, u, lam)
-        for iteration in range(self.max_iterations + 1):
-            residual = np.linalg.norm(R_u) / scale if scale > 0 else np.linalg.norm(R_u)
-            complementarity = float(np.max(np.abs(state.C), initial=0.0)) / self.r
-            if not (np.isfinite(residual) and np.isfinite(complementarity)):
-                return StepSolution(u, lam, d, state.active, iteration, residual, complementarity, False,
-                                    "the iterates are not finite")
-            if residual <= self.tolerance and complementarity <= self.tolerance * self.length_scale:
-                return StepSolution(u, lam, d, state.active, iteration, residual, complementarity, True)
-            if iteration == self.max_iterations:
-                break
-            du, dlam = self._direction(step, d, lam, state, R_u)
-            u, lam, d, state, R_u, scale = self._line_search(step, u, lam, du, dlam, state, R_u)
-        return StepSolution(u, lam, d, state.active, self.max_iterations, residual, complementarity, False,
-                            f"no convergence in {self.max_iterations} Newton iterations")
-
-    def _direction(self, step, d, lam, state: ContactState, R_u):
-        """Solve the generalized Newton system for (Δu, Δλ)."""
-        active = state.active
-        tangent = np.where(~active & (state.tangent < JACOBIAN_REGULARIZATION * self.r),
-                           JACOBIAN_REGULARIZATION * self.r, state.tangent)
-        J = self.A + self.N.T @ sp.diags(tangent) @ self.N
+    def direction(self, step: StepData, x: tuple, ev: Evaluation) -> tuple:
+        u, lam = x
+        active = ev.state.active
+        J = self.A + self.N.T @ sp.diags(self.jacobian_tangent(ev.state)) @ self.N
         N_active = self.N[active]
-        rhs_u = -R_u + self.N[~active].T @ lam[~active]
-        rhs_lam = step.law.g - d[active]
-        kkt = sp.bmat([[J, N_active.T], [N_active, None]], format="csc")
-        solution = spla.splu(kkt).solve(np.concatenate([rhs_u, rhs_lam]))
-        du = solution[: self.A.shape[0]]
+        rhs_u = -ev.merit_vector[: u.size] + self.N[~active].T @ lam[~active]
+        if active.any():
+            kkt = sp.bmat([[J, N_active.T], [N_active, None]], format="csc")
+            solution = spla.splu(kkt).solve(np.concatenate([rhs_u, step.law.g - ev.d[active]]))
+        else:
+            solution = spla.splu(J.tocsc()).solve(rhs_u)
         dlam = -lam.copy()
-        dlam[active] = solution[self.A.shape[0]:]
-        return du, dlam
+        dlam[active] = solution[u.size:]
+        return solution[: u.size], dlam
 
-    def _line_search(self, step, u, lam, du, dlam, state, R_u):
-        """Full step if it changes the active set or decreases the merit; else backtrack (Armijo)."""
-        merit = 0.5 * (R_u @ R_u + state.C @ state.C)
-        alpha = 1.0
-        for _ in range(MAX_BACKTRACKS + 1):
-            trial_u, trial_lam = u + alpha * du, lam + alpha * dlam
-            d, trial, R_trial, scale = self._residuals(step, trial_u, trial_lam)
-            trial_merit = 0.5 * (R_trial @ R_trial + trial.C @ trial.C)
-            if alpha == 1.0 and not np.array_equal(trial.active, state.active):
-                break
-            if trial_merit <= (1.0 - 2.0 * ARMIJO * alpha) * merit:
-                break
-            alpha *= 0.5
-        else:  # no decrease along the direction: take the whole step
-            trial_u, trial_lam = u + du, lam + dlam
-            d, trial, R_trial, scale = self._residuals(step, trial_u, trial_lam)
-        return trial_u, trial_lam, d, trial, R_trial, scale
+    def solution(self, step, x, ev: Evaluation, iterations, converged, message="") -> StepSolution:
+        return StepSolution(x[0], x[1], ev.d, ev.state.active, iterations, ev.residual, ev.complementarity,
+                            converged, message)
+
+    def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
+        """u at the free dofs (the iterate itself)."""
+        return solution.u

@@ -1,0 +1,135 @@
+"""Factor once, solve on the contact nodes (DESIGN §4).
+
+The bulk operator is the same linear elastic matrix at every step (𝒢 is explicit), so
+A0 = A + Nᵀ diag(c0) N is factored once, with a reference stiffness c0 = r at each contact node that
+makes A0 definite even for a body held only by contact; the same term is subtracted in the contact
+law, so the solution is unchanged. With S = N A0⁻¹ Nᵀ (dense m × m) and d_free = N A0⁻¹ b − g0, the
+step problem of ``base`` reduces to the m contact nodes:
+
+    d = d_free − S q(d, λ),    q = f(d) + λ − c0 (d + g0),    C(d, λ) = 0,
+
+solved by the same semi-smooth Newton iteration as the full system, now with a dense m × m matrix;
+u = A0⁻¹ (b − Nᵀ q) is recovered by one solve, only when it is asked for. Right-hand sides that are
+combinations of ones already solved (loads proportional to t, for instance) cost no solve at all.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import CaseError
+from .base import ContactState, StepData, StepSolution
+from .factorization import available_memory, factorize
+from .newton import Evaluation, SemismoothNewton
+
+
+class SolvedSpan:
+    """A0⁻¹ b, reusing the solutions of earlier right-hand sides when b lies in their span."""
+
+    def __init__(self, solve, capacity: int = 4, tolerance: float = 1e-13):
+        self._solve, self.capacity, self.tolerance = solve, capacity, tolerance
+        self._basis: list[np.ndarray] = []  # orthonormal right-hand sides
+        self._images: list[np.ndarray] = []  # A0⁻¹ of each
+        self.solves = 0
+
+    def __call__(self, b: np.ndarray) -> np.ndarray:
+        norm = np.linalg.norm(b)
+        if norm == 0.0:
+            return np.zeros_like(b)
+        coefficients = np.array([q @ b for q in self._basis])
+        remainder = b - sum((c * q for c, q in zip(coefficients, self._basis)), np.zeros_like(b))
+        combination = sum((c * x for c, x in zip(coefficients, self._images)), np.zeros_like(b))
+        rest = np.linalg.norm(remainder)
+        if rest <= self.tolerance * norm:
+            return combination
+        x = self._solve(b)
+        self.solves += 1
+        if len(self._basis) < self.capacity:
+            self._basis.append(remainder / rest)
+            self._images.append((x - combination) / rest)
+        return x
+
+
+class CondensedNewton(SemismoothNewton):
+    """Semi-smooth Newton on the contact nodes with a once-factored stiffness."""
+
+    name = "condensed"
+
+    def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations,
+                 length_scale, factorization: str = "auto"):
+        super().__init__(weights, r, tolerance, max_iterations, length_scale)
+        m = N.shape[0]
+        check_condensed_memory(m, A.shape[0])
+        self.N, self.gap0 = N.tocsr(), gap0
+        self.reference = np.full(m, r)
+        started = time.perf_counter()
+        self.factorization = factorize(A + self.N.T @ sp.diags(self.reference) @ self.N, factorization)
+        factored = time.perf_counter()
+        self.S = self.factorization.condensed_operator(self.N)
+        self.timings = {"factorization": factored - started, "condensation": time.perf_counter() - factored}
+        self.span = SolvedSpan(self.factorization.solve)
+        self._step, self._d_free = None, None
+
+    def _free_penetration(self, step: StepData) -> np.ndarray:
+        """d_free = N A0⁻¹ b − g0 of this step (computed once per step)."""
+        if self._step is not step:
+            self._step, self._d_free = step, self.N @ self.span(step.b) - self.gap0
+        return self._d_free
+
+    def _load(self, state: ContactState, d, lam) -> np.ndarray:
+        return state.force + lam - self.reference * (d + self.gap0)
+
+    def initial(self, step: StepData, previous: StepSolution | None) -> tuple:
+        if previous is None:
+            return np.zeros(self.N.shape[0]), np.zeros(self.N.shape[0])
+        return previous.d, previous.lam
+
+    def evaluate(self, step: StepData, x: tuple) -> Evaluation:
+        """At (d, λ): d_u = d_free − S q is the penetration of the displacement u = A0⁻¹(b − Nᵀq) the
+        solver would return; the residual and complementarity reported are those of u (the full
+        system's A u + Nᵀ(f(d_u) + λ) − b = Nᵀ[f(d_u) − f(d) − c0 (d_u − d)])."""
+        d, lam = x
+        state = ContactState.evaluate(step, self.weights, d, lam, self.r)
+        d_u = self._free_penetration(step) - self.S @ self._load(state, d, lam)
+        recovered = ContactState.evaluate(step, self.weights, d_u, lam, self.r)
+        R_u = self.N.T @ (recovered.force - state.force - self.reference * (d_u - d))
+        scale = max(np.linalg.norm(step.b), np.linalg.norm(self.N.T @ (recovered.force + lam)))
+        residual = np.linalg.norm(R_u) / scale if scale > 0 else np.linalg.norm(R_u)
+        merit = np.concatenate([self.r * (d - d_u), state.C])
+        return Evaluation(d, lam, state, merit, residual, self.complementarity(recovered), d_u)
+
+    def direction(self, step: StepData, x: tuple, ev: Evaluation) -> tuple:
+        """Solve (I + S diag(T − c0)) Δd + S Δλ = −(d − d_u) with Δd_𝒜 = g − d_𝒜 and Δλ_ℐ = −λ_ℐ."""
+        d, lam = x
+        active = ev.state.active
+        M = np.eye(d.size) + self.S * (self.jacobian_tangent(ev.state) - self.reference)[None, :]
+        step_active = step.law.g - d[active]
+        rhs = -(d - ev.d_solution) - M[:, active] @ step_active + self.S[:, ~active] @ lam[~active]
+        unknowns = np.linalg.solve(np.hstack([M[:, ~active], self.S[:, active]]), rhs)
+        dd = np.empty_like(d)
+        dd[active], dd[~active] = step_active, unknowns[: (~active).sum()]
+        dlam = -lam.copy()
+        dlam[active] = unknowns[(~active).sum():]
+        return dd, dlam
+
+    def solution(self, step, x, ev: Evaluation, iterations, converged, message="") -> StepSolution:
+        return StepSolution(None, x[1], ev.d_solution, ev.state.active, iterations, ev.residual,
+                            ev.complementarity, converged, message)
+
+    def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
+        """u = A0⁻¹ (b − Nᵀ q) at the free dofs: one solve."""
+        state = ContactState.evaluate(step, self.weights, solution.d, solution.lam, self.r)
+        return self.factorization.solve(step.b - self.N.T @ self._load(state, solution.d, solution.lam))
+
+
+def check_condensed_memory(m: int, n: int) -> None:
+    """Refuse, before allocating, a condensed operator that would not fit in memory."""
+    needed = 8 * (3 * m * m + 2 * 64 * n)  # S, the Newton matrix and its factor; block solves
+    available = available_memory()
+    if needed > 0.5 * available:
+        raise CaseError(f"solver.method = \"condensed\" needs about {needed / 2**30:.1f} GiB for its dense "
+                        f"{m} x {m} contact operator, more than half the {available / 2**30:.1f} GiB available; "
+                        f"use solver.method = \"full\"")
