@@ -54,6 +54,7 @@ class Result:
     wall_time_s: float = 0.0
     timings: dict = field(default_factory=dict)
     method: str = ""
+    linear_solves: int = 0  # solves with a factored matrix in the time loop
     problem: object = None  # the Problem solved: mesh, contact surface, operators
 
     @classmethod
@@ -135,6 +136,6 @@ class Result:
             "status": self.status, "message": self.message, "dofs": self.dofs, "elements": self.elements,
             "nodes": self.nodes, "contact_nodes": self.contact_nodes, "steps": self.steps,
             "newton_iterations": int(sum(r["newton_iterations"] for r in self.rows)),
-            "solver_method": self.method, "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s,
+            "solver_method": self.method, "linear_solves": self.linear_solves, "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s,
             "timings_s": self.timings, "final": final,
         }

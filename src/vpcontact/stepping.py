@@ -70,6 +70,7 @@ def solve_problem(problem: Problem, *, progress: bool = False) -> Result:
                             at_limit=row["nodes_at_limit"], refresh=False)
             bar.update()
     now = clock.perf_counter()
+    result.linear_solves = solver.solves
     result.finish({**problem.timings, **solver.timings, "time_loop": now - loop_started,
                    "total": problem.timings["build"] + now - started})
     return result

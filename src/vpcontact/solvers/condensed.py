@@ -71,13 +71,20 @@ class CondensedNewton(SemismoothNewton):
         self.S = self.factorization.condensed_operator(self.N)
         self.timings = {"factorization": factored - started, "condensation": time.perf_counter() - factored}
         self.span = SolvedSpan(self.factorization.solve)
-        self._step, self._d_free = None, None
+        self.recoveries = 0
+        self._step, self._d_free, self._b_norm = None, None, 0.0
 
     def _free_penetration(self, step: StepData) -> np.ndarray:
         """d_free = N A0⁻¹ b − g0 of this step (computed once per step)."""
         if self._step is not step:
             self._step, self._d_free = step, self.N @ self.span(step.b) - self.gap0
+            self._b_norm = np.linalg.norm(step.b)
         return self._d_free
+
+    @property
+    def solves(self) -> int:
+        """Solves with the factored A0 in the time loop: new right-hand sides and recoveries of u."""
+        return self.span.solves + self.recoveries
 
     def _load(self, state: ContactState, d, lam) -> np.ndarray:
         return state.force + lam - self.reference * (d + self.gap0)
@@ -96,7 +103,7 @@ class CondensedNewton(SemismoothNewton):
         d_u = self._free_penetration(step) - self.S @ self._load(state, d, lam)
         recovered = ContactState.evaluate(step, self.weights, d_u, lam, self.r)
         R_u = self.N.T @ (recovered.force - state.force - self.reference * (d_u - d))
-        scale = max(np.linalg.norm(step.b), np.linalg.norm(self.N.T @ (recovered.force + lam)))
+        scale = max(self._b_norm, np.linalg.norm(self.N.T @ (recovered.force + lam)))
         residual = np.linalg.norm(R_u) / scale if scale > 0 else np.linalg.norm(R_u)
         merit = np.concatenate([self.r * (d - d_u), state.C])
         return Evaluation(d, lam, state, merit, residual, self.complementarity(recovered), d_u)
@@ -121,6 +128,7 @@ class CondensedNewton(SemismoothNewton):
 
     def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
         """u = A0⁻¹ (b − Nᵀ q) at the free dofs: one solve."""
+        self.recoveries += 1
         state = ContactState.evaluate(step, self.weights, solution.d, solution.lam, self.r)
         return self.factorization.solve(step.b - self.N.T @ self._load(state, solution.d, solution.lam))
 

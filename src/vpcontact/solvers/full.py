@@ -26,6 +26,7 @@ class FullNewton(SemismoothNewton):
         super().__init__(weights, r, tolerance, max_iterations, length_scale)
         self.A, self.N, self.gap0 = A, N.tocsr(), gap0
         self.timings: dict[str, float] = {}
+        self.solves = 0  # sparse LU factorizations and solves, one per Newton iteration
 
     def initial(self, step: StepData, previous: StepSolution | None) -> tuple:
         if previous is None:
@@ -45,6 +46,7 @@ class FullNewton(SemismoothNewton):
     def direction(self, step: StepData, x: tuple, ev: Evaluation) -> tuple:
         u, lam = x
         active = ev.state.active
+        self.solves += 1
         J = self.A + self.N.T @ sp.diags(self.jacobian_tangent(ev.state)) @ self.N
         N_active = self.N[active]
         rhs_u = -ev.merit_vector[: u.size] + self.N[~active].T @ lam[~active]

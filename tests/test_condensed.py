@@ -1,0 +1,48 @@
+"""The condensed solver's own promises: no solve that is not needed, and a clear refusal when its
+dense contact operator would not fit in memory."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import tomli_w
+
+import vpcontact
+from vpcontact.cli import main
+from vpcontact.solvers import condensed
+from vpcontact.solvers.condensed import SolvedSpan
+from conftest import half_disc_case
+
+
+def test_solved_span_reuses_solutions_of_combinations():
+    rng = np.random.default_rng(0)
+    A = sp.random(40, 40, density=0.2, random_state=1) + 40 * sp.eye(40)
+    lu = sp.linalg.splu(A.tocsc())
+    span = SolvedSpan(lu.solve)
+    a, b = rng.standard_normal(40), rng.standard_normal(40)
+    for t in (0.1, 0.2, 0.7, 3.0):
+        np.testing.assert_allclose(A @ span(a + t * b), a + t * b, rtol=1e-12, atol=1e-12)
+    assert span.solves == 2  # a + 0.1 b and a + 0.2 b span every later right-hand side
+    span(rng.standard_normal(40))
+    assert span.solves == 3
+
+
+def test_loads_linear_in_time_cost_one_solve_plus_the_recovered_steps():
+    case = half_disc_case(h=0.1, load=20.0)
+    case["output"]["field_steps"] = [4, 11]
+    result = vpcontact.solve(case)
+    assert result.method == "condensed" and result.steps == 11
+    assert result.linear_solves == 1 + 2  # d_free of step 1 (then combinations), u at steps 4 and 11
+
+
+def test_condensed_refuses_an_operator_that_does_not_fit(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(condensed, "available_memory", lambda: 10_000)
+    case = half_disc_case(h=0.2)
+    case["solver"]["method"] = "condensed"
+    path = tmp_path / "case.toml"
+    path.write_text(tomli_w.dumps(case))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert 'solver.method = "full"' in err and "GiB" in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()
+    case["solver"]["method"] = "auto"  # the default falls back to the full method
+    assert vpcontact.solve(case).method == "full"
