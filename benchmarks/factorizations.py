@@ -211,6 +211,14 @@ class Cholmod(Backend):
         return 0.5 * (S + S.T)
 
 
+class CholmodBlocks(Cholmod):
+    name = "cholmod-blocks"
+    schur_route = "block-solves-64"
+
+    def schur(self, A0, N):
+        return block_solves(self.solve, N, A0.shape[0])
+
+
 class PyPardiso(Backend):
     """pypardiso's own API (mtype 11, real unsymmetric; it checks the matrix on every solve)."""
 
@@ -276,7 +284,7 @@ class MklPardiso:
             cls._lib = lib
         return cls._lib
 
-    def __init__(self, A0, schur_dofs=None, ordering=2, msglvl=0):
+    def __init__(self, A0, schur_dofs=None, ordering=2, msglvl=0, iparm=None):
         lib = self.lib()
         U = sp.triu(A0, format="csr")
         U.sort_indices()
@@ -294,6 +302,8 @@ class MklPardiso:
         ip[17] = -1  # report nnz(L) in iparm[17]
         ip[26] = 0  # no matrix checker
         ip[34] = 1  # zero-based ia/ja
+        for k, v in (iparm or {}).items():  # overrides, zero-based as in the C docs
+            ip[int(k)] = v
         self.perm = np.zeros(self.n, dtype=np.int32)
         self.nschur = 0
         if schur_dofs is not None:
@@ -451,7 +461,7 @@ class Mumps(Backend):
 
 BACKENDS = {
     cls.name: cls
-    for cls in (SuperLUColamd, SuperLUMmd, Cholespy, Cholmod, PyPardiso, MklDirect, MklDirectBlocks, Mumps)
+    for cls in (SuperLUColamd, SuperLUMmd, Cholespy, Cholmod, CholmodBlocks, PyPardiso, MklDirect, MklDirectBlocks, Mumps)
 }
 
 
@@ -476,7 +486,7 @@ def _maxrss_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def measure(name, h, check_schur=False, nsolve=5):
+def measure(name, h, check_schur=False, nsolve=5, steps=0):
     A0, N, assembly_s = build_matrix(h)
     n, m = A0.shape[0], N.shape[0]
     rec = {"backend": name, "h": h, "dofs": n, "contact_nodes": m, "nnz_A0": int(A0.nnz), "assembly_s": assembly_s}
@@ -523,6 +533,14 @@ def measure(name, h, check_schur=False, nsolve=5):
         rec["schur_factor_residual"] = float(np.linalg.norm(A0 @ xs - b) / np.linalg.norm(b))
     if hasattr(be, "info"):
         rec.update(be.info())
+    if steps:  # really run `steps` consecutive solves (new right-hand side each), as the time loop would
+        solver = be.ps if hasattr(be, "ps") else be
+        B = rng.standard_normal((n, 2))
+        t = time.perf_counter()
+        for k in range(steps):
+            x = np.asarray(solver.solve(B[:, 0] + (k / steps) * B[:, 1])).ravel()
+        rec["steps"] = steps
+        rec["steps_s"] = time.perf_counter() - t
     # the condensed solver's whole run: assembly, factor, S, one solve per step (STEPS steps).
     # When the Schur route's factorization also solves (PARDISO iparm[35]=2) it replaces the plain one.
     if "schur_factor_solve_s" in rec:
@@ -580,6 +598,7 @@ def main(argv=None):
     ap.add_argument("--sizes", type=float, nargs="+", default=list(SIZES))
     ap.add_argument("--backends", nargs="+", default=None, help="with --all: restrict to these")
     ap.add_argument("--list", action="store_true", help="print which backends import here")
+    ap.add_argument("--steps", type=int, default=0, help="also time this many consecutive solves (e.g. 563)")
     a = ap.parse_args(argv)
     if a.list:
         print(json.dumps({k: available(k) for k in BACKENDS}, indent=1))
@@ -594,7 +613,7 @@ def main(argv=None):
         print(json.dumps({"backend": a.backend, "available": False, "reason": why}))
         return
     h = a.h if a.h else h_for_dofs(a.dofs_target or SIZES[0])
-    print(json.dumps(measure(a.backend, h, check_schur=a.check_schur)))
+    print(json.dumps(measure(a.backend, h, check_schur=a.check_schur, steps=a.steps)))
 
 
 if __name__ == "__main__":

@@ -1,7 +1,10 @@
-"""The command line: ``vpcontact run CASE.toml [--set key=value ...] --out DIR``.
+"""The command line:
+
+    vpcontact run CASE.toml [--set key=value ...] --out DIR
+    vpcontact study STUDY.toml --out DIR [--workers N | --scheduler tcp://HOST:PORT]
 
 Exit status: 0 complete; 2 bad input (one line on stderr, nothing written); 3 a step failed
-(the converged steps are written, summary.json has "status": "failed").
+(the converged steps are written, summary.json has "status": "failed") or, for a study, a run failed.
 """
 
 from __future__ import annotations
@@ -33,11 +36,22 @@ def _parser() -> argparse.ArgumentParser:
                      help="override a case value, e.g. --set contact.stiffness.beta=-1 (repeatable)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.add_argument("--overwrite", action="store_true", help="replace a non-empty output directory")
+    study = commands.add_parser("study", help="run a parameter study (rerun to resume)")
+    study.add_argument("study", type=Path, help="study file (TOML)")
+    study.add_argument("--out", type=Path, required=True, help="study directory")
+    where = study.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS", help="a Dask scheduler, e.g. tcp://host:8786")
+    study.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    return _study(args) if args.command == "study" else _run(args)
+
+
+def _run(args) -> int:
     try:
         case = load_case(args.case, args.overrides)
         if args.out.exists() and not args.out.is_dir():
@@ -63,6 +77,40 @@ def main(argv: list[str] | None = None) -> int:
               f"{final['penetration_probe']:.6g}, nodes separated/compliance/limit = {final['nodes_separated']}/"
               f"{final['nodes_in_compliance']}/{final['nodes_at_limit']}")
     return 0
+
+
+
+
+def _study(args) -> int:
+    from .studies import load_study, run_study
+
+    try:
+        study = load_study(args.study, args.out)
+        if args.workers is not None and args.workers < 1:
+            raise CaseError(f"--workers {args.workers}: must be at least 1")
+        executor = client = None
+        if args.scheduler is not None:
+            from distributed import Client
+
+            try:
+                client = Client(args.scheduler, timeout="10s")
+            except OSError as error:
+                raise CaseError(f"--scheduler {args.scheduler}: cannot connect ({error})") from None
+            executor = client.get_executor()
+    except CaseError as error:
+        print(f"vpcontact: error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
+        report = run_study(study, args.out, executor=executor, workers=args.workers,
+                           progress=not args.quiet and sys.stderr.isatty())
+    finally:
+        if client is not None:
+            client.close()
+    print(f"study: {len(study.runs)} runs: {len(report['completed'])} run, {len(report['skipped'])} already complete, "
+          f"{len(report['retried'])} retried, {len(report['failed'])} failed -> {args.out / 'study.csv'}")
+    for run_id in report["failed"]:
+        print(f"vpcontact: run '{run_id}' failed (see {args.out / 'runs' / run_id})", file=sys.stderr)
+    return EXIT_FAILED if report["failed"] else 0
 
 
 if __name__ == "__main__":

@@ -123,6 +123,15 @@ class Result:
         """(steps done, m) array of a per-node quantity (see CONTACT_ARRAYS)."""
         return np.array(self.contact[name]).reshape(self.steps, self.contact_nodes)
 
+    def snapshot(self, step: int | None = None):
+        """The solution at a field step (default: the last computed) as a :class:`~vpcontact.norms.Snapshot`,
+        for :func:`vpcontact.norms.differences`."""
+        from .norms import Snapshot
+
+        fields = self.final if step is None else self.fields[step]
+        mesh = self.problem.mesh.mesh
+        return Snapshot(mesh.p, mesh.t, fields.displacement, fields.stress)
+
     def summary(self) -> dict:
         """The content of summary.json (without versions)."""
         final = {}

@@ -5,6 +5,7 @@
 - ``contact.csv``       one row per contact node and step;
 - ``fields/body.pvd``   displacement, stress, von Mises at the field steps (VTU files, ParaView);
 - ``fields/contact.pvd``  Γ3 with penetration, ξ, K, pressures, status, normal and contact force;
+- ``solution.npz``      the fields at the field steps as arrays (see ``write_solution``);
 - ``case.resolved.toml``  every value used, defaults included, with the versions as a header.
 """
 
@@ -144,6 +145,18 @@ def _write_fields(result: Result, folder: Path) -> None:
     _write_pvd(folder / "body.pvd", body)
     if contact:
         _write_pvd(folder / "contact.pvd", contact)
+    write_solution(result, folder.parent / "solution.npz")
+
+
+def write_solution(result: Result, path: Path) -> None:
+    """solution.npz: ``points`` (2, nnodes), ``triangles`` (3, nelements), ``steps`` (s,), ``times`` (s,),
+    ``displacement`` (s, nnodes, 2), ``stress`` (s, nelements, 2, 2) at the s field steps."""
+    steps = sorted(result.fields)
+    mesh = result.problem.mesh.mesh
+    np.savez_compressed(path, points=mesh.p, triangles=mesh.t, steps=np.array(steps),
+                        times=np.array([result.times[s - 1] for s in steps]),
+                        displacement=np.array([result.fields[s].displacement for s in steps]),
+                        stress=np.array([result.fields[s].stress for s in steps]))
 
 
 def _write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:

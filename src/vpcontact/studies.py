@@ -1,0 +1,288 @@
+"""Parameter studies: many runs of one base case, on a local process pool or a Dask cluster.
+
+A study file (TOML) names a base case and its runs:
+
+    base = "../paper_ball.toml"            # relative to the study file
+    [set]                                  # overrides applied to every run
+    "output.field_steps" = "none"
+    [[vary]]                               # one axis of the grid; keys in one axis vary together
+    "mesh.h" = [0.1, 0.05, 0.025]
+    "time.steps" = [11, 22, 44]
+    [[vary]]                               # the grid is the Cartesian product of the axes
+    "contact.stiffness.beta" = [1.0, -1.0]
+    [[runs]]                               # runs listed one by one, added to the grid
+    id = "signorini"
+    "contact.stiffness" = {law = "constant", value = 0.0}
+    [compare]                              # difference norms against a run of the study
+    reference = "signorini"
+    times = [1.1]
+
+Each run writes the standard outputs to DIR/runs/<id>/; DIR/study.csv has a row per run. A run
+whose directory holds a complete result of the same resolved case is not run again; a run that
+fails is retried once. Runs execute through a ``concurrent.futures`` executor: a local process pool,
+or the executor of a ``distributed.Client`` (a shared file system is assumed). The numbers do not
+depend on the executor.
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+import math
+import os
+import re
+import tomllib
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from .case import load_case
+from .errors import CaseError
+from .norms import Snapshot, differences
+
+STUDY_KEYS = {"base", "set", "vary", "runs", "compare"}
+
+
+@dataclass
+class RunSpec:
+    """One run of a study: its id, overrides (dotted key -> value) and output directory."""
+
+    id: str
+    overrides: dict
+    out: Path
+    base: Path
+
+
+@dataclass
+class Study:
+    """A study file, expanded into its runs."""
+
+    path: Path
+    base: Path
+    runs: list[RunSpec]
+    reference: str | None = None
+    times: list[float] = field(default_factory=list)
+
+
+# --- reading a study -----------------------------------------------------------------------------
+def load_study(path: str | os.PathLike, out: str | os.PathLike) -> Study:
+    """Read a study file and validate every run's case (one-line CaseError naming the run)."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise CaseError(f"study file '{path}' not found") from None
+    except tomllib.TOMLDecodeError as error:
+        raise CaseError(f"study file '{path}' is not valid TOML: {error}") from None
+    unknown = set(data) - STUDY_KEYS
+    if unknown:
+        raise CaseError(f"unknown key '{sorted(unknown)[0]}' in study file (valid keys: {', '.join(sorted(STUDY_KEYS))})")
+    if not isinstance(data.get("base"), str):
+        raise CaseError("missing required value 'base' (the case file the runs start from)")
+    base = path.parent / data["base"]
+    common = _table(data.get("set", {}), "set")
+    override_sets = [{**common, **combo} for combo in _grid(data.get("vary", []))] if data.get("vary") else []
+    explicit_ids = []
+    for i, run in enumerate(data.get("runs", [])):
+        run = dict(_table(run, f"runs[{i}]"))
+        explicit_ids.append(str(run.pop("id")) if "id" in run else None)
+        override_sets.append({**common, **run})
+    explicit_ids = [None] * (len(override_sets) - len(explicit_ids)) + explicit_ids
+    if not override_sets:
+        raise CaseError("the study has no runs: give [[vary]] axes or [[runs]]")
+
+    compare = _table(data.get("compare", {}), "compare")
+    times = [float(t) for t in compare.get("times", [])]
+    reference = compare.get("reference")
+    ids = _run_ids(override_sets, common, explicit_ids)
+    if reference is not None and reference not in ids:
+        raise CaseError(f"compare.reference = \"{reference}\": no run has that id (runs: {', '.join(ids)})")
+    if reference is not None and not times:
+        raise CaseError("compare.times is required with compare.reference")
+    runs = []
+    for run_id, overrides in zip(ids, override_sets):
+        overrides = _with_field_times(base, overrides, times, run_id)
+        runs.append(RunSpec(run_id, overrides, Path(out) / "runs" / run_id, base))
+    return Study(path, base, runs, reference, times)
+
+
+def _table(value, where: str) -> dict:
+    if not isinstance(value, dict):
+        raise CaseError(f"study '{where}' must be a table of dotted keys")
+    return value
+
+
+def _grid(axes: list) -> list[dict]:
+    """The Cartesian product of the axes; the keys of one axis vary together."""
+    columns = []
+    for i, axis in enumerate(axes):
+        axis = _table(axis, f"vary[{i}]")
+        lengths = {len(v) if isinstance(v, list) else -1 for v in axis.values()}
+        if len(lengths) != 1 or -1 in lengths or not axis:
+            raise CaseError(f"study vary[{i}]: every key needs a list of values, all of the same length")
+        count = lengths.pop()
+        columns.append([{key: values[j] for key, values in axis.items()} for j in range(count)])
+    return [{k: v for part in combo for k, v in part.items()} for combo in itertools.product(*columns)]
+
+
+def _run_ids(override_sets: list[dict], common: dict, explicit: list) -> list[str]:
+    """Readable ids from the varied values ("h=0.05,steps=22"), made unique."""
+    ids = []
+    for i, (overrides, given) in enumerate(zip(override_sets, explicit)):
+        varied = {k: v for k, v in overrides.items() if k not in common or common[k] != v}
+        text = given or ",".join(f"{k.split('.')[-1]}={_short(v)}" for k, v in varied.items()) or "base"
+        text = re.sub(r"[^A-Za-z0-9=.,+\-_]", "_", text)
+        ids.append(text if text not in ids else f"{text}-{i}")
+    return ids
+
+
+def _short(value) -> str:
+    if isinstance(value, dict):
+        return "-".join(_short(v) for v in value.values())
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _with_field_times(base: Path, overrides: dict, times: list[float], run_id: str) -> dict:
+    """Validate the run's case and make its field steps include the compared times."""
+    try:
+        case = load_case(base, overrides)
+    except CaseError as error:
+        raise CaseError(f"run '{run_id}': {error}") from None
+    if not times:
+        return overrides
+    k = case.time.T / case.time.steps
+    steps = []
+    for t in times:
+        n = round(t / k)
+        if not (1 <= n <= case.time.steps and math.isclose(n * k, t, rel_tol=1e-9, abs_tol=1e-12)):
+            raise CaseError(f"run '{run_id}': compare time {t:g} is not a time step (k = {k:g}, T = {case.time.T:g})")
+        steps.append(n)
+    fields = case.output.field_steps
+    have = {"all": list(range(1, case.time.steps + 1)), "final": [case.time.steps], "none": []}.get(fields, fields)
+    return {**overrides, "output.field_steps": sorted(set(have) | set(steps))}
+
+
+# --- running -------------------------------------------------------------------------------------
+def execute_run(spec: RunSpec) -> dict:
+    """Solve one run and write its directory; returns its summary (status "error" on an exception)."""
+    from .problem import build_problem
+    from .stepping import solve_problem
+    from .writers import write_run
+
+    try:
+        result = solve_problem(build_problem(load_case(spec.base, spec.overrides)))
+        write_run(result, spec.out, overwrite=True)
+        return result.summary()
+    except Exception as error:  # a failed run is reported in study.csv, never stops the study
+        return {"status": "error", "message": f"{type(error).__name__}: {error}"}
+
+
+def is_complete(spec: RunSpec) -> bool:
+    """Does spec.out hold a complete result of exactly this run's resolved case?"""
+    try:
+        summary = json.loads((spec.out / "summary.json").read_text())
+        done = load_case(spec.out / "case.resolved.toml").resolved()
+    except (OSError, ValueError, CaseError):
+        return False
+    return summary.get("status") == "complete" and done == load_case(spec.base, spec.overrides).resolved()
+
+
+def run_study(study: Study, out: str | os.PathLike, *, executor: Executor | None = None, workers: int | None = None,
+              progress: bool = False) -> dict:
+    """Run every incomplete run (each failed one retried once), then write DIR/study.csv.
+
+    Returns a report: {"skipped": [...], "completed": [...], "failed": [...], "retried": [...]}.
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    pending = [spec for spec in study.runs if not is_complete(spec)]
+    report = {"skipped": [s.id for s in study.runs if s not in pending], "completed": [], "failed": [], "retried": []}
+    messages = {}
+    owned = executor is None
+    executor = executor or ProcessPoolExecutor(max_workers=workers or os.cpu_count())
+    try:
+        with tqdm(total=len(pending), disable=not progress, unit="run", desc="runs") as bar:
+            futures = {executor.submit(execute_run, spec): spec for spec in pending}
+            while futures:
+                done = next(as_completed(futures))
+                spec = futures.pop(done)
+                summary = done.result()
+                if summary.get("status") == "complete":
+                    report["completed"].append(spec.id)
+                elif spec.id not in report["retried"]:
+                    report["retried"].append(spec.id)
+                    futures[executor.submit(execute_run, spec)] = spec
+                    continue
+                else:
+                    report["failed"].append(spec.id)
+                    messages[spec.id] = summary.get("message", "")
+                bar.update()
+                bar.set_postfix(done=len(report["completed"]), failed=len(report["failed"]),
+                                left=len(futures), refresh=False)
+    finally:
+        if owned:
+            executor.shutdown()
+    write_study_table(study, out, messages)
+    return report
+
+
+# --- the table -----------------------------------------------------------------------------------
+def write_study_table(study: Study, out: Path, messages: dict[str, str] | None = None) -> list[dict]:
+    """DIR/study.csv: per run its overrides, status, wall time, summary values and difference norms
+    (``messages``: why runs that wrote nothing failed)."""
+    rows = []
+    reference = _snapshots(study, study.reference) if study.reference else {}
+    for spec in study.runs:
+        row = {"id": spec.id, **{k: _cell(v) for k, v in spec.overrides.items() if k != "output.field_steps"}}
+        try:
+            summary = json.loads((spec.out / "summary.json").read_text())
+        except (OSError, ValueError):
+            summary = {"status": "error" if spec.id in (messages or {}) else "missing",
+                       "message": (messages or {}).get(spec.id, "")}
+        row.update({"status": summary.get("status"), "message": summary.get("message", ""),
+                    "wall_time_s": summary.get("wall_time_s"), "dofs": summary.get("dofs"),
+                    "contact_nodes": summary.get("contact_nodes"), "steps": summary.get("steps"),
+                    "newton_iterations": summary.get("newton_iterations")})
+        final = dict(summary.get("final") or {})
+        force = final.pop("contact_force", [None, None])
+        row.update(final)
+        row["contact_force_x"], row["contact_force_y"] = force
+        if reference:
+            mine = _snapshots(study, spec.id) if summary.get("status") == "complete" else {}
+            for t in study.times:
+                norms = differences(mine[t], reference[t]) if t in mine and t in reference else {}
+                row[f"norm_V_t{t:g}"] = norms.get("V", math.nan)
+                row[f"norm_Q_t{t:g}"] = norms.get("Q", math.nan)
+        rows.append(row)
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    temporary = out / ".study.csv.partial"
+    with temporary.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns)
+        writer.writeheader()
+        writer.writerows(rows)
+    temporary.replace(out / "study.csv")
+    return rows
+
+
+def _cell(value):
+    return json.dumps(value) if isinstance(value, (dict, list)) else value
+
+
+def _snapshots(study: Study, run_id: str) -> dict[float, Snapshot]:
+    """The run's fields at the compared times, from its solution.npz."""
+    spec = next(s for s in study.runs if s.id == run_id)
+    try:
+        data = np.load(spec.out / "solution.npz")
+    except OSError:
+        return {}
+    found = {}
+    for t in study.times:
+        index = np.flatnonzero(np.isclose(data["times"], t, rtol=1e-9, atol=1e-12))
+        if index.size:
+            i = index[0]
+            found[t] = Snapshot(data["points"], data["triangles"], data["displacement"][i], data["stress"][i])
+    return found
