@@ -22,9 +22,13 @@ from .mesh import Mesh
 Density = Callable[[np.ndarray, np.ndarray, float], tuple]
 
 
+#: The centroid rule: exact for the bulk forms of P1 × P0 (their integrands are constant per element).
+CENTROID = (np.array([[1.0 / 3.0], [1.0 / 3.0]]), np.array([0.5]))
+
+
 def displacement_basis(mesh: Mesh) -> Basis:
-    """The P1 vector basis (dofs of node i: ``basis.nodal_dofs[:, i]``), one-point exact for P1 strains."""
-    return Basis(mesh.mesh, ElementVector(ElementTriP1()), intorder=1)
+    """The P1 vector basis (dofs of node i: ``basis.nodal_dofs[:, i]``) with the centroid rule."""
+    return Basis(mesh.mesh, ElementVector(ElementTriP1()), quadrature=CENTROID)
 
 
 def stiffness(basis: Basis, elasticity: Elasticity) -> sp.csr_matrix:
