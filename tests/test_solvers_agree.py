@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import vpcontact
-from vpcontact.solvers import SOLVERS
+from vpcontact.solvers.factorization import installed_backends
 from conftest import half_disc_case, rectangle_case
 
 CASES = {
@@ -29,15 +29,19 @@ def relative(a, b):
     return np.abs(a - b).max() / scale
 
 
+#: the full method, and the condensed one with every factorization installed here
+METHODS = [("full", "auto")] + [("condensed", backend) for backend in installed_backends()]
+
+
 @pytest.mark.parametrize("name", CASES)
 def test_methods_agree(name):
     results = {}
-    for method in SOLVERS:
-        case = {**CASES[name], "solver": {**CASES[name]["solver"], "method": method}, "output": {"field_steps": "all"}}
-        results[method] = vpcontact.solve(case)
-        assert results[method].status == "complete", results[method].message
-        assert results[method].method == method
-    reference = results.pop("full")
+    for method, backend in METHODS:
+        solver = {**CASES[name]["solver"], "method": method, "factorization": backend}
+        results[method, backend] = vpcontact.solve({**CASES[name], "solver": solver, "output": {"field_steps": "all"}})
+        assert results[method, backend].status == "complete", results[method, backend].message
+        assert results[method, backend].method == method
+    reference = results.pop(("full", "auto"))
     for method, result in results.items():
         for step, fields in reference.fields.items():
             assert relative(result.fields[step].displacement, fields.displacement) < 1e-8, (method, step)

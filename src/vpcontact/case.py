@@ -20,7 +20,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 
 from .errors import CaseError
 from .expressions import parse_expression
-from .solvers.factorization import BACKENDS
+from .solvers.factorization import BACKENDS, installed_backends
 
 # --- value types ---------------------------------------------------------------------------------
 PositiveFloat = Annotated[float, Field(gt=0)]
@@ -73,20 +73,70 @@ class MeshSection(_Section):
         return self
 
 
+class PerzynaSection(_Section):
+    """𝒢(σ, ε) = −(1/η) (σ − P(σ)), P the projection onto {τ ∈ S² : ‖dev τ‖ ≤ yield_stress}."""
+
+    law: Literal["perzyna"]
+    eta: PositiveFloat  # viscosity η: the Lipschitz constant of 𝒢 is 1/η
+    yield_stress: NonNegativeFloat  # σ_y; 0: the whole deviator relaxes
+
+
+class RelaxationSection(_Section):
+    """𝒢(σ, ε) = −μ (σ − 𝒞ε), 𝒞 isotropic (E_inf, nu_inf) with the material's hypothesis."""
+
+    law: Literal["relaxation"]
+    mu: PositiveFloat  # relaxation rate μ (1/time)
+    E_inf: PositiveFloat
+    nu_inf: float
+
+
+Viscoplastic = Annotated[Union[PerzynaSection, RelaxationSection], Field(discriminator="law")]
+
+
+def _check_poisson_ratio(key: str, nu: float, hypothesis: str) -> None:
+    upper_ok = nu < 0.5 if hypothesis == "plane_strain" else nu <= 0.5
+    if not (-1.0 < nu and upper_ok):
+        bound = "< 0.5" if hypothesis == "plane_strain" else "<= 0.5"
+        name = key.rpartition(".")[2]
+        raise ValueError(f"{key} = {nu!r}: must satisfy -1 < {name} {bound} for {hypothesis}")
+
+
 class MaterialSection(_Section):
-    """Isotropic elasticity (4.1); plane strain (the paper's formula) or plane stress."""
+    """Isotropic elasticity (4.1); plane strain (the paper's formula) or plane stress; optionally a
+    viscoplastic law 𝒢 of (2.1) (none: 𝒢 = 0, linear elasticity)."""
 
     E: PositiveFloat
     nu: float
     hypothesis: Literal["plane_strain", "plane_stress"] = "plane_strain"
+    viscoplastic: Optional[Viscoplastic] = None
 
     @model_validator(mode="after")
     def _admissible_poisson_ratio(self):
-        upper_ok = self.nu < 0.5 if self.hypothesis == "plane_strain" else self.nu <= 0.5
-        if not (-1.0 < self.nu and upper_ok):
-            bound = "< 0.5" if self.hypothesis == "plane_strain" else "<= 0.5"
-            raise ValueError(f"material.nu = {self.nu!r}: must satisfy -1 < nu {bound} for {self.hypothesis}")
+        _check_poisson_ratio("material.nu", self.nu, self.hypothesis)
+        if isinstance(self.viscoplastic, RelaxationSection):
+            _check_poisson_ratio("material.viscoplastic.nu_inf", self.viscoplastic.nu_inf, self.hypothesis)
         return self
+
+
+def _stress_tensor(value):
+    """A symmetric 2 × 2 tensor [[sxx, sxy], [sxy, syy]] of finite numbers."""
+    if not (isinstance(value, list) and len(value) == 2
+            and all(isinstance(row, list) and len(row) == 2 for row in value)):
+        raise ValueError(f"initial.stress = {value!r}: expected a 2 x 2 table [[sxx, sxy], [sxy, syy]]")
+    for row in value:
+        for entry in row:
+            if isinstance(entry, bool) or not isinstance(entry, (int, float)) or not math.isfinite(entry):
+                raise ValueError(f"initial.stress = {value!r}: expected finite numbers, got {entry!r}")
+    if value[0][1] != value[1][0]:
+        raise ValueError(f"initial.stress = {value!r}: must be symmetric (stress[0][1] = {value[0][1]!r}, "
+                         f"stress[1][0] = {value[1][0]!r})")
+    return [[float(entry) for entry in row] for row in value]
+
+
+class InitialSection(_Section):
+    """Initial data (2.7): u_0 = 0 and a uniform initial stress σ_0 (default 0)."""
+
+    stress: Annotated[Any, AfterValidator(_stress_tensor)] = [[0.0, 0.0], [0.0, 0.0]]
 
 
 class DirichletSection(_Section):
@@ -194,9 +244,10 @@ class SolverSection(_Section):
     @field_validator("factorization")
     @classmethod
     def _installed_backend(cls, value):
-        if value != "auto" and value not in BACKENDS:
-            raise ValueError(f"solver.factorization = \"{value}\": not available here; expected \"auto\" or one of "
-                             f"{', '.join(repr(b) for b in BACKENDS)}")
+        if value != "auto" and value not in installed_backends():
+            known = "not installed here" if value in BACKENDS else "unknown"
+            raise ValueError(f"solver.factorization = \"{value}\": {known}; expected \"auto\" or one of "
+                             f"{', '.join(repr(b) for b in installed_backends())}")
         return value
 
     @field_validator("augmentation", mode="before")
@@ -228,6 +279,7 @@ class Case(_Section):
     material: MaterialSection
     boundary: BoundarySection = BoundarySection()
     contact: Optional[ContactSection] = None
+    initial: InitialSection = InitialSection()
     time: TimeSection
     solver: SolverSection = SolverSection()
     output: OutputSection = OutputSection()
@@ -369,6 +421,8 @@ _TYPE_WORDS = {
     "finite_number": "expected a finite number",
 }
 _STIFFNESS_TAGS = ("power", "constant", "exponential")
+_VISCOPLASTIC_TAGS = ("perzyna", "relaxation")
+_LAW_TAGS = {"stiffness": _STIFFNESS_TAGS, "viscoplastic": _VISCOPLASTIC_TAGS}  # tagged unions by section name
 
 
 def _dotted(loc) -> str:
@@ -382,7 +436,7 @@ def _clean_loc(loc) -> tuple:
     """Drop the discriminator tags pydantic inserts (contact.stiffness.power.beta -> contact.stiffness.beta)."""
     cleaned = []
     for item in loc:
-        if cleaned and cleaned[-1] == "stiffness" and item in _STIFFNESS_TAGS:
+        if cleaned and item in _LAW_TAGS.get(cleaned[-1], ()):
             continue
         cleaned.append(item)
     return tuple(cleaned)
@@ -393,14 +447,14 @@ def _describe(error: dict) -> str:
     key, kind, value = _dotted(loc), error["type"], error.get("input")
     ctx = error.get("ctx", {})
     if kind == "extra_forbidden":
-        return _unknown_key(loc)
+        return _unknown_key(loc, _law_tag(error["loc"]))
     if kind == "missing":
         return f"missing required value '{key}'"
     if kind == "value_error":
         message = str(ctx.get("error", error["msg"]))
         return message if key in ("", "mesh", "material", "contact", "output") or message.startswith(key) else f"{key}: {message}"
     if kind in ("union_tag_invalid", "union_tag_not_found"):
-        laws = ", ".join(f'"{t}"' for t in _STIFFNESS_TAGS)
+        laws = ", ".join(f'"{t}"' for t in _LAW_TAGS.get(loc[-1] if loc else "", _STIFFNESS_TAGS))
         given = ctx.get("tag")
         if kind == "union_tag_not_found":
             return f"missing required value '{key}.law' (one of {laws})"
@@ -424,22 +478,33 @@ def _show(value) -> str:
     return repr(value)
 
 
-def _unknown_key(loc) -> str:
-    valid = _valid_keys(loc[:-1])
+def _law_tag(raw_loc) -> str | None:
+    """The law a tagged union was validated as (the tag pydantic inserts after "stiffness" etc.)."""
+    for before, item in zip(raw_loc, raw_loc[1:]):
+        if item in _LAW_TAGS.get(before, ()):
+            return item
+    return None
+
+
+def _unknown_key(loc, law: str | None = None) -> str:
+    valid = _valid_keys(loc[:-1], law)
     name = str(loc[-1])
     close = difflib.get_close_matches(name, valid, n=1)
     hint = f"did you mean '{_dotted((*loc[:-1], close[0]))}'?" if close else f"valid keys: {', '.join(valid)}"
     return f"unknown key '{_dotted(loc)}' ({hint})"
 
 
-def _valid_keys(loc) -> list[str]:
-    """The keys allowed at ``loc`` (a path of section names and list indices)."""
+def _valid_keys(loc, law: str | None = None) -> list[str]:
+    """The keys allowed at ``loc`` (a path of section names and list indices); ``law`` picks the
+    member of a tagged union of laws."""
     models = [Case]
     for item in loc:
         if isinstance(item, int):
             continue
         models = [inner for model in models if item in model.model_fields
                   for inner in _models_in(model.model_fields[item].annotation)]
+    if law is not None and len(models) > 1:
+        models = [model for model in models if law in typing.get_args(model.model_fields.get("law").annotation)] or models
     keys = {k for model in models for k, f in model.model_fields.items() if not f.exclude}
     return sorted(keys)
 

@@ -1,10 +1,12 @@
 """Sparse direct factorizations of the SPD matrix A0, behind one small interface:
 
-    factorization = factorize(A0, backend)
+    factorization = factorize(A0, N, backend)       # factors A0, ready to condense onto N's rows
     x = factorization.solve(b)                      # b: (n,) or (n, k)
-    S = factorization.condensed_operator(N)         # the dense m × m matrix N A0⁻¹ Nᵀ
+    S = factorization.condensed_operator()          # the dense m × m matrix N A0⁻¹ Nᵀ
 
-Backends: "superlu" (SciPy, always installed) and those listed in ``BACKENDS`` that import here.
+Backends, fastest first (measurements in docs/factorizations.md): "pardiso" (MKL PARDISO, SPD
+Cholesky with METIS; S from its Schur complement on the contact dofs; needs the ``mkl`` wheel) and
+"superlu" (SciPy, always installed; S by block solves).
 """
 
 from __future__ import annotations
@@ -12,13 +14,47 @@ from __future__ import annotations
 import os
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..errors import CaseError
-
 #: Columns of Nᵀ solved at once when S is built by block solves.
 BLOCK = 64
+
+
+class PardisoFactorization:
+    """MKL PARDISO; the Schur complement S_C of A0 on the contact dofs C comes with the factor, and
+    S = N_C S_C⁻¹ N_Cᵀ (the C block of A0⁻¹ is S_C⁻¹)."""
+
+    name = "pardiso"
+
+    @staticmethod
+    def available() -> bool:
+        from .pardiso import library
+
+        try:
+            library()
+        except OSError:
+            return False
+        return True
+
+    def __init__(self, A: sp.spmatrix, N: sp.csr_matrix):
+        from .pardiso import Pardiso
+
+        self._dofs = np.unique(N.indices)
+        self._N_contact = N[:, self._dofs].toarray()
+        self._pardiso = Pardiso(A, self._dofs)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        return self._pardiso.solve(b)
+
+    def condensed_operator(self) -> np.ndarray:
+        if self._dofs.size == 0:
+            return np.zeros((self._N_contact.shape[0],) * 2)
+        schur = self._pardiso.schur
+        factor = sla.cho_factor(0.5 * (schur + schur.T))
+        S = self._N_contact @ sla.cho_solve(factor, self._N_contact.T)
+        return 0.5 * (S + S.T)
 
 
 class SuperLUFactorization:
@@ -26,40 +62,41 @@ class SuperLUFactorization:
 
     name = "superlu"
 
-    def __init__(self, A: sp.spmatrix):
+    @staticmethod
+    def available() -> bool:
+        return True
+
+    def __init__(self, A: sp.spmatrix, N: sp.csr_matrix):
+        self._N = N
         self._lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                              options={"SymmetricMode": True})
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self._lu.solve(b)
 
-    def condensed_operator(self, N: sp.csr_matrix) -> np.ndarray:
+    def condensed_operator(self) -> np.ndarray:
         """S = N A0⁻¹ Nᵀ by block solves with BLOCK columns of Nᵀ at a time, symmetrized."""
-        return block_condensed_operator(self.solve, N)
+        m = self._N.shape[0]
+        S = np.empty((m, m))
+        NT = self._N.T.tocsc()
+        for start in range(0, m, BLOCK):
+            stop = min(start + BLOCK, m)
+            S[:, start:stop] = self._N @ self.solve(NT[:, start:stop].toarray())
+        return 0.5 * (S + S.T)
 
 
-def block_condensed_operator(solve, N: sp.csr_matrix) -> np.ndarray:
-    """S = N A0⁻¹ Nᵀ from solves with blocks of columns of Nᵀ."""
-    m = N.shape[0]
-    S = np.empty((m, m))
-    NT = N.T.tocsc()
-    for start in range(0, m, BLOCK):
-        stop = min(start + BLOCK, m)
-        S[:, start:stop] = N @ solve(NT[:, start:stop].toarray())
-    return 0.5 * (S + S.T)
+BACKENDS = {backend.name: backend for backend in (PardisoFactorization, SuperLUFactorization)}
 
 
-BACKENDS = {SuperLUFactorization.name: SuperLUFactorization}
+def installed_backends() -> list[str]:
+    """The backends that work here, fastest first."""
+    return [name for name, backend in BACKENDS.items() if backend.available()]
 
 
-def factorize(A: sp.spmatrix, backend: str = "auto"):
+def factorize(A: sp.spmatrix, N: sp.csr_matrix, backend: str = "auto"):
     """Factor the SPD matrix A with ``backend`` ("auto": the fastest one installed)."""
-    if backend == "auto":
-        backend = next(iter(BACKENDS))
-    if backend not in BACKENDS:
-        raise CaseError(f"solver.factorization = \"{backend}\" is not available here; installed: "
-                        f"{', '.join(BACKENDS)}")
-    return BACKENDS[backend](A)
+    name = installed_backends()[0] if backend == "auto" else backend
+    return BACKENDS[name](A, N)
 
 
 def available_memory() -> int:
