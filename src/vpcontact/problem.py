@@ -21,7 +21,7 @@ from .contact import (ConstantStiffness, ContactLaw, ContactSurface, Exponential
                       PowerStiffness, contact_surface, empty_surface)
 from .errors import CaseError
 from .expressions import parse_expression
-from .material import Elasticity
+from .material import Elasticity, Perzyna, Relaxation
 
 
 @dataclass
@@ -40,6 +40,7 @@ class Problem:
     probe: int | None  # index of the reported contact node
     viscoplastic: Callable | None = None  # 𝒢(σ, ε) over arrays (2, 2, nelements); None: 𝒢 = 0
     timings: dict = field(default_factory=dict)  # seconds: mesh, assembly, build
+    initial_stress: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))  # σ_0 (uniform); u_0 = 0
     times: np.ndarray = field(init=False)
 
     def __post_init__(self):
@@ -56,7 +57,8 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     """Assemble the problem of ``case``; the keyword arguments replace the case's laws by Python
     objects (see :mod:`vpcontact.contact` for the protocol: ``f(r)`` and ``f.derivative(r)``) and
     its traction or body force densities by callables ``f(x, y, t) -> (fx, fy)``; ``viscoplastic``
-    is 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (2, 2, nelements)."""
+    is 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (2, 2, nelements) (it replaces
+    ``material.viscoplastic``)."""
     started = time.perf_counter()
     mesh = _make_mesh(case)
     meshed = time.perf_counter()
@@ -90,7 +92,10 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     _check_rigid_motions(mesh, basis, free, surface)
     done = time.perf_counter()
     timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
-    return Problem(case, mesh, basis, elasticity, A, free, loads, surface, law, probe, viscoplastic, timings)
+    if viscoplastic is None:
+        viscoplastic = _viscoplastic_law(case)
+    return Problem(case, mesh, basis, elasticity, A, free, loads, surface, law, probe, viscoplastic, timings,
+                   initial_stress=np.array(case.initial.stress, dtype=float))
 
 
 def _make_mesh(case: Case) -> meshes.Mesh:
@@ -119,6 +124,16 @@ def _stiffness_law(case: Case):
     if s.law == "constant":
         return ConstantStiffness(s.value)
     return ExponentialStiffness(s.c_v, s.alpha)
+
+
+def _viscoplastic_law(case: Case) -> Callable | None:
+    """𝒢 of ``material.viscoplastic`` (None: 𝒢 = 0)."""
+    v = case.material.viscoplastic
+    if v is None:
+        return None
+    if v.law == "perzyna":
+        return Perzyna(v.eta, v.yield_stress)
+    return Relaxation(v.mu, Elasticity(v.E_inf, v.nu_inf, case.material.hypothesis))
 
 
 def _check_rigid_motions(mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):

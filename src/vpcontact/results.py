@@ -25,12 +25,15 @@ CONTACT_ARRAYS = ("penetration", "xi", "K", "pressure_compliance", "pressure_rig
 @dataclass
 class Fields:
     """Displacement at the nodes (nnodes, 2); per element: in-plane stress (nelements, 2, 2), the
-    out-of-plane σ33 of the elastic response and the von Mises stress of the 3D tensor."""
+    out-of-plane σ33 of the elastic response and the von Mises stress of the 3D tensor; with a
+    viscoplastic law or an initial stress, the history z (nelements, 2, 2) of the step, so that
+    stress = ℰε(u) + z (None otherwise: z = 0)."""
 
     displacement: np.ndarray
     stress: np.ndarray
     stress33: np.ndarray
     von_mises: np.ndarray
+    z: np.ndarray | None = None
 
 
 @dataclass

@@ -3,7 +3,8 @@
 - ``summary.json``      status, sizes, wall time, the final values, versions;
 - ``history.csv``       one row per time step (``results.HISTORY_COLUMNS``);
 - ``contact.csv``       one row per contact node and step;
-- ``fields/body.pvd``   displacement, stress, von Mises at the field steps (VTU files, ParaView);
+- ``fields/body.pvd``   displacement, stress, von Mises (and the viscoplastic history z when there is
+                        one) at the field steps (VTU files, ParaView);
 - ``fields/contact.pvd``  Γ3 with penetration, ξ, K, pressures, status, normal and contact force;
 - ``solution.npz``      the fields at the field steps as arrays (see ``write_solution``);
 - ``case.resolved.toml``  every value used, defaults included, with the versions as a header.
@@ -127,9 +128,13 @@ def _write_fields(result: Result, folder: Path) -> None:
         stress[:, 2, 2] = fields.stress33
         displacement = np.column_stack([fields.displacement, np.zeros(result.nodes)])
         name = f"body_{step:05d}.vtu"
-        meshio.write(folder / name, meshio.Mesh(
-            points, triangles, point_data={"displacement": displacement},
-            cell_data={"stress": [stress.reshape(-1, 9)], "von_mises": [fields.von_mises]}))
+        cell_data = {"stress": [stress.reshape(-1, 9)], "von_mises": [fields.von_mises]}
+        if fields.z is not None:
+            z = np.zeros((result.elements, 3, 3))
+            z[:, :2, :2] = fields.z
+            cell_data["z"] = [z.reshape(-1, 9)]
+        meshio.write(folder / name, meshio.Mesh(points, triangles, point_data={"displacement": displacement},
+                                                cell_data=cell_data))
         body.append((t, name))
         if surface.size:
             data = {key: result.contact[key][step - 1] for key in CONTACT_ARRAYS}
@@ -150,13 +155,18 @@ def _write_fields(result: Result, folder: Path) -> None:
 
 def write_solution(result: Result, path: Path) -> None:
     """solution.npz: ``points`` (2, nnodes), ``triangles`` (3, nelements), ``steps`` (s,), ``times`` (s,),
-    ``displacement`` (s, nnodes, 2), ``stress`` (s, nelements, 2, 2) at the s field steps."""
+    ``displacement`` (s, nnodes, 2), ``stress`` (s, nelements, 2, 2) at the s field steps; with a
+    viscoplastic law or an initial stress also ``z`` (s, nelements, 2, 2), the history of (2.28):
+    stress = ℰε(u) + z."""
     steps = sorted(result.fields)
     mesh = result.problem.mesh.mesh
-    np.savez_compressed(path, points=mesh.p, triangles=mesh.t, steps=np.array(steps),
-                        times=np.array([result.times[s - 1] for s in steps]),
-                        displacement=np.array([result.fields[s].displacement for s in steps]),
-                        stress=np.array([result.fields[s].stress for s in steps]))
+    arrays = dict(points=mesh.p, triangles=mesh.t, steps=np.array(steps),
+                  times=np.array([result.times[s - 1] for s in steps]),
+                  displacement=np.array([result.fields[s].displacement for s in steps]),
+                  stress=np.array([result.fields[s].stress for s in steps]))
+    if steps and result.fields[steps[0]].z is not None:
+        arrays["z"] = np.array([result.fields[s].z for s in steps])
+    np.savez_compressed(path, **arrays)
 
 
 def _write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:
