@@ -46,3 +46,23 @@ def test_condensed_refuses_an_operator_that_does_not_fit(tmp_path, capsys, monke
     assert not (tmp_path / "out").exists()
     case["solver"]["method"] = "auto"  # the default falls back to the full method
     assert vpcontact.solve(case).method == "full"
+
+
+@pytest.mark.parametrize("backend", __import__("vpcontact.solvers.factorization", fromlist=["x"]).installed_backends())
+def test_every_backend_solves_and_condenses_exactly(backend, monkeypatch):
+    """A0 x = b and S = N A0⁻¹ Nᵀ against dense linear algebra, on the half-disc stiffness; PARDISO
+    also after it swaps its Schur-mode factor for a plain one."""
+    from vpcontact.solvers import factorization
+
+    monkeypatch.setattr(factorization.PardisoFactorization, "PLAIN_AFTER", 2)
+    problem = vpcontact.build_problem(vpcontact.load_case(half_disc_case(h=0.2)))
+    free = problem.free
+    N = problem.surface.operator[:, free].tocsr()
+    A0 = (problem.A[free][:, free] + 1e3 * N.T @ N).tocsc()
+    solver = factorization.factorize(A0, N, backend)
+    dense = np.linalg.inv(A0.toarray())
+    np.testing.assert_allclose(solver.condensed_operator(), N @ dense @ N.T.toarray(), rtol=1e-10, atol=1e-14)
+    rng = np.random.default_rng(1)
+    for _ in range(4):
+        b = rng.standard_normal(free.size)
+        np.testing.assert_allclose(solver.solve(b), dense @ b, rtol=1e-9, atol=1e-12)
