@@ -29,9 +29,7 @@ S = Wᵀ W with W = L⁻¹ P Nᵀ (one sparse forward solve with CHOLMOD's LLᵀ
 from __future__ import annotations
 
 import argparse
-import ctypes
 import gc
-import glob
 import json
 import os
 import resource
@@ -240,148 +238,21 @@ class PyPardiso(Backend):
         return self.solver.solve(self.A, b)
 
 
-# --- MKL PARDISO called directly (SPD, mtype 2) -------------------------------------------
-def _find_mkl_rt():
-    path = os.environ.get("MKL_RT")
-    if path:
-        return path
-    pats = [
-        os.path.join(sys.prefix, "lib", "libmkl_rt.so*"),
-        os.path.join(sys.prefix, "lib*", "**", "libmkl_rt.so*"),
-        os.path.join(sys.prefix, "Library", "bin", "mkl_rt*.dll"),
-    ]
-    for pat in pats:
-        hits = sorted(glob.glob(pat, recursive=True), key=len)
-        if hits:
-            return hits[0]
-    from ctypes.util import find_library
-
-    return find_library("mkl_rt")
-
-
-class MklPardiso:
-    """Minimal ctypes wrapper of MKL PARDISO for a real SPD matrix (mtype = 2, Cholesky LLᵀ).
-
-    Input: the upper triangle in CSR, zero-based (iparm[34] = 1), 32-bit indices (LP64
-    ``pardiso``). The arrays handed to PARDISO must stay alive while the handle lives."""
-
-    _lib = None
-    _c_int_p = ctypes.POINTER(ctypes.c_int32)
-
-    @classmethod
-    def lib(cls):
-        if cls._lib is None:
-            path = _find_mkl_rt()
-            if not path:
-                raise OSError("libmkl_rt not found (pip install mkl)")
-            lib = ctypes.CDLL(path)
-            lib.pardiso.restype = None
-            lib.pardiso.argtypes = [ctypes.c_void_p] + [cls._c_int_p] * 5 + [ctypes.c_void_p] + [cls._c_int_p] * 6 + [
-                ctypes.c_void_p,
-                ctypes.c_void_p,
-                cls._c_int_p,
-            ]
-            cls._lib = lib
-        return cls._lib
-
-    def __init__(self, A0, schur_dofs=None, ordering=2, msglvl=0, iparm=None):
-        lib = self.lib()
-        U = sp.triu(A0, format="csr")
-        U.sort_indices()
-        self.n = A0.shape[0]
-        self.data = np.ascontiguousarray(U.data, dtype=np.float64)
-        self.ia = np.ascontiguousarray(U.indptr, dtype=np.int32)
-        self.ja = np.ascontiguousarray(U.indices, dtype=np.int32)
-        self.pt = np.zeros(64, dtype=np.int64)  # internal handle, must be zero before phase 11
-        self.iparm = np.zeros(64, dtype=np.int32)
-        ip = self.iparm
-        ip[0] = 1  # we supply iparm
-        ip[1] = ordering  # 2: METIS nested dissection, 3: parallel METIS
-        ip[7] = 0  # no iterative refinement (SPD, Cholesky)
-        ip[9] = 13  # pivot perturbation 1e-13 (irrelevant for mtype 2)
-        ip[17] = -1  # report nnz(L) in iparm[17]
-        ip[26] = 0  # no matrix checker
-        ip[34] = 1  # zero-based ia/ja
-        for k, v in (iparm or {}).items():  # overrides, zero-based as in the C docs
-            ip[int(k)] = v
-        self.perm = np.zeros(self.n, dtype=np.int32)
-        self.nschur = 0
-        if schur_dofs is not None:
-            # iparm[35] = 2: factor everything and return the dense Schur complement of the dofs
-            # marked 1 in perm (in x, nschur × nschur, ordered as the marked dofs ascend); the
-            # factor stays usable for ordinary solves (checked in the benchmark).
-            ip[35] = 2
-            self.perm[np.asarray(schur_dofs)] = 1
-            self.nschur = len(schur_dofs)
-        self.msglvl = msglvl
-        self.error = ctypes.c_int32(0)
-        self.schur_matrix = None
-
-    def _call(self, phase, b=None, x=None, nrhs=1):
-        i32 = lambda v: ctypes.byref(ctypes.c_int32(v))  # noqa: E731
-        null = ctypes.c_void_p()
-        self.lib().pardiso(
-            self.pt.ctypes.data,
-            i32(1),  # maxfct
-            i32(1),  # mnum
-            i32(2),  # mtype: real SPD
-            i32(phase),
-            i32(self.n),
-            self.data.ctypes.data,
-            self.ia.ctypes.data_as(self._c_int_p),
-            self.ja.ctypes.data_as(self._c_int_p),
-            self.perm.ctypes.data_as(self._c_int_p),
-            i32(nrhs),
-            self.iparm.ctypes.data_as(self._c_int_p),
-            i32(self.msglvl),
-            b.ctypes.data if b is not None else null,
-            x.ctypes.data if x is not None else null,
-            ctypes.byref(self.error),
-        )
-        if self.error.value != 0:
-            raise RuntimeError(f"MKL PARDISO phase {phase} failed: error {self.error.value}")
-
-    def factor(self):
-        """Phase 12: analysis + numeric factorization (+ the Schur complement if asked)."""
-        if self.nschur:
-            xs = np.zeros(self.nschur * self.nschur)
-            dummy = np.zeros(self.n)
-            self._call(12, dummy, xs)
-            self.schur_matrix = xs.reshape(self.nschur, self.nschur)
-        else:
-            self._call(12)
-        return self
-
-    def solve(self, b):
-        """Phase 33 with nrhs columns; b is (n,) or (n, k), copied to Fortran order."""
-        b = np.asarray(b, dtype=np.float64)
-        one = b.ndim == 1
-        B = np.asfortranarray(b.reshape(self.n, -1))
-        X = np.zeros_like(B, order="F")
-        self._call(33, B, X, nrhs=B.shape[1])
-        return X[:, 0] if one else X
-
-    def release(self):
-        if self.pt.any():
-            self._call(-1)
-
-    def __del__(self):
-        try:
-            self.release()
-        except Exception:
-            pass
-
-
+# --- MKL PARDISO called directly (SPD, mtype 2): the package's own binding ------------------
 class MklDirect(Backend):
     name = "mkl-direct"
     schur_route = "schur-contact-dofs (iparm[35]=2)"
 
     @classmethod
     def check(cls):
-        MklPardiso.lib()
+        from vpcontact.solvers.pardiso import library
+
+        library()
 
     def factor(self, A0):
-        self.p = MklPardiso(A0).factor()
+        from vpcontact.solvers.pardiso import Pardiso
+
+        self.p = Pardiso(A0)
 
     def solve(self, b):
         return self.p.solve(b)
@@ -390,11 +261,10 @@ class MklDirect(Backend):
         # a second PARDISO handle whose factorization also returns the Schur complement on the
         # contact dofs; in the solver this handle would replace the plain one (its factor solves).
         C, Nc = contact_dofs(N)
-        self.ps = MklPardiso(A0, schur_dofs=C).factor()
-        return schur_to_S(self.ps.schur_matrix, Nc)
+        from vpcontact.solvers.pardiso import Pardiso
 
-    def info(self):
-        return {"nnz_factor": int(self.p.iparm[17]), "iparm": {"1": int(self.p.iparm[1]), "35": 2}}
+        self.ps = Pardiso(A0, schur_dofs=C)
+        return schur_to_S(self.ps.schur, Nc)
 
 
 class MklDirectBlocks(MklDirect):

@@ -5,7 +5,6 @@ problem solved by generic SciPy solvers instead of the semi-smooth Newton method
 import math
 
 import numpy as np
-import pytest
 from scipy.optimize import minimize, root
 
 import vpcontact
