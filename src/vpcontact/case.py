@@ -7,8 +7,11 @@ overrides are applied to the raw data before validation. Every problem is report
 
 from __future__ import annotations
 
+import datetime
 import difflib
+import json
 import math
+import os
 import re
 import tomllib
 import typing
@@ -23,6 +26,34 @@ from .expressions import parse_expression
 from .solvers.factorization import BACKENDS, installed_backends
 
 # --- value types ---------------------------------------------------------------------------------
+#: Longest value shown in a message (longer ones are cut, the message stays one short line).
+SHOWN = 60
+#: Most time steps and (estimated) triangles of a built-in shape a case may ask for: beyond, the run
+#: could not even allocate its arrays.
+MAX_STEPS = 10**8
+MAX_ELEMENTS = 10**9
+
+
+def _finite(number) -> bool:
+    """Is an int or float a finite float64 (an int beyond 1.8e308 is not)?"""
+    try:
+        return math.isfinite(float(number))
+    except OverflowError:
+        return False
+
+
+def _brief(value) -> str:
+    """repr(value), cut to SHOWN characters (a huge number or list stays a short message)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 200:
+        sign = "a negative" if value < 0 else "an"
+        return f"{sign} integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+    try:
+        text = repr(value)
+    except Exception:  # noqa: BLE001 - an object of the API may have any repr
+        return f"a value of type {type(value).__name__}"
+    return text if len(text) <= SHOWN else text[: SHOWN - 3] + "..."
+
+
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
 
@@ -30,9 +61,9 @@ NonNegativeFloat = Annotated[float, Field(ge=0)]
 def _expression_value(value):
     """An expression: a string (parsed later with its key in the message) or a number."""
     if isinstance(value, bool) or not isinstance(value, (str, int, float)):
-        raise ValueError(f"expected an expression (a string such as \"-1000*t\") or a number, got {value!r}")
+        raise ValueError(f"expected an expression (a string such as \"-1000*t\") or a number, got {_brief(value)}")
     if isinstance(value, float) and not math.isfinite(value):
-        raise ValueError(f"expected a finite number, got {value!r}")
+        raise ValueError(f"expected a finite number, got {_brief(value)}")
     return value
 
 
@@ -70,6 +101,12 @@ class MeshSection(_Section):
                 raise ValueError(f"mesh.{key} is not used with {where}")
         if self.file is not None and self.h is not None:
             raise ValueError("mesh.h is not used with mesh.file (the file fixes the elements)")
+        if self.shape is not None:
+            area = math.pi * self.radius * self.radius / 2 if self.shape == "half_disc" else self.width * self.height
+            triangles = 2.0 * area / self.h / self.h  # (no ** : 1e300**2 raises OverflowError)
+            if not triangles <= MAX_ELEMENTS:
+                raise ValueError(f"mesh.h = {_brief(self.h)}: about {triangles:.1e} triangles for this {self.shape}, "
+                                 f"more than {MAX_ELEMENTS:.0e}")
         return self
 
 
@@ -98,7 +135,7 @@ def _check_poisson_ratio(key: str, nu: float, hypothesis: str) -> None:
     if not (-1.0 < nu and upper_ok):
         bound = "< 0.5" if hypothesis == "plane_strain" else "<= 0.5"
         name = key.rpartition(".")[2]
-        raise ValueError(f"{key} = {nu!r}: must satisfy -1 < {name} {bound} for {hypothesis}")
+        raise ValueError(f"{key} = {_brief(nu)}: must satisfy -1 < {name} {bound} for {hypothesis}")
 
 
 class MaterialSection(_Section):
@@ -122,14 +159,14 @@ def _stress_tensor(value):
     """A symmetric 2 × 2 tensor [[sxx, sxy], [sxy, syy]] of finite numbers."""
     if not (isinstance(value, list) and len(value) == 2
             and all(isinstance(row, list) and len(row) == 2 for row in value)):
-        raise ValueError(f"initial.stress = {value!r}: expected a 2 x 2 table [[sxx, sxy], [sxy, syy]]")
+        raise ValueError(f"initial.stress = {_brief(value)}: expected a 2 x 2 table [[sxx, sxy], [sxy, syy]]")
     for row in value:
         for entry in row:
-            if isinstance(entry, bool) or not isinstance(entry, (int, float)) or not math.isfinite(entry):
-                raise ValueError(f"initial.stress = {value!r}: expected finite numbers, got {entry!r}")
+            if isinstance(entry, bool) or not isinstance(entry, (int, float)) or not _finite(entry):
+                raise ValueError(f"initial.stress = {_brief(value)}: expected finite numbers, got {_brief(entry)}")
     if value[0][1] != value[1][0]:
-        raise ValueError(f"initial.stress = {value!r}: must be symmetric (stress[0][1] = {value[0][1]!r}, "
-                         f"stress[1][0] = {value[1][0]!r})")
+        raise ValueError(f"initial.stress = {_brief(value)}: must be symmetric (stress[0][1] = {_brief(value[0][1])}, "
+                         f"stress[1][0] = {_brief(value[1][0])})")
     return [[float(entry) for entry in row] for row in value]
 
 
@@ -228,7 +265,7 @@ class TimeSection(_Section):
     """[0, T] in ``steps`` equal steps k = T / steps."""
 
     T: PositiveFloat
-    steps: Annotated[int, Field(ge=1)]
+    steps: Annotated[int, Field(ge=1, le=MAX_STEPS)]
 
 
 class SolverSection(_Section):
@@ -239,6 +276,7 @@ class SolverSection(_Section):
     factorization: str = "auto"  # sparse direct backend of "condensed"
     tolerance: Annotated[float, Field(gt=0, lt=1)] = 1e-10
     max_iterations: Annotated[int, Field(ge=1)] = 50
+    max_step_cuts: Annotated[int, Field(ge=0, le=30)] = 4  # halvings of a step whose Newton iteration fails
     augmentation: Optional[PositiveFloat] = None  # Alart–Curnier r; "auto": the median normal stiffness
 
     @field_validator("factorization")
@@ -246,7 +284,7 @@ class SolverSection(_Section):
     def _installed_backend(cls, value):
         if value != "auto" and value not in installed_backends():
             known = "not installed here" if value in BACKENDS else "unknown"
-            raise ValueError(f"solver.factorization = \"{value}\": {known}; expected \"auto\" or one of "
+            raise ValueError(f"solver.factorization = {_show(value)}: {known}; expected \"auto\" or one of "
                              f"{', '.join(repr(b) for b in installed_backends())}")
         return value
 
@@ -259,6 +297,8 @@ class SolverSection(_Section):
 class OutputSection(_Section):
     field_steps: Any = "final"  # "all", "final", "none" or a list of step numbers
     progress: bool = True
+    checkpoint_every_steps: Annotated[int, Field(ge=0)] = 0  # 0: not by step count
+    checkpoint_every_seconds: NonNegativeFloat = 60.0  # 0: not by time
 
     @field_validator("field_steps")
     @classmethod
@@ -268,7 +308,7 @@ class OutputSection(_Section):
         if isinstance(value, list) and all(isinstance(s, int) and not isinstance(s, bool) and s >= 1 for s in value):
             return sorted(set(value))
         raise ValueError(
-            f"output.field_steps = {value!r}: expected \"all\", \"final\", \"none\" or a list of step numbers >= 1"
+            f"output.field_steps = {_brief(value)}: expected \"all\", \"final\", \"none\" or a list of step numbers >= 1"
         )
 
 
@@ -289,7 +329,7 @@ class Case(_Section):
     def _field_steps_in_range(self):
         steps = self.output.field_steps
         if isinstance(steps, list) and steps and steps[-1] > self.time.steps:
-            raise ValueError(f"output.field_steps: step {steps[-1]} is after the last step ({self.time.steps})")
+            raise ValueError(f"output.field_steps: step {_brief(steps[-1])} is after the last step ({self.time.steps})")
         return self
 
     @property
@@ -310,22 +350,52 @@ def load_case(source: str | Path | dict, overrides: dict | list[str] | None = No
 
     ``overrides``: {"contact.stiffness.beta": -1} or ["contact.stiffness.beta=-1", ...] (values are
     TOML: ``-1``, ``"inf"``, ``[1, 2]``; a value that is not TOML is taken as a string).
+    Whatever the input, the result is a Case or a CaseError with a one-line message.
     """
+    try:
+        return _load_case(source, overrides)
+    except CaseError as error:
+        raise CaseError(one_line(str(error))) from None
+
+
+#: Longest message of a CaseError from load_case.
+LONGEST_MESSAGE = 400
+
+
+def one_line(message: str) -> str:
+    """The message on one line: control and separator characters escaped, at most LONGEST_MESSAGE long."""
+    text = "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in message)
+    return text if len(text) <= LONGEST_MESSAGE else text[: LONGEST_MESSAGE - 3] + "..."
+
+
+def _load_case(source, overrides) -> Case:
     base_dir = "."
     if isinstance(source, dict):
+        _check_tree(source)
         data = _deep_copy(source)
-    else:
-        path = Path(source)
+    elif isinstance(source, (str, os.PathLike)):
         try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
+            path = Path(source)
+        except TypeError:
+            raise CaseError(f"case file {_brief(source)}: not a file name") from None
+        try:
+            text = path.read_text(encoding="utf-8")
         except FileNotFoundError:
             raise CaseError(f"case file '{path}' not found") from None
-        except (OSError, UnicodeDecodeError) as error:
+        except (OSError, UnicodeDecodeError, ValueError) as error:  # ValueError: a NUL in the name
             raise CaseError(f"case file '{path}' cannot be read: {error}") from None
-        except tomllib.TOMLDecodeError as error:
+        try:
+            data = tomllib.loads(text)
+        except ValueError as error:  # TOMLDecodeError, or an integer of more than 4300 digits
             raise CaseError(f"case file '{path}' is not valid TOML: {error}") from None
+        except RecursionError:
+            raise CaseError(f"case file '{path}' is not valid TOML: nested too deeply") from None
+        _check_tree(data)
         base_dir = str(path.parent)
+    else:
+        raise CaseError(f"a case is a TOML file name or a table (dict), not {type(source).__name__}")
     for key, value in _parse_overrides(overrides).items():
+        _check_tree(value, (key,))
         _set_dotted(data, key, value)
     if "base_dir" in data:
         raise CaseError("unknown key 'base_dir'")
@@ -335,6 +405,41 @@ def load_case(source: str | Path | dict, overrides: dict | list[str] | None = No
         raise CaseError(_describe(error.errors()[0])) from None
     _check_expressions(case)
     return case
+
+
+#: Deepest nesting of tables and lists accepted in a case (a case needs 5).
+MAX_NESTING = 32
+_VALUE_TYPES = (str, bool, int, float, list, dict, datetime.date, datetime.time)  # what TOML holds
+
+
+def _check_tree(data, prefix: tuple = ()) -> None:
+    """Refuse what no TOML file holds before it reaches the validation: tables nested deeper than
+    MAX_NESTING, keys that are not strings, values of other types (sets, bytes, objects).
+    ``prefix``: where ``data`` sits in the case (an override's key)."""
+    stack = [(data, prefix, 0)]
+    while stack:
+        value, path, depth = stack.pop()
+        if depth > MAX_NESTING:
+            raise CaseError(f"{_dotted(path[:4])}...: nested more than {MAX_NESTING} levels deep")
+        if not isinstance(value, _VALUE_TYPES):
+            raise CaseError(f"{_dotted(path) or 'the case'} = {_type_name(value)}: not a value a case file can hold "
+                            f"(a number, string, boolean, list or table)")
+        if isinstance(value, int) and value.bit_length() > 13000:  # Python cannot even print it (4300 digits)
+            raise CaseError(f"{_dotted(path) or 'the case'} = {_brief(value)}: too large for any value of a case")
+        if isinstance(value, dict):
+            for key, item in value.items():
+                if not isinstance(key, str):
+                    raise CaseError(f"key {_type_name(key)} in {_dotted(path) or 'the case'}: keys must be strings")
+                stack.append((item, (*path, key), depth + 1))
+        elif isinstance(value, list):
+            stack.extend((item, (*path, i), depth + 1) for i, item in enumerate(value))
+
+
+def _type_name(value) -> str:
+    """A value for a message without calling its repr (any object may be given)."""
+    if isinstance(value, (int, float, str, bytes, type(None))):
+        return _brief(value)
+    return f"a value of type {type(value).__name__}"
 
 
 def _deep_copy(data):
@@ -349,15 +454,22 @@ def _parse_overrides(overrides) -> dict:
     if overrides is None:
         return {}
     if isinstance(overrides, dict):
+        for key in overrides:
+            if not isinstance(key, str):
+                raise CaseError(f"override key {_type_name(key)}: expected a dotted key such as contact.stiffness.beta")
         return dict(overrides)
+    if not isinstance(overrides, (list, tuple)):
+        raise CaseError(f"overrides: expected a dict or a list of \"key=value\" strings, not {type(overrides).__name__}")
     parsed = {}
     for item in overrides:
+        if not isinstance(item, str):
+            raise CaseError(f"--set {_type_name(item)}: expected a \"key=value\" string")
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
-            raise CaseError(f"--set {item!r}: expected key=value, e.g. contact.stiffness.beta=-1")
+            raise CaseError(f"--set {_brief(item)}: expected key=value, e.g. contact.stiffness.beta=-1")
         try:
             value = tomllib.loads(f"v = {text}")["v"]
-        except tomllib.TOMLDecodeError:
+        except (ValueError, RecursionError):  # not TOML (or an integer of more than 4300 digits)
             value = text
         parsed[key.strip()] = value
     return parsed
@@ -372,27 +484,27 @@ def _set_dotted(data: dict, dotted: str, value) -> None:
     for piece in dotted.split("."):
         match = _KEY.match(piece)
         if match is None:
-            raise CaseError(f"override key {dotted!r} is not a dotted key such as contact.stiffness.beta")
+            raise CaseError(f"override key {_brief(dotted)} is not a dotted key such as contact.stiffness.beta")
         steps.append(match.group(1))
-        steps += [int(i) for i in re.findall(r"\[(\d+)\]", match.group(2))]
+        steps += [int(i) if len(i) <= 18 else 10**18 for i in re.findall(r"\[(\d+)\]", match.group(2))]
     node = data
     for position, step in enumerate(steps[:-1]):
         if isinstance(step, int):
             if not isinstance(node, list) or step >= len(node):
-                raise CaseError(f"override key {dotted!r}: no entry [{step}] there")
+                raise CaseError(f"override key {_brief(dotted)}: no entry [{step}] there")
             node = node[step]
         else:
             if not isinstance(node, dict):
-                raise CaseError(f"override key {dotted!r}: '{step}' is not inside a table")
+                raise CaseError(f"override key {_brief(dotted)}: '{step}' is not inside a table")
             if step not in node and isinstance(steps[position + 1], int):
-                raise CaseError(f"override key {dotted!r}: no list '{step}' to index")
+                raise CaseError(f"override key {_brief(dotted)}: no list '{step}' to index")
             node = node.setdefault(step, {})
     last = steps[-1]
     if isinstance(last, int):
         if not isinstance(node, list) or last >= len(node):
-            raise CaseError(f"override key {dotted!r}: no entry [{last}] there")
+            raise CaseError(f"override key {_brief(dotted)}: no entry [{last}] there")
     elif not isinstance(node, dict):
-        raise CaseError(f"override key {dotted!r}: '{last}' is not inside a table")
+        raise CaseError(f"override key {_brief(dotted)}: '{last}' is not inside a table")
     node[last] = value
 
 
@@ -436,8 +548,8 @@ def _clean_loc(loc) -> tuple:
     """Drop the discriminator tags pydantic inserts (contact.stiffness.power.beta -> contact.stiffness.beta)."""
     cleaned = []
     for item in loc:
-        if cleaned and item in _LAW_TAGS.get(cleaned[-1], ()):
-            continue
+        if cleaned and (item in _LAW_TAGS.get(cleaned[-1], ()) or (cleaned[-1] == "part" and item in ("str", "int"))):
+            continue  # a law's tag, or the member of the union str | int of a part name
         cleaned.append(item)
     return tuple(cleaned)
 
@@ -471,11 +583,14 @@ def _describe(error: dict) -> str:
 
 
 def _show(value) -> str:
+    """A value as a message shows it: strings in double quotes, control characters escaped, cut to
+    SHOWN characters."""
     if isinstance(value, str):
-        return f'"{value}"'
+        text = json.dumps(value, ensure_ascii=False)
+        return text if len(text) <= SHOWN else text[: SHOWN - 4] + '..."'
     if isinstance(value, dict):
         return "{...}"
-    return repr(value)
+    return _brief(value)
 
 
 def _law_tag(raw_loc) -> str | None:

@@ -1,10 +1,12 @@
 """The command line:
 
-    vpcontact run CASE.toml [--set key=value ...] --out DIR
+    vpcontact run CASE.toml [--set key=value ...] --out DIR [--resume | --overwrite]
     vpcontact study STUDY.toml --out DIR [--workers N | --scheduler tcp://HOST:PORT]
 
-Exit status: 0 complete; 2 bad input (one line on stderr, nothing written); 3 a step failed
-(the converged steps are written, summary.json has "status": "failed") or, for a study, a run failed.
+Exit status: 0 complete; 2 bad input (one line on stderr, nothing written); 3 a step failed even
+after its cuts (the converged steps are written, summary.json has "status": "failed") or, for a
+study, a run failed; 130 / 143 a run stopped by SIGINT / SIGTERM at the end of a step (outputs and a
+checkpoint written, "status": "interrupted"; ``--resume`` continues it).
 """
 
 from __future__ import annotations
@@ -16,9 +18,6 @@ from pathlib import Path
 from . import __version__
 from .case import load_case
 from .errors import CaseError
-from .problem import build_problem
-from .stepping import solve_problem
-from .writers import write_run
 
 EXIT_BAD_INPUT, EXIT_FAILED = 2, 3
 
@@ -35,7 +34,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a case value, e.g. --set contact.stiffness.beta=-1 (repeatable)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
-    run.add_argument("--overwrite", action="store_true", help="replace a non-empty output directory")
+    replace = run.add_mutually_exclusive_group()
+    replace.add_argument("--overwrite", action="store_true", help="replace a non-empty output directory")
+    replace.add_argument("--resume", action="store_true",
+                         help="continue the run in --out from its checkpoint (a killed or interrupted run)")
     study = commands.add_parser("study", help="run a parameter study (rerun to resume)")
     study.add_argument("study", type=Path, help="study file (TOML)")
     study.add_argument("--out", type=Path, required=True, help="study directory")
@@ -43,42 +45,51 @@ def _parser() -> argparse.ArgumentParser:
     where.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
     where.add_argument("--scheduler", default=None, metavar="ADDRESS", help="a Dask scheduler, e.g. tcp://host:8786")
     study.add_argument("--quiet", action="store_true", help="no progress bar")
+    reproduce = commands.add_parser("reproduce", help="regenerate every result of Sect. 4 of the paper, with a report")
+    reproduce.add_argument("--out", type=Path, required=True, help="output directory (report.md, report.html, ...)")
+    reproduce.add_argument("--quick", action="store_true", help="a coarse version (under 2 minutes)")
+    reproduce.add_argument("--workers", type=int, default=None, help="worker processes of the studies (default: cores)")
+    reproduce.add_argument("--overwrite", action="store_true", help="replace an earlier reproduction in --out")
+    reproduce.add_argument("--quiet", action="store_true", help="no progress lines")
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
+    if args.command == "reproduce":
+        return _reproduce(args)
     return _study(args) if args.command == "study" else _run(args)
 
 
 def _run(args) -> int:
+    from .rundir import EXIT_SIGNAL, run
+
     try:
         case = load_case(args.case, args.overrides)
-        if args.out.exists() and not args.out.is_dir():
-            raise CaseError(f"--out '{args.out}' exists and is not a directory")
-        if args.out.exists() and any(args.out.iterdir()) and not args.overwrite:
-            raise CaseError(f"--out '{args.out}' is not empty (use --overwrite to replace it)")
-        problem = build_problem(case)
         progress = case.output.progress and not args.quiet and sys.stderr.isatty()
-        result = solve_problem(problem, progress=progress)
+        outcome = run(case, args.out, resume=args.resume, overwrite=args.overwrite, progress=progress)
     except CaseError as error:
         print(f"vpcontact: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    write_run(result, args.out, overwrite=args.overwrite)
-    summary = result.summary()
-    if result.status != "complete":
-        print(f"vpcontact: {result.message}", file=sys.stderr)
+    if outcome.status == "interrupted":
+        print(f"vpcontact: {outcome.message}", file=sys.stderr)
+        return EXIT_SIGNAL[outcome.signal]
+    if outcome.status != "complete":
+        print(f"vpcontact: {outcome.message}", file=sys.stderr)
         return EXIT_FAILED
+    if outcome.result is None:
+        print(f"vpcontact: {outcome.message}")
+        return 0
+    summary = outcome.result.summary()
     final = summary["final"]
-    print(f"complete: {summary['steps']} steps, {summary['dofs']} dofs, {summary['contact_nodes']} contact nodes, "
+    cuts = f", {summary['step_cuts']} step cuts" if summary["step_cuts"] else ""
+    print(f"complete: {summary['steps']} steps{cuts}, {summary['dofs']} dofs, {summary['contact_nodes']} contact nodes, "
           f"{summary['newton_iterations']} Newton iterations, {summary['wall_time_s']:.1f} s -> {args.out}")
     if final.get("K_probe") is not None and summary["contact_nodes"]:
         print(f"final t = {final['t']:g}: K_probe = {final['K_probe']:.6g}, penetration_probe = "
               f"{final['penetration_probe']:.6g}, nodes separated/compliance/limit = {final['nodes_separated']}/"
               f"{final['nodes_in_compliance']}/{final['nodes_at_limit']}")
     return 0
-
-
 
 
 def _study(args) -> int:
@@ -111,6 +122,24 @@ def _study(args) -> int:
     for run_id in report["failed"]:
         print(f"vpcontact: run '{run_id}' failed (see {args.out / 'runs' / run_id})", file=sys.stderr)
     return EXIT_FAILED if report["failed"] else 0
+
+
+def _reproduce(args) -> int:
+    from .reproduce import OutputError, ReproduceError, run
+
+    if args.workers is not None and args.workers < 1:
+        print(f"vpcontact: error: --workers {args.workers}: must be at least 1", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
+    try:
+        run(args.out, quick=args.quick, workers=args.workers, overwrite=args.overwrite, log=log)
+    except OutputError as error:  # --out unusable: nothing was run
+        print(f"vpcontact: error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except ReproduceError as error:
+        print(f"vpcontact: {error}", file=sys.stderr)
+        return EXIT_FAILED
+    return 0
 
 
 if __name__ == "__main__":

@@ -8,86 +8,207 @@ At t_n = n k:
     σ_n   = ℰε(u_n) + z_n                                       (the discrete (2.28))
 with u_0 = 0 and a uniform σ_0 (``problem.initial_stress``), so z_1 = σ_0 + k 𝒢(σ_0, 0). The bulk
 operator is the same at every step; with 𝒢 ≠ 0, u_n is computed at every step (σ_n feeds z_{n+1}).
+
+Step cuts: when the Newton iteration of a step fails (iteration limit, non-finite iterates, a
+singular Newton matrix), the step is done as two sub-steps of length k/2, each of them cut again if
+it fails, down to ``solver.max_step_cuts`` halvings. A sub-step of length h ending at t is an
+ordinary step of the same scheme: loads at t, z advanced by h 𝒢 from the last converged level, ξ
+by h d⁺ (the same rules with h for k), so a cut step is exactly the same scheme on a finer grid.
+The state carried from level to level is a :class:`LoopState`; it is all a checkpoint needs.
 """
 
 from __future__ import annotations
 
 import time as clock
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 from tqdm.auto import tqdm
 
 from .assembly import element_strain, stress_force
-from .contact import node_status
-from .problem import Problem
+from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from .material import von_mises
+from .problem import Problem
 from .results import Fields, Result
-from .solvers import StepData, make_solver
+from .solvers import StepData, StepSolution, make_solver
+
+
+@dataclass
+class LoopState:
+    """What the time loop carries from the last converged time level to the next one."""
+
+    step: int  # time steps t_n done
+    xi: np.ndarray  # ξ at the last level
+    z: np.ndarray | None  # z at the last level, σ = ℰε(u) + z there (2, 2, elements); None: z ≡ 0
+    rate: np.ndarray | None  # 𝒢(σ, ε) at the last level; None: 𝒢 = 0
+    previous: StepSolution | None  # the last level's solution: the next Newton iteration starts from it
+
+    def z_after(self, h: float) -> np.ndarray | None:
+        """z at the level h after the last one (explicit: z + h 𝒢)."""
+        return self.z if self.rate is None else self.z + h * self.rate
+
+
+@dataclass
+class _Attempt:
+    """A (sub-)step tried from the current state."""
+
+    t: float
+    h: float
+    step: StepData
+    z: np.ndarray | None
+    solution: StepSolution
+
+
+class TimeLoop:
+    """The time loop of a problem: ``TimeLoop(problem).run()`` returns the :class:`Result`.
+
+    ``run`` takes two hooks: ``after_step(loop)``, called after every completed time step (the
+    checkpoints of :mod:`vpcontact.rundir`), and ``stop()``, asked before every step (a signal
+    asked the run to stop: the status becomes "interrupted").
+    """
+
+    def __init__(self, problem: Problem):
+        started = clock.perf_counter()
+        self.problem = problem
+        case, free, surface = problem.case, problem.free, problem.surface
+        options = case.solver
+        self.solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
+                                  surface.weights, surface.gap0, augmentation=options.augmentation,
+                                  tolerance=options.tolerance, max_iterations=options.max_iterations,
+                                  length_scale=problem.mesh.diameter, factorization=options.factorization)
+        self.max_cuts = options.max_step_cuts
+        self.result = Result.start(problem, self.solver)
+        self._created = started
+        self.setup_time = clock.perf_counter() - started
+        self.earlier_time, self.earlier_solves = 0.0, 0  # wall time and linear solves of earlier sessions (resumed)
+        nelements = problem.mesh.mesh.t.shape[1]
+        sigma0 = np.repeat(np.asarray(problem.initial_stress, dtype=float)[:, :, None], nelements, axis=2)
+        G = problem.viscoplastic
+        history = G is not None or np.any(sigma0 != 0.0)  # z ≠ 0 possible: the right-hand side carries Bᵀz
+        rate = viscoplastic_rate(G, sigma0, np.zeros_like(sigma0)) if G is not None else None  # the j = 0 term
+        self.state = LoopState(0, np.zeros(surface.size), sigma0 if history else None, rate, None)
+        self._u = np.zeros(problem.basis.N)
+
+    # --- the loop ---------------------------------------------------------------------------------
+    def run(self, *, progress: bool = False, after_step: Callable[["TimeLoop"], None] | None = None,
+            stop: Callable[[], str | None] | None = None) -> Result:
+        """Advance from the current state to T (or to a failure, or until ``stop()`` returns a reason)."""
+        started = clock.perf_counter()
+        problem, result = self.problem, self.result
+        times = problem.times
+        with tqdm(total=len(times), initial=self.state.step, disable=not progress, unit="step",
+                  desc="time steps") as bar:
+            for n in range(self.state.step + 1, len(times) + 1):
+                reason = stop() if stop is not None else None
+                if reason:
+                    result.status = "interrupted"
+                    result.message = (f"{reason} after step {n - 1} (t = {times[n - 2] if n > 1 else 0.0:g}) "
+                                      f"of {len(times)}")
+                    break
+                self._substep = 0
+                failure = self._advance(n, times[n - 1], problem.k, 0)
+                if failure is not None:
+                    result.fail(failure)
+                    break
+                self.state.step = n
+                row = result.rows[-1]
+                bar.set_postfix(newton=row["newton_iterations"], residual=f"{row['residual']:.1e}",
+                                at_limit=row["nodes_at_limit"], cuts=result.step_cuts, refresh=False)
+                bar.update()
+                if self.state.rate is not None and not np.all(np.isfinite(self.state.z_after(problem.k))):
+                    result.fail(f"after step {n} (t = {times[n - 1]:g}): the viscoplastic history is not finite (is "
+                                f"the explicit step k = {problem.k:g} small against the law's relaxation time?)")
+                    break
+                if after_step is not None:
+                    after_step(self)
+        now = clock.perf_counter()
+        result.linear_solves = self.earlier_solves + self.solver.solves
+        result.finish({**problem.timings, **self.solver.timings, "time_loop": now - started,
+                       "total": problem.timings["build"] + self.setup_time + now - started,
+                       **({"earlier_sessions": self.earlier_time} if result.resumed_at else {})})
+        result.wall_time_s += self.earlier_time
+        return result
+
+    def elapsed(self) -> float:
+        """Wall time of the run so far, earlier sessions included (seconds)."""
+        return self.earlier_time + self.problem.timings["build"] + clock.perf_counter() - self._created
+
+    def _advance(self, n: int, t: float, h: float, cuts: int) -> str | None:
+        """Reach time t of step n from the current level by one step of length h, or by two halves if
+        its Newton iteration fails (recursively); None, or the failure's message."""
+        attempt = self._attempt(t, h)
+        if attempt.solution.converged:
+            self._accept(n, t == self.problem.times[n - 1], attempt)
+            return None
+        if cuts == self.max_cuts:
+            return self._failure_message(n, attempt, cuts)
+        self.result.step_cuts += 1
+        failure = self._advance(n, t - 0.5 * h, 0.5 * h, cuts + 1)
+        return failure if failure is not None else self._advance(n, t, 0.5 * h, cuts + 1)
+
+    def _attempt(self, t: float, h: float) -> _Attempt:
+        """Solve the step problem of the level at time t, h after the last one (the state is unchanged)."""
+        problem, state = self.problem, self.state
+        z = state.z_after(h)
+        b = problem.loads(t)
+        if z is not None:
+            b -= stress_force(problem.basis, z)
+        step = StepData(b[problem.free], problem.law, state.xi, h)
+        try:
+            solution = self.solver.solve(step, state.previous)
+        except (np.linalg.LinAlgError, RuntimeError) as error:
+            if isinstance(error, RuntimeError) and "singular" not in str(error):
+                raise
+            m = problem.surface.size
+            solution = StepSolution(None, np.zeros(m), np.full(m, np.nan), np.zeros(m, dtype=bool), 0, np.nan, np.nan,
+                                    False, f"the Newton matrix is singular ({error})")
+        return _Attempt(t, h, step, z, solution)
+
+    def _accept(self, n: int, ends_step: bool, attempt: _Attempt) -> None:
+        """Make a converged attempt the new level: ξ, fields, z and 𝒢 there; record it."""
+        problem, state, result = self.problem, self.state, self.result
+        solution, law, h = attempt.solution, problem.law, attempt.h
+        d = solution.d
+        compliance, _ = law.pressure(d, state.xi, h)
+        xi = state.xi + h * np.maximum(d, 0.0)
+        fields, rate = None, None
+        G = problem.viscoplastic
+        if G is not None or (ends_step and (n in result.field_steps or n == len(problem.times))):
+            u = self._u
+            u[problem.free] = self.solver.displacement(attempt.step, solution)
+            strain = element_strain(problem.basis, u)
+            z = attempt.z
+            sigma = problem.elasticity.stress(strain) + (0.0 if z is None else z)  # σ = ℰε(u) + z
+            sigma33 = problem.elasticity.out_of_plane_stress(strain)
+            fields = Fields(displacement=u[problem.basis.nodal_dofs].T.copy(), stress=np.moveaxis(sigma, -1, 0),
+                            stress33=sigma33, von_mises=von_mises(sigma, sigma33),
+                            z=None if z is None else np.moveaxis(z, -1, 0).copy())
+            if G is not None:
+                rate = viscoplastic_rate(G, sigma, strain)
+        self._substep += 1
+        result.record(n, attempt.t, solution, fields, xi=xi, K=law.K(xi), compliance=compliance,
+                      status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step)
+        self.state = LoopState(state.step, xi, attempt.z, rate, solution)
+
+    def _failure_message(self, n: int, attempt: _Attempt, cuts: int) -> str:
+        """One line: the step, its time, where the cuts ended, the residuals and the contact counts."""
+        t_n = self.problem.times[n - 1]
+        s = attempt.solution
+        where = (f" after {cuts} step cut{'s' if cuts != 1 else ''} (sub-step of length {attempt.h:g} ending at "
+                 f"t = {attempt.t:.10g})" if cuts else "")
+        counts = ""
+        if s.d.size and np.all(np.isfinite(s.d)):
+            status = node_status(s.d, s.active)
+            counts = (f"; contact nodes separated/in compliance/at limit = {int(np.sum(status == SEPARATED))}/"
+                      f"{int(np.sum(status == IN_COMPLIANCE))}/{int(np.sum(status == AT_LIMIT))}")
+        return (f"step {n} (t = {t_n:g}) failed{where}: {s.message}; residual {s.residual:.3e}, "
+                f"complementarity {s.complementarity:.3e}{counts}")
 
 
 def solve_problem(problem: Problem, *, progress: bool = False) -> Result:
     """Run the time loop of ``problem`` and return the result (status "failed" if a step fails)."""
-    started = clock.perf_counter()
-    case, free, surface, law = problem.case, problem.free, problem.surface, problem.law
-    options = case.solver
-    solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
-                         surface.weights, surface.gap0, augmentation=options.augmentation,
-                         tolerance=options.tolerance, max_iterations=options.max_iterations,
-                         length_scale=problem.mesh.diameter, factorization=options.factorization)
-    result = Result.start(problem, solver)
-    loop_started = clock.perf_counter()
-    nelements = problem.mesh.mesh.t.shape[1]
-    u = np.zeros(problem.basis.N)
-    xi = np.zeros(surface.size)
-    G, k = problem.viscoplastic, problem.k
-    sigma0 = np.repeat(np.asarray(problem.initial_stress, dtype=float)[:, :, None], nelements, axis=2)
-    history = G is not None or np.any(sigma0 != 0.0)  # z ≠ 0 possible: the right-hand side carries Bᵀz
-    z = sigma0.copy()  # σ_0 − ℰε(u_0), u_0 = 0
-    if G is not None:
-        z = z + k * viscoplastic_rate(G, sigma0, np.zeros_like(sigma0))  # the j = 0 term
-    previous = None
-
-    with tqdm(total=len(problem.times), disable=not progress, unit="step", desc="time steps") as bar:
-        for n, t in enumerate(problem.times, start=1):
-            b = problem.loads(t)
-            if history:
-                b -= stress_force(problem.basis, z)
-            step = StepData(b[free], law, xi, problem.k)
-            solution = solver.solve(step, previous)
-            if not solution.converged:
-                result.fail(n, t, solution)
-                break
-            previous, d = solution, solution.d
-            compliance, _ = law.pressure(d, xi, problem.k)
-            xi = xi + problem.k * np.maximum(d, 0.0)
-            fields, blown_up = None, False
-            if G is not None or n in result.field_steps or n == len(problem.times):
-                u[free] = solver.displacement(step, solution)
-                strain = element_strain(problem.basis, u)
-                sigma = problem.elasticity.stress(strain) + z  # σ_n = ℰε(u_n) + z_n
-                sigma33 = problem.elasticity.out_of_plane_stress(strain)
-                fields = Fields(displacement=u[problem.basis.nodal_dofs].T.copy(), stress=np.moveaxis(sigma, -1, 0),
-                                stress33=sigma33, von_mises=von_mises(sigma, sigma33),
-                                z=np.moveaxis(z, -1, 0).copy() if history else None)
-                if G is not None:
-                    z = z + k * viscoplastic_rate(G, sigma, strain)  # z_{n+1}
-                    blown_up = not np.all(np.isfinite(z))
-            result.record(n, t, solution, fields, xi=xi, K=law.K(xi), compliance=compliance,
-                          status=node_status(d, solution.active))
-            row = result.rows[-1]
-            bar.set_postfix(newton=row["newton_iterations"], residual=f"{row['residual']:.1e}",
-                            at_limit=row["nodes_at_limit"], refresh=False)
-            bar.update()
-            if blown_up:
-                result.status = "failed"
-                result.message = (f"after step {n} (t = {t:g}): the viscoplastic history is not finite (is the explicit "
-                                  f"step k = {k:g} small against the law's relaxation time?)")
-                break
-    now = clock.perf_counter()
-    result.linear_solves = solver.solves
-    result.finish({**problem.timings, **solver.timings, "time_loop": now - loop_started,
-                   "total": problem.timings["build"] + now - started})
-    return result
+    return TimeLoop(problem).run(progress=progress)
 
 
 def viscoplastic_rate(G, sigma: np.ndarray, strain: np.ndarray) -> np.ndarray:

@@ -1,4 +1,7 @@
-"""The files of a run directory (all written into a staging folder, renamed into place at the end):
+"""The files of a run directory. Each is written atomically (a temporary file beside it, renamed into
+place: a reader never sees half a file), ``summary.json`` last: a directory whose summary.json says
+``"status": "complete"`` holds a complete run; without summary.json a run is in progress or was killed
+(``vpcontact run --resume`` continues it from its checkpoint, see :mod:`vpcontact.rundir`).
 
 - ``summary.json``      status, sizes, wall time, the final values, versions;
 - ``history.csv``       one row per time step (``results.HISTORY_COLUMNS``);
@@ -13,11 +16,13 @@
 from __future__ import annotations
 
 import csv
+import functools
 import json
 import math
 import os
 import shutil
 import xml.etree.ElementTree as ET
+from contextlib import contextmanager
 from importlib import metadata
 from pathlib import Path
 
@@ -30,41 +35,94 @@ from .results import CONTACT_ARRAYS, HISTORY_COLUMNS, Result
 PACKAGES = ("vpcontact", "numpy", "scipy", "scikit-fem", "meshio", "pydantic")
 
 
-def versions() -> dict[str, str]:
-    """Installed versions of vpcontact and its main dependencies."""
-    found = {}
+@functools.lru_cache(maxsize=1)
+def _installed_versions() -> tuple:
+    found = []
     for name in PACKAGES:
         try:
-            found[name] = metadata.version(name)
+            found.append((name, metadata.version(name)))
         except metadata.PackageNotFoundError:
-            found[name] = "not installed"
-    return found
+            found.append((name, "not installed"))
+    return tuple(found)
+
+
+def versions() -> dict[str, str]:
+    """Installed versions of vpcontact and its main dependencies (read once per process)."""
+    return dict(_installed_versions())
+
+
+@contextmanager
+def replacing(path: Path):
+    """Yield a temporary path beside ``path`` (same suffix); once the caller has written it, flush it to
+    disk and rename it to ``path`` (atomic: ``path`` is the old file or the new one, never a part)."""
+    path = Path(path)
+    temporary = path.with_name(f".{path.stem}.tmp-{os.getpid()}{path.suffix}")
+    try:
+        yield temporary
+        with open(temporary, "rb+") as handle:
+            os.fsync(handle.fileno())
+        os.replace(temporary, path)
+    finally:
+        temporary.unlink(missing_ok=True)
+
+
+def write_text(path: Path, text: str) -> None:
+    """Write a text file atomically."""
+    with replacing(path) as temporary:
+        temporary.write_text(text, encoding="utf-8")
+
+
+def remove_temporaries(folder: Path) -> None:
+    """Delete the temporary files a killed writer left in ``folder`` and its subfolders."""
+    for leftover in Path(folder).rglob(".*.tmp-*"):
+        if leftover.is_file():
+            leftover.unlink(missing_ok=True)
+
+
+def clear_directory(out: Path, keep: tuple[str, ...] = ()) -> None:
+    """Empty a run directory for a new run, summary.json first (it must never describe other files)."""
+    out = Path(out)
+    (out / "summary.json").unlink(missing_ok=True)
+    for entry in out.iterdir():
+        if entry.name in keep:
+            continue
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry)
+        else:
+            entry.unlink()
 
 
 def write_run(result: Result, out: str | os.PathLike, *, overwrite: bool = False) -> Path:
-    """Write every output of ``result`` to ``out``: complete, or not at all (staging + rename)."""
+    """Write every output of ``result`` to ``out`` (created; emptied first with ``overwrite``), each file
+    atomically and summary.json last."""
     out = Path(out)
-    if out.exists() and not overwrite and any(out.iterdir()):
-        raise FileExistsError(f"output directory '{out}' is not empty (use --overwrite to replace it)")
-    staging = out.with_name(f".{out.name}.partial")
-    shutil.rmtree(staging, ignore_errors=True)
-    staging.mkdir(parents=True)
-    try:
-        _write_history(result, staging / "history.csv")
-        _write_contact(result, staging / "contact.csv")
-        _write_fields(result, staging / "fields")
-        found = versions()
-        header = "".join(f"# {name} {version}\n" for name, version in found.items())
-        (staging / "case.resolved.toml").write_text(header + result.problem.case.to_toml(), encoding="utf-8")
-        summary = {**result.summary(), "versions": found}
-        (staging / "summary.json").write_text(json.dumps(_json_safe(summary), indent=2) + "\n", encoding="utf-8")
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-    if out.exists():
-        shutil.rmtree(out)
-    staging.rename(out)
+    if out.exists() and any(out.iterdir()):
+        if not overwrite:
+            raise FileExistsError(f"output directory '{out}' is not empty (use --overwrite to replace it)")
+        clear_directory(out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_resolved_case(result.problem.case, out)
+    write_outputs(result, out)
     return out
+
+
+def write_resolved_case(case, out: Path) -> None:
+    """case.resolved.toml: every value used, defaults included, the versions in its header."""
+    header = "".join(f"# {name} {version}\n" for name, version in versions().items())
+    write_text(Path(out) / "case.resolved.toml", header + case.to_toml())
+
+
+def write_outputs(result: Result, out: Path, *, history_only: bool = False) -> None:
+    """history.csv, contact.csv, fields/ and solution.npz, then summary.json (the last file written).
+    ``history_only``: history.csv alone (refreshed at the checkpoints of a run in progress)."""
+    out = Path(out)
+    _write_history(result, out / "history.csv")
+    if history_only:
+        return
+    _write_contact(result, out / "contact.csv")
+    _write_fields(result, out / "fields")
+    summary = {**result.summary(), "versions": versions()}
+    write_text(out / "summary.json", json.dumps(_json_safe(summary), indent=2) + "\n")
 
 
 def _json_safe(value):
@@ -81,7 +139,7 @@ def _json_safe(value):
 
 
 def _write_history(result: Result, path: Path) -> None:
-    with path.open("w", newline="") as handle:
+    with replacing(path) as temporary, temporary.open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=HISTORY_COLUMNS)
         writer.writeheader()
         for row in result.rows:
@@ -90,9 +148,9 @@ def _write_history(result: Result, path: Path) -> None:
 
 def _write_contact(result: Result, path: Path) -> None:
     surface = result.problem.surface
-    steps, m = result.steps, surface.size
+    steps, m = len(result.rows), surface.size
     columns = {
-        "step": np.repeat(np.arange(1, steps + 1), m),
+        "step": np.repeat(result.series("step").astype(int) if steps else np.zeros(0, dtype=int), m),
         "t": np.repeat(result.times, m),
         "node": np.tile(surface.nodes, steps),
         "x": np.tile(surface.coordinates[0], steps),
@@ -104,7 +162,8 @@ def _write_contact(result: Result, path: Path) -> None:
     for name in CONTACT_ARRAYS:
         columns[name] = result.contact_history(name).ravel()
     columns["status"] = np.asarray(STATUS_NAMES)[columns["status"].astype(int)]
-    with path.open("w", newline="") as handle:
+    columns["substep"] = np.repeat(result.series("substep").astype(int) if steps else np.zeros(0, dtype=int), m)
+    with replacing(path) as temporary, temporary.open("w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(columns)
         writer.writerows(zip(*(c.tolist() for c in columns.values())))
@@ -113,7 +172,7 @@ def _write_contact(result: Result, path: Path) -> None:
 def _write_fields(result: Result, folder: Path) -> None:
     if not result.fields:
         return
-    folder.mkdir()
+    folder.mkdir(exist_ok=True)
     problem = result.problem
     points = np.column_stack([problem.mesh.mesh.p.T, np.zeros(result.nodes)])
     triangles = [("triangle", problem.mesh.mesh.t.T)]
@@ -122,7 +181,7 @@ def _write_fields(result: Result, folder: Path) -> None:
     segments = [("line", surface.segments.T)]
     body, contact = [], []
     for step, fields in sorted(result.fields.items()):
-        t = result.times[step - 1]
+        t = problem.times[step - 1]
         stress = np.zeros((result.elements, 3, 3))
         stress[:, :2, :2] = fields.stress
         stress[:, 2, 2] = fields.stress33
@@ -133,24 +192,32 @@ def _write_fields(result: Result, folder: Path) -> None:
             z = np.zeros((result.elements, 3, 3))
             z[:, :2, :2] = fields.z
             cell_data["z"] = [z.reshape(-1, 9)]
-        meshio.write(folder / name, meshio.Mesh(points, triangles, point_data={"displacement": displacement},
+        with replacing(folder / name) as temporary:
+            meshio.write(temporary, meshio.Mesh(points, triangles, point_data={"displacement": displacement},
                                                 cell_data=cell_data))
         body.append((t, name))
         if surface.size:
-            data = {key: result.contact[key][step - 1] for key in CONTACT_ARRAYS}
-            pressure = data["pressure_compliance"] + data["pressure_rigid"]
             normal = np.column_stack([surface.normals.T, np.zeros(surface.size)])
             name = f"contact_{step:05d}.vtu"
-            meshio.write(folder / name, meshio.Mesh(contact_points, segments, point_data={
-                **{key: np.asarray(value, dtype=float) for key, value in data.items()},
-                "pressure": pressure, "normal": normal,
-                "contact_force": -normal * (surface.weights * pressure)[:, None],
-                "displacement": displacement[surface.nodes]}))
+            row = _end_of_step_row(result, step)
+            data = {key: result.contact[key][row] for key in CONTACT_ARRAYS}
+            pressure = data["pressure_compliance"] + data["pressure_rigid"]
+            with replacing(folder / name) as temporary:
+                meshio.write(temporary, meshio.Mesh(contact_points, segments, point_data={
+                    **{key: np.asarray(value, dtype=float) for key, value in data.items()},
+                    "pressure": pressure, "normal": normal,
+                    "contact_force": -normal * (surface.weights * pressure)[:, None],
+                    "displacement": displacement[surface.nodes]}))
             contact.append((t, name))
     _write_pvd(folder / "body.pvd", body)
     if contact:
         _write_pvd(folder / "contact.pvd", contact)
     write_solution(result, folder.parent / "solution.npz")
+
+
+def _end_of_step_row(result: Result, step: int) -> int:
+    """The history row at t_n of step n."""
+    return int(np.flatnonzero(result.ends_step() & (result.series("step") == step))[0])
 
 
 def write_solution(result: Result, path: Path) -> None:
@@ -161,12 +228,13 @@ def write_solution(result: Result, path: Path) -> None:
     steps = sorted(result.fields)
     mesh = result.problem.mesh.mesh
     arrays = dict(points=mesh.p, triangles=mesh.t, steps=np.array(steps),
-                  times=np.array([result.times[s - 1] for s in steps]),
+                  times=np.array([result.problem.times[s - 1] for s in steps]),
                   displacement=np.array([result.fields[s].displacement for s in steps]),
                   stress=np.array([result.fields[s].stress for s in steps]))
     if steps and result.fields[steps[0]].z is not None:
         arrays["z"] = np.array([result.fields[s].z for s in steps])
-    np.savez_compressed(path, **arrays)
+    with replacing(path) as temporary:
+        np.savez_compressed(temporary, **arrays)
 
 
 def _write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:
@@ -175,4 +243,5 @@ def _write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:
     collection = ET.SubElement(root, "Collection")
     for t, name in entries:
         ET.SubElement(collection, "DataSet", timestep=repr(float(t)), part="0", file=name)
-    ET.ElementTree(root).write(path, xml_declaration=True, encoding="utf-8")
+    with replacing(path) as temporary:
+        ET.ElementTree(root).write(temporary, xml_declaration=True, encoding="utf-8")

@@ -5,6 +5,13 @@ re-checks the matrix at every solve, about 10 times slower per solve (docs/facto
 has no Schur complement. This binding passes the upper triangle in zero-based CSR (iparm[34] = 1),
 orders with METIS (iparm[1] = 2) and can return the dense Schur complement of chosen dofs while it
 factors (iparm[35] = 2); the factor stays usable for ordinary solves.
+
+Reproducibility: the factorization is bitwise reproducible with several threads, the solve phase is
+not (measured with MKL 2026.2 on two threads: the same factor and right-hand side gave results that
+differ in the last bits from one call to the next). Solves therefore run on one MKL thread, which
+makes them reproducible at no cost (forward and backward substitution are memory bound: 30 ms on one
+thread against 34 ms on two at 230k DOFs); MKL's conditional numerical reproducibility mode
+(iparm[33] > 0, or MKL_CBWR) also makes them reproducible but 2–3 times slower.
 """
 
 from __future__ import annotations
@@ -34,6 +41,8 @@ def library() -> ctypes.CDLL:
             raise OSError("libmkl_rt not found (pip install mkl)")
         lib = ctypes.CDLL(path)
         lib.pardiso.restype = None
+        lib.MKL_Set_Num_Threads_Local.restype = ctypes.c_int
+        lib.MKL_Set_Num_Threads_Local.argtypes = [ctypes.c_int]
         lib.pardiso.argtypes = ([ctypes.c_void_p] + [_INT_P] * 5 + [ctypes.c_void_p] + [_INT_P] * 6
                                 + [ctypes.c_void_p, ctypes.c_void_p, _INT_P])
         _LIBRARY = lib
@@ -83,7 +92,11 @@ class Pardiso:
         b = np.asarray(b, dtype=np.float64)
         B = np.asfortranarray(b.reshape(self.n, -1))
         X = np.zeros_like(B, order="F")
-        self._call(33, B, X, nrhs=B.shape[1])
+        previous = library().MKL_Set_Num_Threads_Local(1)  # reproducible: see the module's docstring
+        try:
+            self._call(33, B, X, nrhs=B.shape[1])
+        finally:
+            library().MKL_Set_Num_Threads_Local(previous)
         return X[:, 0] if b.ndim == 1 else X
 
     def __del__(self):

@@ -1,0 +1,185 @@
+"""Checkpoints of a run in progress: everything the time loop needs to continue as if it had never
+stopped.
+
+Layout, inside the run directory:
+
+    checkpoint/state.npz           the loop state at the end of a time step and the results so far
+    checkpoint/fields_NNNNN.npz    the fields of field step NNNNN (written once, before the state
+                                   that includes that step)
+
+Every file is written atomically (a temporary file renamed into place), so a run killed at any
+moment leaves the previous complete checkpoint. state.npz holds
+
+- ``case``: the resolved case (TOML) the run was started with, and ``mesh_digest``: a hash of the
+  mesh, the free dofs and the contact nodes, both checked on resume;
+- the :class:`~vpcontact.stepping.LoopState`: the step reached, ξ, z and 𝒢 there (viscoplastic
+  history), and the last StepSolution (u at the free dofs for the full solver, λ, d, the active set,
+  its report): the next Newton iteration starts from it exactly as in an uninterrupted run;
+- the history rows (one array per column) and the per-node contact arrays so far (rows × m);
+- ``meta`` (JSON): the field steps saved, step cuts, wall time and linear solves so far, the steps
+  where the run was resumed before, the versions.
+
+The step solver itself is rebuilt on resume (the condensed solver refactors A0 and rebuilds S): the
+numbers then agree with an uninterrupted run to rounding (the factor-once solver reuses earlier
+solves in a different order), bitwise with the full solver.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from .case import _brief
+from .errors import CaseError
+from .results import CONTACT_ARRAYS, HISTORY_COLUMNS, INTEGER_COLUMNS, Fields
+from .solvers import StepSolution
+from .stepping import LoopState, TimeLoop
+from .writers import replacing, versions
+
+FOLDER = "checkpoint"
+STATE = "state.npz"
+FORMAT = 1
+#: Output keys that do not change the numbers: they may differ between a run and its resumption.
+FREE_KEYS = ("progress", "checkpoint_every_steps", "checkpoint_every_seconds")
+
+
+class ResumeError(CaseError):
+    """A checkpoint that does not belong to the case given (or cannot be read): a one-line message."""
+
+
+def folder(out: Path) -> Path:
+    return Path(out) / FOLDER
+
+
+def exists(out: Path) -> bool:
+    return (folder(out) / STATE).is_file()
+
+
+def remove(out: Path) -> None:
+    shutil.rmtree(folder(out), ignore_errors=True)
+
+
+def comparable(case_dict: dict) -> dict:
+    """A resolved case without the keys that do not change the numbers."""
+    output = {k: v for k, v in case_dict.get("output", {}).items() if k not in FREE_KEYS}
+    return {**case_dict, "output": output}
+
+
+def mesh_digest(problem) -> str:
+    """A hash of what the numbers depend on beyond the case file: the mesh (a mesh file may change),
+    the free dofs and the contact nodes."""
+    digest = hashlib.sha256()
+    for array in (problem.mesh.mesh.p, problem.mesh.mesh.t, problem.free, problem.surface.nodes):
+        digest.update(np.ascontiguousarray(array).tobytes())
+    return digest.hexdigest()
+
+
+def save(loop: TimeLoop, out: Path) -> None:
+    """Write the checkpoint of ``loop`` (at the end of its last completed step) into ``out``."""
+    target = folder(out)
+    target.mkdir(parents=True, exist_ok=True)
+    result, state = loop.result, loop.state
+    saved = sorted(result.fields)
+    for n in saved:
+        path = target / f"fields_{n:05d}.npz"
+        if not path.exists():
+            fields = result.fields[n]
+            arrays = {name: getattr(fields, name) for name in ("displacement", "stress", "stress33", "von_mises")}
+            if fields.z is not None:
+                arrays["z"] = fields.z
+            with replacing(path) as temporary:
+                np.savez(temporary, **arrays)
+    rows = len(result.rows)
+    arrays = {
+        "format": np.array(FORMAT),
+        "case": np.array(loop.problem.case.to_toml()),
+        "mesh_digest": np.array(mesh_digest(loop.problem)),
+        "step": np.array(state.step),
+        "xi": state.xi,
+    }
+    if state.z is not None:
+        arrays["z"] = state.z
+    if state.rate is not None:
+        arrays["rate"] = state.rate
+    previous = state.previous
+    if previous is not None:
+        if previous.u is not None:
+            arrays["previous_u"] = previous.u
+        arrays.update(previous_lam=previous.lam, previous_d=previous.d, previous_active=previous.active,
+                      previous_report=np.array([previous.iterations, previous.residual, previous.complementarity]))
+    for column in HISTORY_COLUMNS:
+        arrays[f"row_{column}"] = np.array([row[column] for row in result.rows],
+                                           dtype=np.int64 if column in INTEGER_COLUMNS else np.float64)
+    arrays["row_time"] = np.array(result.times, dtype=np.float64)
+    for name in CONTACT_ARRAYS:
+        arrays[f"contact_{name}"] = np.array(result.contact[name]).reshape(rows, result.contact_nodes)
+    meta = {"field_steps": saved, "step_cuts": result.step_cuts, "resumed_at": result.resumed_at,
+            "elapsed_s": loop.elapsed(), "linear_solves": loop.earlier_solves + loop.solver.solves,
+            "versions": versions()}
+    arrays["meta"] = np.array(json.dumps(meta))
+    with replacing(target / STATE) as temporary:
+        np.savez(temporary, **arrays)
+
+
+def restore(loop: TimeLoop, out: Path) -> int:
+    """Load the checkpoint in ``out`` into a fresh ``loop`` (same case, same mesh: else ResumeError);
+    returns the step it continues after. Warns (stderr) when the versions differ."""
+    path = folder(out) / STATE
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {key: data[key] for key in data.files}
+        meta = json.loads(str(arrays["meta"]))
+        stored_case = tomllib.loads(str(arrays["case"]))
+    except (OSError, ValueError, KeyError, tomllib.TOMLDecodeError) as error:
+        raise ResumeError(f"cannot resume from '{path}': unreadable checkpoint ({error})") from None
+    if int(arrays["format"]) != FORMAT:
+        raise ResumeError(f"cannot resume from '{path}': checkpoint format {int(arrays['format'])}, expected {FORMAT}")
+    problem = loop.problem
+    if comparable(stored_case) != comparable(tomllib.loads(problem.case.to_toml())):
+        raise ResumeError(f"cannot resume: the run in '{out}' was started with a different case "
+                          f"({first_difference(stored_case, tomllib.loads(problem.case.to_toml()))})")
+    if str(arrays["mesh_digest"]) != mesh_digest(problem):
+        raise ResumeError(f"cannot resume: the mesh of the run in '{out}' differs from the mesh of the case now")
+
+    result = loop.result
+    previous = None
+    if "previous_lam" in arrays:
+        iterations, residual, complementarity = arrays["previous_report"]
+        previous = StepSolution(arrays.get("previous_u"), arrays["previous_lam"], arrays["previous_d"],
+                                arrays["previous_active"].astype(bool), int(iterations), float(residual),
+                                float(complementarity), True)
+    step = int(arrays["step"])
+    loop.state = LoopState(step, arrays["xi"], arrays.get("z"), arrays.get("rate"), previous)
+    columns = {column: arrays[f"row_{column}"] for column in HISTORY_COLUMNS}
+    rows = len(arrays["row_time"])
+    result.rows = [{column: (int(values[i]) if column in INTEGER_COLUMNS else np.float64(values[i]))
+                    for column, values in columns.items()} for i in range(rows)]
+    result.times = [np.float64(t) for t in arrays["row_time"]]
+    result.contact = {name: list(arrays[f"contact_{name}"]) for name in CONTACT_ARRAYS}
+    result.completed_steps = step
+    result.step_cuts = int(meta["step_cuts"])
+    result.resumed_at = [*meta["resumed_at"], step]
+    for n in meta["field_steps"]:
+        with np.load(folder(out) / f"fields_{n:05d}.npz", allow_pickle=False) as data:
+            result.fields[n] = Fields(data["displacement"], data["stress"], data["stress33"], data["von_mises"],
+                                      data["z"] if "z" in data.files else None)
+    if result.fields:
+        result.final = result.fields[max(result.fields)]
+    loop.earlier_time, loop.earlier_solves = float(meta["elapsed_s"]), int(meta["linear_solves"])
+    loop.stored_versions = meta.get("versions", {})
+    return step
+
+
+def first_difference(a, b, where: str = "") -> str:
+    """The first key where two nested tables differ, as 'key: old -> new'."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        for key in sorted(set(a) | set(b), key=str):
+            if a.get(key) != b.get(key):
+                return first_difference(a.get(key), b.get(key), f"{where}.{key}" if where else str(key))
+        return where or "?"
+    return f"{where} = {_brief(a)} in the run, {_brief(b)} now"

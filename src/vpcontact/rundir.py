@@ -1,0 +1,211 @@
+"""A run directory during and after a run: ``vpcontact run CASE --out DIR [--resume | --overwrite]``.
+
+The directory exists from the start: ``case.resolved.toml`` first, then a checkpoint (see
+:mod:`vpcontact.checkpoint`) every ``output.checkpoint_every_steps`` steps and/or every
+``output.checkpoint_every_seconds`` seconds, with ``history.csv`` refreshed at each; at the end every
+output, each written atomically, ``summary.json`` last. The checkpoint is removed once the run is
+complete or has failed; an interrupted or killed run keeps it, and ``--resume`` continues from it.
+
+Status (summary.json) and exit status of the command line:
+
+    complete      0    every step done
+    failed        3    a step did not converge even after ``solver.max_step_cuts`` halvings; the
+                       converged steps (and sub-steps) are written
+    interrupted   130  SIGINT (Ctrl-C) / 143 SIGTERM: the run stopped at the end of the current
+                       step, wrote what exists and its checkpoint; ``--resume`` continues it
+    (bad input)   2    one line on stderr; nothing computed, nothing written
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sys
+import threading
+import time as clock
+from dataclasses import dataclass
+from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: no directory lock
+    fcntl = None
+
+from . import checkpoint
+from .case import Case, load_case
+from .errors import CaseError
+from .problem import build_problem
+from .results import Result
+from .stepping import TimeLoop
+from .writers import clear_directory, remove_temporaries, versions, write_outputs, write_resolved_case
+
+SIGNAL_NAMES = {signal.SIGINT: "SIGINT", signal.SIGTERM: "SIGTERM"}
+EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
+
+
+@dataclass
+class Outcome:
+    """What ``run`` did: the result (None when a resumed run had nothing left to do), the status, a
+    message, and the signal that stopped it (if any)."""
+
+    result: Result | None
+    status: str
+    message: str = ""
+    signal: int | None = None
+
+
+def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = False,
+        progress: bool = False) -> Outcome:
+    """Solve ``case`` into the run directory ``out`` (see the module's docstring). Bad input, an
+    unusable ``out`` or a checkpoint of another case raise CaseError before anything is written."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise CaseError(f"--out '{out}' exists and is not a directory")
+    used = out.exists() and any(out.iterdir())
+    if used and not (resume or overwrite):
+        raise CaseError(f"--out '{out}' is not empty (use --overwrite to replace it, or --resume to continue the run "
+                        f"in it)")
+    if resume and overwrite:
+        raise CaseError("--resume and --overwrite exclude each other")
+    if resume and used:
+        done = _finished(case, out)
+        if done is not None:
+            return done
+    with _StopOnSignals() as stopper:
+        problem = build_problem(case)
+        loop = TimeLoop(problem)
+        resuming = resume and checkpoint.exists(out)
+        if resuming:
+            checkpoint.restore(loop, out)
+            now = versions()
+            changed = [f"{name} {loop.stored_versions.get(name)} -> {version}" for name, version in now.items()
+                       if loop.stored_versions.get(name) != version]
+            if changed:
+                print(f"vpcontact: warning: resuming with other versions ({', '.join(changed)}): the numbers may "
+                      f"differ in the last digits from an uninterrupted run", file=sys.stderr)
+        elif resume and used:
+            _check_same_case(case, out)
+        # from here on the directory is ours: nothing above wrote to it
+        out.mkdir(parents=True, exist_ok=True)
+        lock = _lock(out)
+        try:
+            result = _run_locked(loop, case, out, clear=overwrite and used, stopper=stopper, progress=progress)
+        finally:
+            (out / LOCK).unlink(missing_ok=True)
+            os.close(lock)
+    return Outcome(result, result.status, result.message, stopper.signal)
+
+
+LOCK = ".vpcontact.lock"
+
+
+def _run_locked(loop: TimeLoop, case: Case, out: Path, *, clear: bool, stopper, progress: bool) -> Result:
+    """The run proper, in a directory this process holds: prepare it, loop with checkpoints, write."""
+    if clear:
+        clear_directory(out, keep=(LOCK,))
+    remove_temporaries(out)
+    (out / "summary.json").unlink(missing_ok=True)
+    write_resolved_case(case, out)
+    cadence = _Cadence(case.output.checkpoint_every_steps, case.output.checkpoint_every_seconds, loop.state.step)
+
+    def after_step(loop: TimeLoop) -> None:
+        if cadence.due(loop.state.step):
+            checkpoint.save(loop, out)
+            write_outputs(loop.result, out, history_only=True)
+            cadence.saved(loop.state.step)
+
+    result = loop.run(progress=progress, after_step=after_step, stop=stopper.reason)
+    if result.status == "interrupted":
+        if cadence.last_step != loop.state.step or not checkpoint.exists(out):
+            checkpoint.save(loop, out)
+        result.message += f"; continue with --resume (checkpoint in {checkpoint.folder(out)})"
+    write_outputs(result, out)
+    if result.status != "interrupted":
+        checkpoint.remove(out)
+    return result
+
+
+def _lock(out: Path) -> int:
+    """Hold an exclusive lock on the run directory while this process writes to it (released by the
+    kernel if the process dies): two runs never write into one directory."""
+    fd = os.open(out / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+    if fcntl is None:
+        return fd
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        os.close(fd)
+        raise CaseError(f"--out '{out}': another vpcontact run is writing to it") from None
+    return fd
+
+
+def _finished(case: Case, out: Path) -> Outcome | None:
+    """A run directory that holds a finished run of this case and no checkpoint: nothing to resume."""
+    summary_path = out / "summary.json"
+    if checkpoint.exists(out) or not summary_path.is_file():
+        return None
+    try:
+        summary = json.loads(summary_path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if summary.get("status") not in ("complete", "failed"):
+        return None
+    _check_same_case(case, out)
+    message = summary.get("message", "") or f"the run in '{out}' is already complete; nothing to resume"
+    return Outcome(None, summary["status"], message)
+
+
+def _check_same_case(case: Case, out: Path) -> None:
+    """--resume in a directory without a checkpoint: it must hold a run of this same case."""
+    path = out / "case.resolved.toml"
+    try:
+        before = load_case(path)
+    except CaseError:
+        raise CaseError(f"cannot resume: '{out}' holds no run of vpcontact (no readable case.resolved.toml)") from None
+    if checkpoint.comparable(before.resolved()) != checkpoint.comparable(case.resolved()):
+        raise checkpoint.ResumeError(f"cannot resume: the run in '{out}' was started with a different case "
+                                     f"({checkpoint.first_difference(before.resolved(), case.resolved())})")
+
+
+class _Cadence:
+    """When to checkpoint: every ``steps`` steps and/or every ``seconds`` seconds (0: not by that)."""
+
+    def __init__(self, steps: int, seconds: float, start: int):
+        self.steps, self.seconds = steps, seconds
+        self.last_step, self.last_time = start, clock.monotonic()
+
+    def due(self, step: int) -> bool:
+        by_steps = self.steps > 0 and step - self.last_step >= self.steps
+        by_time = self.seconds > 0 and clock.monotonic() - self.last_time >= self.seconds
+        return by_steps or by_time
+
+    def saved(self, step: int) -> None:
+        self.last_step, self.last_time = step, clock.monotonic()
+
+
+class _StopOnSignals:
+    """While active (main thread only), SIGINT and SIGTERM ask the time loop to stop at the end of the
+    current step; a second signal of the same kind acts at once (the default action)."""
+
+    def __init__(self):
+        self.signal: int | None = None
+        self._previous = {}
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for number in SIGNAL_NAMES:
+                self._previous[number] = signal.signal(number, self._handle)
+        return self
+
+    def __exit__(self, *exc):
+        for number, handler in self._previous.items():
+            signal.signal(number, handler)
+        return False
+
+    def _handle(self, number, frame):
+        self.signal = number
+        signal.signal(number, self._previous.get(number, signal.SIG_DFL))  # a second one is not deferred
+
+    def reason(self) -> str | None:
+        return None if self.signal is None else f"stopped by {SIGNAL_NAMES[self.signal]}"

@@ -1,0 +1,112 @@
+"""`vpcontact reproduce --quick`, end to end once: the paper's numbers, the figures and the report."""
+
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from vpcontact import load_case
+from vpcontact.cli import main
+from vpcontact.reproduce import PAPER_CASE, make_plan
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+FIGURES = [f"fig{n:02d}" for n in range(2, 11)]
+
+
+@pytest.fixture(scope="module")
+def quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp("reproduce") / "quick"
+    assert main(["reproduce", "--out", str(out), "--quick", "--workers", "2", "--quiet"]) == 0
+    return out, json.loads((out / "reproduce.json").read_text())
+
+
+def test_the_packaged_case_is_the_example():
+    assert load_case(tomllib.loads(PAPER_CASE)).resolved() == load_case(EXAMPLES / "paper_ball.toml").resolved()
+
+
+def test_stiffness_at_the_bottom_point_matches_the_paper(quick):
+    _, data = quick
+    K = data["K_bottom_final"]["k0.1"]
+    assert K["beta=1"] == pytest.approx(323.0, rel=0.01)
+    assert K["beta=-1"] == pytest.approx(21.0, rel=0.05)
+    # the series start near c_v = 100 and end at those values
+    assert data["cases"]["beta+1_k0.1"]["K_probe"][-1] == K["beta=1"]
+    assert data["cases"]["beta-1_k1_128"]["steps"] == 141
+
+
+def test_rho_distance_decreases_to_zero(quick):
+    _, data = quick
+    rho = data["rho_study"]
+    assert rho["rho"] == sorted(rho["rho"], reverse=True) and len(rho["rho"]) >= 4
+    difference = rho["difference"]
+    assert all(b < a for a, b in zip(difference, difference[1:]))
+    assert rho["decreasing"] and difference[-1] < 1e-3 * difference[0]
+
+
+def test_hk_slope_is_linear(quick):
+    _, data = quick
+    hk = data["hk_study"]
+    assert hk["slope"] >= 0.8
+    assert hk["levels"] == [4, 8, 16, 32] and hk["reference"]["level"] == 64
+    assert all(b < a for a, b in zip(hk["error_V"], hk["error_V"][1:]))
+
+
+def test_claims_and_the_ordering_of_penetrations(quick):
+    _, data = quick
+    verdicts = {c["claim"]: c["verdict"] for c in data["claims"]}
+    assert any("all contact nodes in normal compliance" in c and v == "holds" for c, v in verdicts.items())
+    order = data["penetration_ordering"]["k0.1"]
+    # the paper's ordering fails against the uncapped case once β = −1 sits on the rigid base
+    assert order["hardening_below_constant_all_steps"]
+    assert order["softening_below_uncapped_from_t"] == pytest.approx(0.6)
+    assert order["final"]["alpha0_g2000"] > order["final"]["beta-1"] == pytest.approx(0.2)
+    states = data["node_states"]
+    assert all(r["at_limit"] == 0 for r in states["beta+1"]) and states["beta-1"][-1]["at_limit"] > 0
+
+
+def test_every_figure_is_written_and_mentioned(quick):
+    out, data = quick
+    markdown = (out / "report.md").read_text()
+    page = (out / "report.html").read_text()
+    assert sorted(data["figures"]) == FIGURES
+    for key in FIGURES:
+        for kind in ("png", "pdf"):
+            path = out / "figures" / f"{key}.{kind}"
+            assert path.is_file() and path.stat().st_size > 1000, path
+        number = f"Fig. {int(key[3:])}"
+        assert f"figures/{key}.png" in markdown and number in markdown
+        assert f'id="{key}"' in page and "data:image/png;base64," in page and number in page
+    assert (out / "figures" / "fig02.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (out / "figures" / "fig02.pdf").read_bytes()[:5] == b"%PDF-"
+
+
+def test_report_states_the_deviations_and_the_machine(quick):
+    out, data = quick
+    markdown = (out / "report.md").read_text()
+    for text in ("17.977", "1000", "k = 0.1", "1/128", "plane strain", "does not hold", "Wall time and machine"):
+        assert text in markdown, text
+    assert data["machine"]["cores"] >= 1 and data["wall_time_s"]["total"] > 0
+    assert all(math.isfinite(v) for v in data["wall_time_s"].values())
+    assert data["wall_time_s"]["total"] < 120  # --quick: under 2 minutes
+
+
+def test_runs_are_written_as_ordinary_outputs(quick):
+    out, _ = quick
+    assert (out / "cases" / "beta+1_k0.1" / "summary.json").is_file()
+    assert (out / "studies" / "rho_sweep" / "study.csv").is_file()
+    assert (out / "studies" / "hk_convergence.toml").is_file()
+
+
+def test_refuses_a_non_empty_directory(quick, capsys):
+    out, _ = quick
+    assert main(["reproduce", "--out", str(out), "--quick", "--quiet"]) == 2
+    assert "not empty" in capsys.readouterr().err
+
+
+def test_quick_plan_is_coarse():
+    plan = make_plan(True)
+    assert plan.figure_h == 0.05 and plan.reference_level == 64 and max(plan.levels) == 32
+    full = make_plan(False)
+    assert full.reference_level == 512 and full.levels[-1] == 256 and full.rho[-1] == 1e-6
