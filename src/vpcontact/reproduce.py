@@ -38,6 +38,7 @@ import numpy as np
 
 from . import __version__
 from .case import load_case
+from .writers import json_safe
 
 #: The paper's example with the calibrated load: the content of examples/paper_ball.toml (a test
 #: checks that the two resolve to the same case), carried by the package so that `reproduce` does not
@@ -383,7 +384,7 @@ def run(
     timer.part("report", t0)
     data["wall_time_s"] = {**timer.parts, "total": time.perf_counter() - started}
     report.write(data, out)  # again, with its own time and the total
-    (out / "reproduce.json").write_text(json.dumps(_json_safe(data), indent=1) + "\n", encoding="utf-8")
+    (out / "reproduce.json").write_text(json.dumps(json_safe(data), indent=1) + "\n", encoding="utf-8")
     log(f"reproduce ({plan.mode}): {data['wall_time_s']['total']:.1f} s -> {out / 'report.html'}")
     return data
 
@@ -941,17 +942,3 @@ def settings(plan: Plan) -> dict:
         "calibrated_load": CALIBRATED_LOAD,
         "figure_times": list(FIGURE_TIMES),
     }
-
-
-def _json_safe(value):
-    if isinstance(value, dict):
-        return {str(k): _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, (np.floating, float)):
-        return None if not math.isfinite(float(value)) else float(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.bool_):
-        return bool(value)
-    return value

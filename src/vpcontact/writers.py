@@ -122,16 +122,18 @@ def write_outputs(result: Result, out: Path, *, history_only: bool = False) -> N
     _write_contact(result, out / "contact.csv")
     _write_fields(result, out / "fields")
     summary = {**result.summary(), "versions": versions()}
-    write_text(out / "summary.json", json.dumps(_json_safe(summary), indent=2) + "\n")
+    write_text(out / "summary.json", json.dumps(json_safe(summary), indent=2) + "\n")
 
 
-def _json_safe(value):
-    """NaN and inf are not JSON: write them as null."""
+def json_safe(value):
+    """Plain JSON values: NumPy scalars as Python ones, NaN and inf as null, keys as strings."""
     if isinstance(value, dict):
-        return {k: _json_safe(v) for k, v in value.items()}
+        return {str(k): json_safe(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, (np.integer,)):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.bool_):
+        return bool(value)
+    if isinstance(value, np.integer):
         return int(value)
     if isinstance(value, (float, np.floating)):
         return float(value) if math.isfinite(value) else None
