@@ -161,10 +161,6 @@ class ContactSurface:
     def size(self) -> int:
         return self.nodes.size
 
-    def penetration(self, u: np.ndarray) -> np.ndarray:
-        """d_i = u(x_i)·ν_i − g0_i."""
-        return self.operator @ u - self.gap0
-
     def nearest_node(self, point) -> int:
         """Index (into the contact nodes) of the node nearest to ``point``."""
         return int(np.argmin(np.sum((self.coordinates - np.reshape(point, (2, 1))) ** 2, axis=0)))
