@@ -44,3 +44,42 @@ def half_disc_case(h=0.1, **contact) -> dict:
 @pytest.fixture
 def deep_copy():
     return copy.deepcopy
+
+
+# --- the exit-code contract (README "Exit status"), shared by the adversarial tests ------------------
+def run_cli(*args, cwd=None, timeout=120, env=None):
+    """``python -m vpcontact.cli ARGS`` in a subprocess (a hang fails the test): (status, stdout, stderr)."""
+    import os
+    import subprocess
+    import sys
+
+    environment = {**os.environ, **(env or {})}
+    process = subprocess.run([sys.executable, "-m", "vpcontact.cli", *map(str, args)], cwd=cwd, env=environment,
+                             capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+    return process.returncode, process.stdout, process.stderr
+
+
+def snapshot_tree(folder):
+    """{relative path: (size, mtime_ns)} of every file and folder under ``folder`` (None if absent)."""
+    from pathlib import Path
+
+    folder = Path(folder)
+    if not folder.exists() and not folder.is_symlink():
+        return None
+    if not folder.is_dir():
+        return {".": folder.lstat().st_size}
+    return {str(p.relative_to(folder)): (p.lstat().st_size, p.lstat().st_mtime_ns) for p in sorted(folder.rglob("*"))}
+
+
+def assert_refused(status, stderr, *words, untouched=()):
+    """A refusal: exit 2, exactly one line ``vpcontact: error: ...`` naming ``words``, no traceback, no
+    NumPy warning; ``untouched``: pairs (folder, snapshot_tree(folder) taken before) that must be
+    unchanged (nothing written, nothing deleted)."""
+    assert status == 2, (status, stderr)
+    assert stderr.startswith("vpcontact: error: ") and stderr.count("\n") == 1, stderr
+    assert "Traceback" not in stderr and "Warning" not in stderr, stderr
+    assert len(stderr) < 1000, f"{len(stderr)} characters"
+    for word in words:
+        assert word in stderr, (word, stderr)
+    for folder, before in untouched:
+        assert snapshot_tree(folder) == before, f"{folder} changed"

@@ -55,6 +55,10 @@ def test_classical_normal_compliance_with_history_matches_a_generic_root_finder(
     assert result.series("nodes_in_compliance")[-1] > 0
 
 
+#: How far the SLSQP reference of the Signorini test is trusted (a length; the body's size is 2).
+REFERENCE_ACCURACY = 1e-7
+
+
 def test_signorini_matches_the_dual_quadratic_program():
     """K ≡ 0: at each time the Signorini problem with gap g is the QP min ½uᵀAu − bᵀu, N u ≤ g.
     With the roller on the axis A is singular (free vertical translation e); its dual is
@@ -85,8 +89,12 @@ def test_signorini_matches_the_dual_quadratic_program():
     top = np.argmax(lam)
     u = base + (g - N[top] @ base) / (N[top] @ e) * e
     d = N @ u
-    assert np.all(d <= g + 1e-9)
-    np.testing.assert_allclose(result.contact_history("penetration")[-1], d, rtol=0, atol=1e-7)
+    # SLSQP is accurate to about 1e-9 here (its feasibility error varies between SciPy versions: 2.4e-9
+    # with 1.16 and 1.17); the reference is used within REFERENCE_ACCURACY, checked on its own KKT
+    # conditions: primal feasibility d ≤ g and complementarity λ (g − d) = 0.
+    assert np.all(d <= g + REFERENCE_ACCURACY)
+    assert np.max(lam * np.abs(g - d)) <= REFERENCE_ACCURACY * lam.max()
+    np.testing.assert_allclose(result.contact_history("penetration")[-1], d, rtol=0, atol=REFERENCE_ACCURACY)
     np.testing.assert_allclose(result.contact_history("pressure_rigid")[-1] * w, lam, rtol=0, atol=1e-6 * lam.max())
     active = result.contact_history("status")[-1] == 2
     assert active.sum() >= 2 and not active.all()
