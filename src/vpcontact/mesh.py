@@ -131,7 +131,8 @@ def half_disc(h: float, radius: float = 1.0) -> Mesh:
     to the arc at depth √3/2·h, staggered against the arc nodes, and inside it a hexagonal
     lattice of spacing h. The triangulation is Delaunay (the lattice's own triangles away
     from the boundary, scipy's Delaunay near it); the interior nodes are then Laplacian-
-    smoothed. Measured for R/h in [1, 300]: longest edge ≤ 1.45 h, smallest angle ≥ 27°;
+    smoothed. The mesh is built for R = 1 and h/R, then scaled by R: the same triangles in any
+    unit of length. Measured for R/h in [1, 300]: longest edge ≤ 1.45 h, smallest angle ≥ 27°;
     for R/h ≥ 5 the triangle count is within 5 % of (πR²/2)/(√3 h²/4).
     """
     h = _positive("h", h)
@@ -140,6 +141,7 @@ def half_disc(h: float, radius: float = 1.0) -> Mesh:
         raise CaseError(f"h = {h} must not exceed the radius {R}")
     n_arc = int(np.ceil(0.5 * np.pi * R / h))
     n_axis = int(np.ceil(2.0 * R / h))
+    radius, h, R = R, h / R, 1.0  # built for R = 1, then scaled: the same triangles in any unit of length
 
     # Boundary: the arc counter-clockwise from (0, 0) to (0, 2R), then the axis downwards.
     angle = np.linspace(-0.5 * np.pi, 0.5 * np.pi, 2 * n_arc + 1)
@@ -204,7 +206,8 @@ def half_disc(h: float, radius: float = 1.0) -> Mesh:
     flip = _signed_areas(p, t) < 0
     t[1:, flip] = t[2:0:-1, flip]
     t = np.hstack((core_t, t))
-    p = _smooth(p, t, np.arange(p.shape[1]) >= n_boundary, sweeps=6)
+    p = radius * _smooth(p, t, np.arange(p.shape[1]) >= n_boundary, sweeps=6)
+    h, R = h * radius, radius
 
     center = np.array([0.0, R])
 

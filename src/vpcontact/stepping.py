@@ -32,6 +32,7 @@ from .material import von_mises
 from .problem import Problem
 from .results import Fields, Result
 from .solvers import StepData, StepSolution, make_solver
+from .solvers.errors import SingularMatrixError
 
 
 @dataclass
@@ -157,12 +158,12 @@ class TimeLoop:
         step = StepData(b[problem.free], problem.law, state.xi, h)
         try:
             solution = self.solver.solve(step, state.previous)
-        except (np.linalg.LinAlgError, RuntimeError) as error:
-            if isinstance(error, RuntimeError) and "singular" not in str(error):
-                raise
+        except SingularMatrixError as error:
             m = problem.surface.size
             solution = StepSolution(None, np.zeros(m), np.full(m, np.nan), np.zeros(m, dtype=bool), 0, np.nan, np.nan,
-                                    False, f"the Newton matrix is singular ({error})")
+                                    False, f"the Newton matrix is singular ({error})",
+                                    "a part of the body held only by contact may have lost it: hold it with "
+                                    "boundary.dirichlet entries, or try smaller time steps (time.steps)")
         return _Attempt(t, h, step, z, solution)
 
     def _accept(self, n: int, ends_step: bool, attempt: _Attempt) -> None:
@@ -192,7 +193,7 @@ class TimeLoop:
         self.state = LoopState(state.step, xi, attempt.z, rate, solution)
 
     def _failure_message(self, n: int, attempt: _Attempt, cuts: int) -> str:
-        """One line: the step, its time, where the cuts ended, the residuals and the contact counts."""
+        """One line: the step, its time, where the cuts ended, the residuals, the contact counts and what to try."""
         t_n = self.problem.times[n - 1]
         s = attempt.solution
         where = (f" after {cuts} step cut{'s' if cuts != 1 else ''} (sub-step of length {attempt.h:g} ending at "
@@ -202,8 +203,9 @@ class TimeLoop:
             status = node_status(s.d, s.active)
             counts = (f"; contact nodes separated/in compliance/at limit = {int(np.sum(status == SEPARATED))}/"
                       f"{int(np.sum(status == IN_COMPLIANCE))}/{int(np.sum(status == AT_LIMIT))}")
+        advice = f"; {s.advice}" if s.advice else ""
         return (f"step {n} (t = {t_n:g}) failed{where}: {s.message}; residual {s.residual:.3e}, "
-                f"complementarity {s.complementarity:.3e}{counts}")
+                f"complementarity {s.complementarity:.3e}{counts}{advice}")
 
 
 def solve_problem(problem: Problem, *, progress: bool = False) -> Result:

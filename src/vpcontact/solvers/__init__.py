@@ -14,6 +14,7 @@ from .base import StepData, StepSolution, default_augmentation
 from .condensed import CondensedNewton, check_condensed_memory
 from .full import FullNewton
 from ..errors import CaseError
+from .errors import SingularMatrixError, SolverMemoryError
 
 SOLVERS = {FullNewton.name: FullNewton, CondensedNewton.name: CondensedNewton}
 METHODS = ("auto", *SOLVERS)
@@ -30,9 +31,16 @@ def make_solver(method: str, A, N, weights, gap0, *, augmentation: float | None,
         except CaseError:
             method = FullNewton.name
     common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale)
-    if method == CondensedNewton.name:
+    if method != CondensedNewton.name:
+        return FullNewton(*common)
+    try:
         return CondensedNewton(*common, factorization=factorization)
-    return FullNewton(*common)
+    except SingularMatrixError as error:
+        raise CaseError(f"the stiffness matrix cannot be factored ({error}): the mesh has degenerate elements, or "
+                        f"a part of the body is held by nothing") from None
+    except SolverMemoryError:
+        raise CaseError(f"not enough memory to factor the stiffness matrix ({A.shape[0]} dofs): use a coarser mesh, "
+                        f"or solver.factorization = \"pardiso\" if it is installed") from None
 
 
 __all__ = ["METHODS", "SOLVERS", "StepData", "StepSolution", "make_solver"]

@@ -37,7 +37,8 @@ class StepSolution:
     residual: float  # ‖A u + Nᵀ(f + λ) − b‖ / max(‖b‖, ‖Nᵀ(f + λ)‖)
     complementarity: float  # max_i |min(λ_i / r, g − d_i)|, a length
     converged: bool
-    message: str = ""
+    message: str = ""  # why it did not converge
+    advice: str = ""  # what the user may try then
 
 
 @dataclass(frozen=True)

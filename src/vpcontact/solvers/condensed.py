@@ -23,8 +23,9 @@ from threadpoolctl import ThreadpoolController
 
 from ..errors import CaseError
 from .base import ContactState, StepData, StepSolution
+from .errors import SingularMatrixError
 from .factorization import available_memory, factorize
-from .newton import Evaluation, SemismoothNewton
+from .newton import ROUNDOFF, Evaluation, SemismoothNewton
 
 
 class SolvedSpan:
@@ -75,6 +76,7 @@ class CondensedNewton(SemismoothNewton):
         self.factorization = factorize(A + self.N.T @ sp.diags(self.reference) @ self.N, self.N, factorization)
         factored = time.perf_counter()
         self.S = self.factorization.condensed_operator()
+        self._S_row_sums = np.abs(self.S).sum(axis=1)  # bounds |S| |q| by its rows' sums times max |q|
         self.timings = {"factorization": factored - started, "condensation": time.perf_counter() - factored}
         self.span = SolvedSpan(self.factorization.solve)
         self.recoveries = 0
@@ -107,16 +109,21 @@ class CondensedNewton(SemismoothNewton):
     def evaluate(self, step: StepData, x: tuple) -> Evaluation:
         """At (d, λ): d_u = d_free − S q is the penetration of the displacement u = A0⁻¹(b − Nᵀq) the
         solver would return; the residual and complementarity reported are those of u (the full
-        system's A u + Nᵀ(f(d_u) + λ) − b = Nᵀ[f(d_u) − f(d) − c0 (d_u − d)])."""
+        system's A u + Nᵀ(f(d_u) + λ) − b = Nᵀ[f(d_u) − f(d) − c0 (d_u − d)]). Rounding leaves
+        d_u − d at about ROUNDOFF (|d_free| + |S| |q| + |d|), hence the residual's floor."""
         d, lam = x
         state = ContactState.evaluate(step, self.weights, d, lam, self.r)
         d_u = self._free_penetration(step) - self.S @ self._load(state, d, lam)
         recovered = ContactState.evaluate(step, self.weights, d_u, lam, self.r)
         R_u = self.N.T @ (recovered.force - state.force - self.reference * (d_u - d))
         scale = max(self._b_norm, np.linalg.norm(self.N.T @ (recovered.force + lam)))
-        residual = np.linalg.norm(R_u) / scale if scale > 0 else np.linalg.norm(R_u)
+        load_size = np.abs(state.force) + np.abs(lam) + self.reference * np.abs(d + self.gap0)
+        d_size = np.abs(self._d_free) + self._S_row_sums * load_size.max(initial=0.0) + np.abs(d)
+        floor = ROUNDOFF * np.linalg.norm((self.reference + np.abs(recovered.tangent)) * d_size)
+        residual = np.linalg.norm(R_u)
+        residual, floor = (residual / scale, floor / scale) if scale > 0 else (residual, floor)
         merit = np.concatenate([self.r * (d - d_u), state.C])
-        return Evaluation(d, lam, state, merit, residual, self.complementarity(recovered), d_u)
+        return Evaluation(d, lam, state, merit, residual, self.complementarity(recovered), floor, d_u)
 
     def direction(self, step: StepData, x: tuple, ev: Evaluation) -> tuple:
         """Solve (I + S diag(T − c0)) Δd + S Δλ = −(d − d_u) with Δd_𝒜 = g − d_𝒜 and Δλ_ℐ = −λ_ℐ."""
@@ -125,16 +132,19 @@ class CondensedNewton(SemismoothNewton):
         M = np.eye(d.size) + self.S * (self.jacobian_tangent(ev.state) - self.reference)[None, :]
         step_active = step.law.g - d[active]
         rhs = -(d - ev.d_solution) - M[:, active] @ step_active + self.S[:, ~active] @ lam[~active]
-        unknowns = np.linalg.solve(np.hstack([M[:, ~active], self.S[:, active]]), rhs)
+        try:
+            unknowns = np.linalg.solve(np.hstack([M[:, ~active], self.S[:, active]]), rhs)
+        except np.linalg.LinAlgError as error:
+            raise SingularMatrixError(f"the condensed Newton matrix is singular ({error})") from None
         dd = np.empty_like(d)
         dd[active], dd[~active] = step_active, unknowns[: (~active).sum()]
         dlam = -lam.copy()
         dlam[active] = unknowns[(~active).sum():]
         return dd, dlam
 
-    def solution(self, step, x, ev: Evaluation, iterations, converged, message="") -> StepSolution:
+    def solution(self, step, x, ev: Evaluation, iterations, converged, message="", advice="") -> StepSolution:
         return StepSolution(None, x[1], ev.d_solution, ev.state.active, iterations, ev.residual,
-                            ev.complementarity, converged, message)
+                            ev.complementarity, converged, message, advice)
 
     def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
         """u = A0⁻¹ (b − Nᵀ q) at the free dofs: one solve."""

@@ -18,6 +18,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .errors import SingularMatrixError, SolverMemoryError
+
 #: Columns of Nᵀ solved at once when S is built by block solves.
 BLOCK = 64
 
@@ -68,7 +70,11 @@ class PardisoFactorization:
         if self._dofs.size == 0:
             return np.zeros((self._N_contact.shape[0],) * 2)
         schur = self._pardiso.schur
-        factor = sla.cho_factor(0.5 * (schur + schur.T))
+        try:
+            factor = sla.cho_factor(0.5 * (schur + schur.T))
+        except np.linalg.LinAlgError as error:
+            raise SingularMatrixError(f"the Schur complement on the contact dofs is not positive definite ({error})") \
+                from None
         S = self._N_contact @ sla.cho_solve(factor, self._N_contact.T)
         return 0.5 * (S + S.T)
 
@@ -84,8 +90,8 @@ class SuperLUFactorization:
 
     def __init__(self, A: sp.spmatrix, N: sp.csr_matrix):
         self._N = N
-        self._lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                             options={"SymmetricMode": True})
+        self._lu = splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                        options={"SymmetricMode": True})
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self._lu.solve(b)
@@ -99,6 +105,16 @@ class SuperLUFactorization:
             stop = min(start + BLOCK, m)
             S[:, start:stop] = self._N @ self.solve(NT[:, start:stop].toarray())
         return 0.5 * (S + S.T)
+
+
+def splu(A: sp.csc_matrix, **options):
+    """SciPy's sparse LU with its failures typed: SingularMatrixError, SolverMemoryError."""
+    try:
+        return spla.splu(A, **options)
+    except MemoryError:
+        raise SolverMemoryError(f"not enough memory to factor a {A.shape[0]} x {A.shape[0]} matrix") from None
+    except RuntimeError as error:  # SuperLU's only RuntimeError: an exactly singular factor
+        raise SingularMatrixError(f"SuperLU: {error}") from None
 
 
 BACKENDS = {backend.name: backend for backend in (PardisoFactorization, SuperLUFactorization)}

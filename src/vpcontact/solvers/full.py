@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .base import ContactState, StepData, StepSolution
-from .newton import Evaluation, SemismoothNewton
+from .factorization import splu
+from .newton import ROUNDOFF, Evaluation, SemismoothNewton
 
 
 class FullNewton(SemismoothNewton):
@@ -25,6 +25,7 @@ class FullNewton(SemismoothNewton):
     def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations, length_scale):
         super().__init__(weights, r, tolerance, max_iterations, length_scale)
         self.A, self.N, self.gap0 = A, N.tocsr(), gap0
+        self._A_abs, self._N_abs = abs(self.A), abs(self.N)  # for the rounding level of the residual
         self.timings: dict[str, float] = {}
         self.solves = 0  # sparse LU factorizations and solves, one per Newton iteration
 
@@ -34,14 +35,19 @@ class FullNewton(SemismoothNewton):
         return previous.u, previous.lam
 
     def evaluate(self, step: StepData, x: tuple) -> Evaluation:
+        """The residual R_u = A u + Nᵀ(f + λ) − b relative to the larger of ‖b‖ and ‖Nᵀ(f + λ)‖, and
+        the level rounding leaves in it: ROUNDOFF ‖|A||u| + |Nᵀ|(|f| + |λ|) + |b|‖ on the same scale
+        (a rigid motion held only by a soft layer makes |A||u| much larger than the forces)."""
         u, lam = x
         d = self.N @ u - self.gap0
         state = ContactState.evaluate(step, self.weights, d, lam, self.r)
         contact = self.N.T @ (state.force + lam)
         R_u = self.A @ u + contact - step.b
         scale = max(np.linalg.norm(step.b), np.linalg.norm(contact))
-        residual = np.linalg.norm(R_u) / scale if scale > 0 else np.linalg.norm(R_u)
-        return Evaluation(d, lam, state, np.concatenate([R_u, state.C]), residual, self.complementarity(state))
+        magnitudes = self._A_abs @ np.abs(u) + self._N_abs.T @ (np.abs(state.force) + np.abs(lam)) + np.abs(step.b)
+        floor = ROUNDOFF * np.linalg.norm(magnitudes)
+        residual, floor = (np.linalg.norm(R_u) / scale, floor / scale) if scale > 0 else (np.linalg.norm(R_u), floor)
+        return Evaluation(d, lam, state, np.concatenate([R_u, state.C]), residual, self.complementarity(state), floor)
 
     def direction(self, step: StepData, x: tuple, ev: Evaluation) -> tuple:
         u, lam = x
@@ -52,16 +58,16 @@ class FullNewton(SemismoothNewton):
         rhs_u = -ev.merit_vector[: u.size] + self.N[~active].T @ lam[~active]
         if active.any():
             kkt = sp.bmat([[J, N_active.T], [N_active, None]], format="csc")
-            solution = spla.splu(kkt).solve(np.concatenate([rhs_u, step.law.g - ev.d[active]]))
+            solution = splu(kkt).solve(np.concatenate([rhs_u, step.law.g - ev.d[active]]))
         else:
-            solution = spla.splu(J.tocsc()).solve(rhs_u)
+            solution = splu(J.tocsc()).solve(rhs_u)
         dlam = -lam.copy()
         dlam[active] = solution[u.size:]
         return solution[: u.size], dlam
 
-    def solution(self, step, x, ev: Evaluation, iterations, converged, message="") -> StepSolution:
+    def solution(self, step, x, ev: Evaluation, iterations, converged, message="", advice="") -> StepSolution:
         return StepSolution(x[0], x[1], ev.d, ev.state.active, iterations, ev.residual, ev.complementarity,
-                            converged, message)
+                            converged, message, advice)
 
     def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
         """u at the free dofs (the iterate itself)."""

@@ -25,7 +25,16 @@ from ctypes.util import find_library
 import numpy as np
 import scipy.sparse as sp
 
+from .errors import SingularMatrixError, SolverError, SolverMemoryError
+
 _INT_P = ctypes.POINTER(ctypes.c_int32)
+#: PARDISO's error codes (the MKL reference) as typed errors.
+_ERRORS = {
+    -2: (SolverMemoryError, "not enough memory"),
+    -4: (SingularMatrixError, "zero pivot: the matrix is singular or not positive definite"),
+    -7: (SingularMatrixError, "the diagonal is singular"),
+    -9: (SolverMemoryError, "not enough memory for the out-of-core factorization"),
+}
 _LIBRARY = None
 
 
@@ -55,6 +64,7 @@ class Pardiso:
 
     def __init__(self, A: sp.spmatrix, schur_dofs: np.ndarray | None = None):
         upper = sp.triu(A, format="csr")
+        upper.setdiag(upper.diagonal())  # every diagonal entry stored, zeros too: a missing one crashes PARDISO
         upper.sort_indices()
         self.n = A.shape[0]
         self._data = np.ascontiguousarray(upper.data, dtype=np.float64)
@@ -84,8 +94,8 @@ class Pardiso:
                           value(0), None if b is None else b.ctypes.data, None if x is None else x.ctypes.data,
                           ctypes.byref(error))
         if error.value != 0:
-            raise RuntimeError(f"MKL PARDISO phase {phase} failed with error {error.value}"
-                               + (" (the matrix is not positive definite)" if error.value == -4 else ""))
+            kind, meaning = _ERRORS.get(error.value, (SolverError, "see the MKL PARDISO error codes"))
+            raise kind(f"MKL PARDISO phase {phase} failed with error {error.value} ({meaning})")
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """A⁻¹ b for b of shape (n,) or (n, k)."""
