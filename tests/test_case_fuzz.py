@@ -19,9 +19,12 @@ from vpcontact.case import LONGEST_MESSAGE, MAX_NESTING
 from vpcontact.errors import CaseError
 from conftest import half_disc_case, rectangle_case
 
+#: 200 fixed examples in the test suite (the same on every machine: CI never fails by chance);
+#: VPCONTACT_FUZZ_EXAMPLES=N draws N new random ones (a fuzzing session).
+FUZZING = "VPCONTACT_FUZZ_EXAMPLES" in os.environ
 SETTINGS = settings(max_examples=int(os.environ.get("VPCONTACT_FUZZ_EXAMPLES", 200)), deadline=None,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
-                    database=None)
+                    database=None, derandomize=not FUZZING)
 
 KEYS = ["mesh", "shape", "h", "file", "radius", "width", "height", "material", "E", "nu", "hypothesis",
         "viscoplastic", "law", "eta", "yield_stress", "mu", "E_inf", "nu_inf", "initial", "stress", "boundary",
