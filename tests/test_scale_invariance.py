@@ -6,7 +6,7 @@
 - Stiffness ratio: from a body a thousand times softer than the layer (E / (c_v R) = 1e-3) to a steel
   part in Pa on the paper's layer (1e9), both methods complete without a step cut and agree to the
   accuracy double precision allows: a body held only by a soft layer carries a rigid motion that the
-  stiffness matrix annihilates only to rounding, ε E/(c_v R) per row.
+  stiffness matrix annihilates only to rounding, ε E per row (see vpcontact.rigid_modes).
 """
 
 import numpy as np
@@ -82,32 +82,44 @@ def test_other_units_give_the_same_solution(reference, L, s):
     assert_same_up_to_units(result, expected, L, s, rtol=1e-9)
 
 
+def attainable(E: float) -> float:
+    """The relative accuracy of the condensed method on a body held only by the layer: its contact
+    unknowns carry the rounding ε E/(c_v R) of the factored stiffness (observed ≤ 3 ε E/(c_v R));
+    the full method evaluates the elastic forces without the rigid motion and is exact to rounding."""
+    return 1e-9 + 30 * np.finfo(float).eps * E / C_V
+
+
 @pytest.mark.parametrize("E", [0.1, 1e3, 1e6, 1e9, 1e11])
 def test_both_methods_complete_and_agree_for_any_stiffness_ratio(E):
-    """E / (c_v R) from 1e-3 to 1e9: no step cut (a residual at rounding level is converged), and the
-    methods agree to 1e-8 or to the rounding of the rigid motion, 10 ε E/(c_v R) √(dofs)."""
+    """E / (c_v R) from 1e-3 to 1e9: no step cut (a residual at rounding level is converged), the
+    same contact states, and the same numbers to the attainable accuracy."""
     results = {method: vpcontact.solve(paper_case(E=E, method=method)) for method in ("full", "condensed")}
     for method, result in results.items():
         assert result.status == "complete", (method, result.message)
         assert result.step_cuts == 0, method
     full, condensed = results["full"], results["condensed"]
-    attainable = 1e-8 + 10 * np.finfo(float).eps * E / C_V * np.sqrt(full.dofs)
+    np.testing.assert_array_equal(condensed.contact_history("status"), full.contact_history("status"))
     for name in ("penetration", "xi", "K", "pressure_compliance"):
         a, b = condensed.contact_history(name), full.contact_history(name)
-        assert np.abs(a - b).max() <= attainable * np.abs(b).max(), name
+        assert np.abs(a - b).max() <= attainable(E) * np.abs(b).max(), name
     for step, fields in full.fields.items():
         u = condensed.fields[step].displacement
-        assert np.abs(u - fields.displacement).max() <= attainable * np.abs(fields.displacement).max()
+        assert np.abs(u - fields.displacement).max() <= attainable(E) * np.abs(fields.displacement).max()
 
 
-def test_a_stiff_body_on_a_soft_layer_approaches_the_rigid_limit():
+@pytest.mark.parametrize("method", ["full", "condensed"])
+def test_a_stiff_body_on_a_soft_layer_approaches_the_rigid_limit(method):
     """As E grows the penetration at the bottom tends to its rigid-body limit like 1/E: the values at
-    E = 1e9 and 1e11 lie within the rounding of that limit extrapolated from E = 1e5 and 1e6."""
-    probe = {E: vpcontact.solve(paper_case(E=E, method="condensed")).series("penetration_probe")[-1]
-             for E in (1e5, 1e6, 1e9, 1e11)}
-    limit = probe[1e6] + (probe[1e6] - probe[1e5]) / 9.0  # d(E) = d∞ − c/E
+    E = 1e9 and 1e11 are those of d∞ − c/E fitted at E = 1e6 and 1e7, to the attainable accuracy
+    (without removing the rigid motion from A u both were off by 4e-7 here at 1e11, and by 5e-4 on
+    46k DOFs)."""
+    probe = {E: vpcontact.solve(paper_case(E=E, method=method)).series("penetration_probe")[-1]
+             for E in (1e6, 1e7, 1e9, 1e11)}
+    c = (probe[1e7] - probe[1e6]) / (1 / 1e6 - 1 / 1e7)  # d(E) = d∞ − c/E + O(1/E²)
+    limit = probe[1e7] + c / 1e7
     for E in (1e9, 1e11):
-        assert abs(probe[E] - limit) <= 1e-7 + 10 * np.finfo(float).eps * E / C_V * 40 * limit, E
+        accuracy = 1e-8 if method == "full" else attainable(E)  # 1e-8: the fit's own accuracy
+        assert abs(probe[E] - (limit - c / E)) <= accuracy * limit, (E, probe[E] - (limit - c / E))
 
 
 @pytest.mark.parametrize("backend", installed_backends())

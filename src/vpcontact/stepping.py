@@ -31,6 +31,7 @@ from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from .material import von_mises
 from .problem import Problem
 from .results import Fields, Result
+from .rigid_modes import free_rigid_modes, rigid_modes
 from .solvers import StepData, StepSolution, make_solver
 from .solvers.errors import SingularMatrixError
 
@@ -74,10 +75,13 @@ class TimeLoop:
         self.problem = problem
         case, free, surface = problem.case, problem.free, problem.surface
         options = case.solver
+        mesh = problem.mesh.mesh
+        held_by_contact = free_rigid_modes(rigid_modes(mesh.p, mesh.t, problem.basis.nodal_dofs), free)
         self.solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
-                                  surface.weights, surface.gap0, augmentation=options.augmentation,
-                                  tolerance=options.tolerance, max_iterations=options.max_iterations,
-                                  length_scale=problem.mesh.diameter, factorization=options.factorization)
+                                  surface.weights, surface.gap0, rigid=held_by_contact,
+                                  augmentation=options.augmentation, tolerance=options.tolerance,
+                                  max_iterations=options.max_iterations, length_scale=problem.mesh.diameter,
+                                  factorization=options.factorization)
         self.max_cuts = options.max_step_cuts
         self.result = Result.start(problem, self.solver)
         self._created = started

@@ -20,9 +20,10 @@ SOLVERS = {FullNewton.name: FullNewton, CondensedNewton.name: CondensedNewton}
 METHODS = ("auto", *SOLVERS)
 
 
-def make_solver(method: str, A, N, weights, gap0, *, augmentation: float | None, tolerance: float,
+def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float | None, tolerance: float,
                 max_iterations: int, length_scale: float, factorization: str = "auto"):
-    """The step solver ``method`` for stiffness A and contact operator N (both on the free dofs)."""
+    """The step solver ``method`` for stiffness A and contact operator N (both on the free dofs);
+    ``rigid``: an orthonormal basis of the rigid motions held only by contact, (free dofs, k)."""
     r = default_augmentation(A, N) if augmentation is None else augmentation
     if method == "auto":
         try:
@@ -30,7 +31,7 @@ def make_solver(method: str, A, N, weights, gap0, *, augmentation: float | None,
             method = CondensedNewton.name
         except CaseError:
             method = FullNewton.name
-    common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale)
+    common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale, rigid)
     if method != CondensedNewton.name:
         return FullNewton(*common)
     try:

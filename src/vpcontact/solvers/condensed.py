@@ -11,11 +11,21 @@ step problem of ``base`` reduces to the m contact nodes:
 solved by the same semi-smooth Newton iteration as the full system, now with a dense m × m matrix;
 u = A0⁻¹ (b − Nᵀ q) is recovered by one solve, only when it is asked for. Right-hand sides that are
 combinations of ones already solved (loads proportional to t, for instance) cost no solve at all.
+
+A stiff body held only by a soft layer (E / K ≳ 1e6) is the one case where that is not enough: A
+annihilates the body's rigid motions only to rounding, and A0's factor carries that rounding into
+the layer's balance (a relative error of about ε E/K √n). There the iteration converges to rounding
+level only, and the step is finished by iterative refinement: the whole system's residual is
+evaluated with the rigid motions removed, R = A (u − Z Zᵀu) + Nᵀ(f + λ) − b, and the step solved
+again with the load corrected by −R, until the net force and moment ‖ZᵀR‖ balance to the tolerance
+or stop decreasing (one or two rounds, two solves each): the body's balance then holds to about
+ε E/K relative, the rounding of the contact unknowns, instead of ε E/K √n.
 """
 
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -25,7 +35,7 @@ from ..errors import CaseError
 from .base import ContactState, StepData, StepSolution
 from .errors import SingularMatrixError
 from .factorization import available_memory, factorize
-from .newton import ROUNDOFF, Evaluation, SemismoothNewton
+from .newton import ROUNDOFF, STAGNATION, Evaluation, SemismoothNewton
 
 
 class SolvedSpan:
@@ -55,6 +65,11 @@ class SolvedSpan:
         return x
 
 
+#: Rounds of iterative refinement at most (each multiplies the imbalance by about ε E/K √n; one or
+#: two are needed).
+MAX_REFINEMENTS = 4
+
+
 class CondensedNewton(SemismoothNewton):
     """Semi-smooth Newton on the contact nodes with a once-factored stiffness.
 
@@ -66,11 +81,11 @@ class CondensedNewton(SemismoothNewton):
     _threads = ThreadpoolController()
 
     def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations,
-                 length_scale, factorization: str = "auto"):
+                 length_scale, rigid: np.ndarray, factorization: str = "auto"):
         super().__init__(weights, r, tolerance, max_iterations, length_scale)
         m = N.shape[0]
         check_condensed_memory(m, A.shape[0])
-        self.N, self.gap0 = N.tocsr(), gap0
+        self.A, self.N, self.gap0, self.Z = A, N.tocsr(), gap0, rigid
         self.reference = np.full(m, r)
         started = time.perf_counter()
         self.factorization = factorize(A + self.N.T @ sp.diags(self.reference) @ self.N, self.N, factorization)
@@ -79,24 +94,60 @@ class CondensedNewton(SemismoothNewton):
         self._S_row_sums = np.abs(self.S).sum(axis=1)  # bounds |S| |q| by its rows' sums times max |q|
         self.timings = {"factorization": factored - started, "condensation": time.perf_counter() - factored}
         self.span = SolvedSpan(self.factorization.solve)
-        self.recoveries = 0
-        self._step, self._d_free, self._b_norm = None, None, 0.0
+        self.recoveries = self.refinements = 0
+        self._step, self._load_vector, self._d_free, self._b_norm = None, None, None, 0.0
 
     def solve(self, step: StepData, previous: StepSolution | None) -> StepSolution:
         with self._threads.limit(limits=1, user_api="blas"):
-            return super().solve(step, previous)
+            solution = super().solve(step, previous)
+            if solution.converged and solution.residual > self.tolerance and self.Z.shape[1]:
+                return self._refine(step, solution)
+            return solution
+
+    def _refine(self, step: StepData, solution: StepSolution) -> StepSolution:
+        """Iterative refinement of a solution converged to rounding level (see the module's docstring),
+        until the balance is within the tolerance or stops halving (the rounding of the contact
+        unknowns themselves); the solution returned carries its displacement u."""
+        last = np.inf
+        for _ in range(MAX_REFINEMENTS):
+            u = self._recover(solution)
+            state = ContactState.evaluate(step, self.weights, solution.d, solution.lam, self.r)
+            contact = self.N.T @ (state.force + solution.lam)
+            R = self.A @ (u - self.Z @ (self.Z.T @ u)) + contact - step.b
+            balance = np.linalg.norm(self.Z.T @ R) / (max(self._b_norm, np.linalg.norm(contact)) or 1.0)
+            if balance <= self.tolerance or balance > STAGNATION * last:
+                break
+            last = balance
+            self.refinements += 1
+            self._load_vector = self._load_vector - R
+            self._d_free = self._d_free - self.N @ self.factorization.solve(R)
+            refined = super().solve(step, solution)
+            solution = replace(refined, iterations=solution.iterations + refined.iterations)
+            if not solution.converged:
+                return solution
+        else:
+            u = self._recover(solution)
+        return replace(solution, u=u)
 
     def _free_penetration(self, step: StepData) -> np.ndarray:
-        """d_free = N A0⁻¹ b − g0 of this step (computed once per step)."""
+        """d_free = N A0⁻¹ b − g0 of this step (computed once per step; b corrected by refinements)."""
         if self._step is not step:
-            self._step, self._d_free = step, self.N @ self.span(step.b) - self.gap0
+            self._step, self._load_vector = step, step.b
+            self._d_free = self.N @ self.span(step.b) - self.gap0
             self._b_norm = np.linalg.norm(step.b)
         return self._d_free
 
+    def _recover(self, solution: StepSolution) -> np.ndarray:
+        """u = A0⁻¹ (b − Nᵀ q) at the free dofs for this step's (corrected) load b: one solve."""
+        self.recoveries += 1
+        state = ContactState.evaluate(self._step, self.weights, solution.d, solution.lam, self.r)
+        return self.factorization.solve(self._load_vector - self.N.T @ self._load(state, solution.d, solution.lam))
+
     @property
     def solves(self) -> int:
-        """Solves with the factored A0 in the time loop: new right-hand sides and recoveries of u."""
-        return self.span.solves + self.recoveries
+        """Solves with the factored A0 in the time loop: new right-hand sides, recoveries of u and the
+        corrections of refinements."""
+        return self.span.solves + self.recoveries + self.refinements
 
     def _load(self, state: ContactState, d, lam) -> np.ndarray:
         return state.force + lam - self.reference * (d + self.gap0)
@@ -110,7 +161,8 @@ class CondensedNewton(SemismoothNewton):
         """At (d, λ): d_u = d_free − S q is the penetration of the displacement u = A0⁻¹(b − Nᵀq) the
         solver would return; the residual and complementarity reported are those of u (the full
         system's A u + Nᵀ(f(d_u) + λ) − b = Nᵀ[f(d_u) − f(d) − c0 (d_u − d)]). Rounding leaves
-        d_u − d at about ROUNDOFF (|d_free| + |S| |q| + |d|), hence the residual's floor."""
+        d_u − d at about ROUNDOFF (|d_free| + |S| |q| + |d|), hence the residual's floor; the balance
+        of the rigid motions is not measured here (it is as rounded as d_u − d) but by ``_refine``."""
         d, lam = x
         state = ContactState.evaluate(step, self.weights, d, lam, self.r)
         d_u = self._free_penetration(step) - self.S @ self._load(state, d, lam)
@@ -120,10 +172,10 @@ class CondensedNewton(SemismoothNewton):
         load_size = np.abs(state.force) + np.abs(lam) + self.reference * np.abs(d + self.gap0)
         d_size = np.abs(self._d_free) + self._S_row_sums * load_size.max(initial=0.0) + np.abs(d)
         floor = ROUNDOFF * np.linalg.norm((self.reference + np.abs(recovered.tangent)) * d_size)
-        residual = np.linalg.norm(R_u)
-        residual, floor = (residual / scale, floor / scale) if scale > 0 else (residual, floor)
+        scale = scale if scale > 0 else 1.0
         merit = np.concatenate([self.r * (d - d_u), state.C])
-        return Evaluation(d, lam, state, merit, residual, self.complementarity(recovered), floor, d_u)
+        return Evaluation(d, lam, state, merit, np.linalg.norm(R_u) / scale, self.complementarity(recovered),
+                          floor / scale, d_solution=d_u)
 
     def direction(self, step: StepData, x: tuple, ev: Evaluation) -> tuple:
         """Solve (I + S diag(T − c0)) Δd + S Δλ = −(d − d_u) with Δd_𝒜 = g − d_𝒜 and Δλ_ℐ = −λ_ℐ."""
@@ -147,10 +199,11 @@ class CondensedNewton(SemismoothNewton):
                             ev.complementarity, converged, message, advice)
 
     def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
-        """u = A0⁻¹ (b − Nᵀ q) at the free dofs: one solve."""
-        self.recoveries += 1
-        state = ContactState.evaluate(step, self.weights, solution.d, solution.lam, self.r)
-        return self.factorization.solve(step.b - self.N.T @ self._load(state, solution.d, solution.lam))
+        """u at the free dofs: the refined one, or u = A0⁻¹ (b − Nᵀ q) (one solve)."""
+        if solution.u is not None:
+            return solution.u
+        self._free_penetration(step)
+        return self._recover(solution)
 
 
 def check_condensed_memory(m: int, n: int) -> None:

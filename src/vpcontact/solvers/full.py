@@ -22,9 +22,10 @@ class FullNewton(SemismoothNewton):
 
     name = "full"
 
-    def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations, length_scale):
+    def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations, length_scale,
+                 rigid: np.ndarray):
         super().__init__(weights, r, tolerance, max_iterations, length_scale)
-        self.A, self.N, self.gap0 = A, N.tocsr(), gap0
+        self.A, self.N, self.gap0, self.Z = A, N.tocsr(), gap0, rigid
         self._A_abs, self._N_abs = abs(self.A), abs(self.N)  # for the rounding level of the residual
         self.timings: dict[str, float] = {}
         self.solves = 0  # sparse LU factorizations and solves, one per Newton iteration
@@ -35,19 +36,22 @@ class FullNewton(SemismoothNewton):
         return previous.u, previous.lam
 
     def evaluate(self, step: StepData, x: tuple) -> Evaluation:
-        """The residual R_u = A u + Nᵀ(f + λ) − b relative to the larger of ‖b‖ and ‖Nᵀ(f + λ)‖, and
-        the level rounding leaves in it: ROUNDOFF ‖|A||u| + |Nᵀ|(|f| + |λ|) + |b|‖ on the same scale
-        (a rigid motion held only by a soft layer makes |A||u| much larger than the forces)."""
+        """The residual R_u = A u + Nᵀ(f + λ) − b relative to the larger of ‖b‖ and ‖Nᵀ(f + λ)‖, with
+        A u evaluated as A (u − Z Zᵀu): the rigid motions Z held only by contact strain nothing, and
+        a large one (a stiff body sinking into a soft layer) would cost digits, since A annihilates it
+        only to rounding. Also the level rounding leaves in R_u, ROUNDOFF ‖|A||u| + |Nᵀ|(|f| + |λ|) +
+        |b|‖, and the balance ‖Zᵀ R_u‖, on the same scale."""
         u, lam = x
         d = self.N @ u - self.gap0
         state = ContactState.evaluate(step, self.weights, d, lam, self.r)
         contact = self.N.T @ (state.force + lam)
-        R_u = self.A @ u + contact - step.b
+        R_u = self.A @ (u - self.Z @ (self.Z.T @ u)) + contact - step.b
         scale = max(np.linalg.norm(step.b), np.linalg.norm(contact))
+        scale = scale if scale > 0 else 1.0
         magnitudes = self._A_abs @ np.abs(u) + self._N_abs.T @ (np.abs(state.force) + np.abs(lam)) + np.abs(step.b)
-        floor = ROUNDOFF * np.linalg.norm(magnitudes)
-        residual, floor = (np.linalg.norm(R_u) / scale, floor / scale) if scale > 0 else (np.linalg.norm(R_u), floor)
-        return Evaluation(d, lam, state, np.concatenate([R_u, state.C]), residual, self.complementarity(state), floor)
+        return Evaluation(d, lam, state, np.concatenate([R_u, state.C]), np.linalg.norm(R_u) / scale,
+                          self.complementarity(state), ROUNDOFF * np.linalg.norm(magnitudes) / scale,
+                          np.linalg.norm(self.Z.T @ R_u) / scale)
 
     def direction(self, step: StepData, x: tuple, ev: Evaluation) -> tuple:
         u, lam = x

@@ -45,6 +45,7 @@ class Evaluation:
     residual: float
     complementarity: float
     residual_floor: float = 0.0  # the residual that rounding alone leaves (same scale as ``residual``)
+    balance: float = 0.0  # ‖Zᵀ R‖ (same scale): net force and moment on the rigid motions held only by contact
     d_solution: np.ndarray | None = None  # penetration of the displacement the solver returns, if not d
 
     def __post_init__(self):
@@ -69,13 +70,14 @@ class SemismoothNewton:
 
     def converged(self, ev: Evaluation, last_residual: float | None) -> bool:
         """Complementarity to the tolerance times the body's size, and equilibrium to the tolerance, or
-        to rounding when the tolerance is below what rounding allows: the residual is under its
-        floor and the last iteration no longer halved it (a stiff body held by a soft layer)."""
+        to rounding when the tolerance is below what rounding allows (a stiff body held by a soft
+        layer): the residual is under its floor, the last iteration no longer halved it, and the
+        net force and moment on the motions held only by contact balance to the tolerance."""
         if ev.complementarity > self.tolerance * self.length_scale:
             return False
         if ev.residual <= self.tolerance:
             return True
-        return (ev.residual <= ev.residual_floor and last_residual is not None
+        return (ev.residual <= ev.residual_floor and ev.balance <= self.tolerance and last_residual is not None
                 and ev.residual > STAGNATION * last_residual)
 
     def complementarity(self, state: ContactState) -> float:
