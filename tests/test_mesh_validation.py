@@ -6,6 +6,7 @@ the other bad meshes are written here node by node. Valid meshes (the built-in s
 the valid gmsh files) must pass every check.
 """
 
+import contextlib
 import math
 import os
 from pathlib import Path
@@ -146,6 +147,33 @@ def test_gmsh_mistakes_are_refused_with_the_fix(tmp_path, name):
     refused(tmp_path, square_case(MESHES / f"{name}.msh"), f"{name}.msh", *GMSH_REFUSALS[name])
 
 
+def other_cells():
+    """name -> (file name, meshio cells, words): cells that are not linear triangles, written by meshio."""
+    triangle = ("triangle", np.array([[0, 1, 2], [0, 2, 4]]))
+    return {
+        "cubic triangle": ("cubic.msh", [("triangle10", np.arange(10)[None])],
+                           ["second-order or higher-order elements (1 triangle10)", "Mesh.ElementOrder = 1"]),
+        "second-order quadrilateral": ("quad9.msh", [triangle, ("quad9", np.arange(9)[None])],
+                                       ["1 quadrilaterals and 2 triangles", "Mesh.RecombineAll = 0"]),
+        "second-order lines": ("lines.msh", [triangle, ("line3", np.array([[0, 1, 3]]))],
+                               ["(1 line3)", "Mesh.ElementOrder = 1"]),
+        "polygon": ("polygon.vtu", [triangle, ("polygon", np.array([[0, 1, 2, 3, 4]]))],
+                    ["cells that are not linear triangles (1 polygon)", "linear triangles only"]),
+        "no physical group, no triangle": ("lines_only.msh", [("line", np.array([[0, 1], [1, 2]]))],
+                                           ["has no triangles: mesh the surface in 2D (gmsh -2)"]),
+    }
+
+
+@pytest.mark.parametrize("name", other_cells())
+def test_cells_that_are_not_linear_triangles_are_refused(tmp_path, name):
+    file, cells, words = other_cells()[name]
+    points = np.column_stack((np.linspace(0, 1, 10), np.linspace(0, 1, 10) ** 2, np.zeros(10)))
+    file_format = "gmsh22" if file.endswith(".msh") else None
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):  # meshio's notes on missing tags
+        meshio.write(tmp_path / file, meshio.Mesh(points, cells), file_format=file_format)
+    refused(tmp_path, square_case(tmp_path / file), f"mesh file '{tmp_path / file}'", *words)
+
+
 @pytest.mark.parametrize("name", BAD_MESHES)
 def test_bad_meshes_are_refused_naming_the_place(tmp_path, name):
     points, triangles, words = BAD_MESHES[name]
@@ -235,29 +263,32 @@ def fifo(tmp_path):
 
 
 def special(kind, tmp_path, fifo):
-    return {"fifo": (fifo, "a FIFO (named pipe)"), "device": (Path("/dev/zero"), "a character device"),
-            "directory": (tmp_path / "folder", "a directory")}[kind]
-
-
-@pytest.mark.parametrize("kind", ["fifo", "device", "directory"])
-def test_mesh_file_that_is_not_a_regular_file(tmp_path, fifo, kind):
+    """(path, what the refusal calls it) of a FIFO, a device, a directory or a link to a FIFO."""
     (tmp_path / "folder").mkdir()
+    (tmp_path / "link").symlink_to(fifo)
+    return {"fifo": (fifo, "a FIFO (named pipe)"), "device": (Path("/dev/zero"), "a character device"),
+            "directory": (tmp_path / "folder", "a directory"), "link": (tmp_path / "link", "a FIFO (named pipe)")}[kind]
+
+
+KINDS = ["fifo", "device", "directory", "link"]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_mesh_file_that_is_not_a_regular_file(tmp_path, fifo, kind):
     path, what = special(kind, tmp_path, fifo)
     refused(tmp_path, square_case(path), f"mesh file '{path}' is {what}, not a regular file")
 
 
-@pytest.mark.parametrize("kind", ["fifo", "device", "directory"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_case_file_that_is_not_a_regular_file(tmp_path, fifo, kind):
-    (tmp_path / "folder").mkdir()
     path, what = special(kind, tmp_path, fifo)
     before = snapshot_tree(tmp_path)
     status, _, stderr = run_cli("run", path, "--out", tmp_path / "out", "--quiet", timeout=60)
     assert_refused(status, stderr, f"case file '{path}' is {what}, not a regular file", untouched=[(tmp_path, before)])
 
 
-@pytest.mark.parametrize("kind", ["fifo", "device", "directory"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_study_file_that_is_not_a_regular_file(tmp_path, fifo, kind):
-    (tmp_path / "folder").mkdir()
     path, what = special(kind, tmp_path, fifo)
     before = snapshot_tree(tmp_path)
     status, _, stderr = run_cli("study", path, "--out", tmp_path / "study", "--quiet", timeout=60)
@@ -350,6 +381,16 @@ def test_an_annulus_and_a_separate_body_in_its_hole_pass():
 def test_valid_gmsh_files_are_read(name):
     m = read_mesh(MESHES / f"{name}.msh")
     assert np.abs(m.mesh.p).max() <= 3.0 and m.mesh.t.shape[1] in (14, 28)
+
+
+@pytest.mark.parametrize("file_format", ["gmsh", "gmsh22"])
+def test_binary_gmsh_files_keep_their_physical_names(tmp_path, file_format):
+    """The physical names are read from the file's head, also when the rest is binary."""
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet):
+        meshio.write(tmp_path / "binary.msh", meshio.read(MESHES / "square.msh"), file_format=file_format, binary=True)
+    assert b"\0" in (tmp_path / "binary.msh").read_bytes()
+    m = read_mesh(tmp_path / "binary.msh")
+    assert m.part_names == ["1", "2", "3", "4", "bottom", "left", "right", "top"]
 
 
 @pytest.mark.parametrize("name", ["shared_curves", "shared_curves_msh22"])
