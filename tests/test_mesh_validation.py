@@ -174,6 +174,31 @@ def test_cells_that_are_not_linear_triangles_are_refused(tmp_path, name):
     refused(tmp_path, square_case(tmp_path / file), f"mesh file '{tmp_path / file}'", *words)
 
 
+SQUARE = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+
+
+@pytest.mark.parametrize("points, triangles, words", [
+    (SQUARE, [[0, 1, 2], [0, 2, 7]], ["triangle 2 refers to node 8, but the file has nodes 1 to 4", "damaged"]),
+    (SQUARE, [[0, 1, -1], [0, 2, 3]], ["triangle 1 refers to node 0, but the file has nodes 1 to 4", "damaged"]),
+    (SQUARE * 1e150, [[0, 1, 2], [0, 2, 3]], ["the mesh is 1.41e+150 long", "between 1e-100 and 1e+100",
+                                              "another length unit"]),
+    (SQUARE * 1e-150, [[0, 1, 2], [0, 2, 3]], ["the mesh is 1.41e-150 long", "another length unit"]),
+], ids=["node after the last", "negative node", "too long", "too short"])
+def test_damaged_or_out_of_scale_meshes_are_refused(tmp_path, points, triangles, words):
+    meshio.write(tmp_path / "mesh.vtu", meshio.Mesh(points, [("triangle", np.array(triangles))]))
+    refused(tmp_path, square_case(tmp_path / "mesh.vtu"), "mesh file", "mesh.vtu", *words)
+
+
+@pytest.mark.parametrize("scale", [1e-90, 1e-12, 1e12, 1e90])
+def test_the_checks_do_not_depend_on_the_length_unit(scale):
+    """A mesh far from the origin in any unit passes; a fold is found in any unit."""
+    p, t = grid(3, 2)
+    check_triangles("x", (p.T + 7.0) * scale, t.T, np.arange(len(p)) + 1)
+    p[4] = [0.9, 0.6]  # the node at (1/3, 1/2) pulled past its neighbours on the right
+    with pytest.raises(CaseError, match="folded"):
+        check_triangles("x", (p.T + 7.0) * scale, t.T, np.arange(len(p)) + 1)
+
+
 @pytest.mark.parametrize("name", BAD_MESHES)
 def test_bad_meshes_are_refused_naming_the_place(tmp_path, name):
     points, triangles, words = BAD_MESHES[name]

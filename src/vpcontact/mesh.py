@@ -338,6 +338,11 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
         raise CaseError(_no_triangles(label, data, names))
     t = np.vstack(triangles).T.astype(np.int64)
     check_memory(t.shape[1], f"mesh file '{label}'", "use a coarser mesh")
+    outside = (t < 0) | (t >= len(data.points))
+    if outside.any():
+        k = np.flatnonzero(outside.any(axis=0))[0]
+        raise CaseError(f"mesh file '{label}': triangle {k + 1} refers to node {t[outside[:, k], k][0] + 1}, but the "
+                        f"file has nodes 1 to {len(data.points)}: the file is damaged")
     used, t = np.unique(t, return_inverse=True)
     t = t.reshape(3, -1)
     renumber = np.full(len(data.points), -1, dtype=np.int64)

@@ -38,6 +38,9 @@ from .errors import CaseError
 ZERO_AREA = 1e-12
 #: Nodes or boundary edges closer than COINCIDENT × (the diagonal of the nodes' bounding box) touch.
 COINCIDENT = 1e-9
+#: Smallest and largest mesh size (diagonal of the bounding box) accepted: squares and products of
+#: lengths must stay far from underflow and overflow in double precision.
+LENGTHS = (1e-100, 1e100)
 #: Winding numbers are computed for at most this many (point, edge) pairs at once.
 CHUNK = 2**22
 
@@ -88,6 +91,12 @@ def check_triangles(label: str, p: np.ndarray, t: np.ndarray, node_numbers: np.n
     used, cover a plane region once (see the module docstring). `node_numbers` (n,): the nodes'
     numbers in the file; triangles are named by their position among the file's triangles (from 1)."""
     names = _Names(label, p, node_numbers)
+    low, high = p.min(axis=1), p.max(axis=1)
+    diameter = float(np.hypot(*(0.5 * high - 0.5 * low))) * 2.0  # halves: no overflow near the largest float
+    if diameter > 0.0 and not LENGTHS[0] <= diameter <= LENGTHS[1]:  # (0: all nodes at one place, zero areas)
+        raise names.error(f"the mesh is {diameter:.3g} long: element computations need a size between "
+                          f"{LENGTHS[0]:g} and {LENGTHS[1]:g}; write it in another length unit")
+    p = (p - 0.5 * (low + high)[:, None]) / (diameter or 1.0)  # the checks in a unit box: no overflow or underflow
     twice_area = _check_areas(names, p, t)
     start, end = _boundary_edges(names, p, t, twice_area)
     tol = COINCIDENT * float(np.linalg.norm(p.max(axis=1) - p.min(axis=1)))
@@ -107,7 +116,7 @@ def _check_areas(names: _Names, p: np.ndarray, t: np.ndarray) -> np.ndarray:
     bad = np.flatnonzero(np.abs(twice_area) <= 2.0 * ZERO_AREA * longest)
     if bad.size:
         k = bad[0]
-        corners = ", ".join(names.at(p[:, i]) for i in t[:, k])
+        corners = ", ".join(names.at(names.p[:, i]) for i in t[:, k])
         raise names.error(f"{names.triangle(k, t)} has zero area: its corners {corners} lie on one line"
                           f"{_more(bad.size, 'triangle')}; remove it or mesh the geometry again")
     return twice_area
@@ -156,7 +165,7 @@ def _check_coincident_nodes(names: _Names, p: np.ndarray, start: np.ndarray, tol
     pairs = cKDTree(p[:, nodes].T).query_pairs(tol, output_type="ndarray")
     if pairs.size:
         i, j = nodes[pairs[0]]
-        raise names.error(f"nodes {names.numbers[i]} and {names.numbers[j]} are both at {names.at(p[:, i])}"
+        raise names.error(f"nodes {names.numbers[i]} and {names.numbers[j]} are both at {names.at(names.p[:, i])}"
                           f"{_more(len(pairs), 'pair')}: the mesh is cut along a seam there; {FIX_SEAM}")
 
 
