@@ -137,7 +137,7 @@ GMSH_REFUSALS = {
     "crack": ["nodes", "are both at (1, ", "cut along a seam", "Coherence"],
     "overlapping_squares": ["boundary edges", "cross", "BooleanFragments"],
     "surface_twice": ["same side of their common edge", "folded", "no surface may be listed twice"],
-    "duplicate_names": ["two physical groups are named 'bottom' (curve 1 and curve 2)", "only one of them",
+    "duplicate_names": ["two physical curves are named 'bottom' (groups 1 and 2)", "only one of them",
                         "give each group its own name"],
 }
 
@@ -416,6 +416,14 @@ def test_binary_gmsh_files_keep_their_physical_names(tmp_path, file_format):
     assert b"\0" in (tmp_path / "binary.msh").read_bytes()
     m = read_mesh(tmp_path / "binary.msh")
     assert m.part_names == ["1", "2", "3", "4", "bottom", "left", "right", "top"]
+
+
+def test_a_curve_and_a_surface_may_share_a_name(tmp_path):
+    """gmsh names physical groups per dimension; the part is the curve."""
+    text = (MESHES / "square_msh22.msh").read_text().replace('2 5 "body"', '2 5 "bottom"')
+    (tmp_path / "named.msh").write_text(text)
+    m = read_mesh(tmp_path / "named.msh")
+    np.testing.assert_array_equal(m.facets("bottom"), m.facets(1))
 
 
 @pytest.mark.parametrize("name", ["shared_curves", "shared_curves_msh22"])

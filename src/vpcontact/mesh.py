@@ -310,7 +310,7 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     a z coordinate must be zero and is dropped. Every "line" cell of a physical group (tag > 0)
     joins the part named by the tag number (str) and, if the file names that dimension-1 physical
     group, by its name too (a curve may be in several named groups); each such line must be a
-    boundary edge of the triangle mesh. Two physical groups of one name are refused. Lines without
+    boundary edge of the triangle mesh. Two physical curves of one name are refused. Lines without
     a physical tag (or tag 0, gmsh's "none") are ignored. No exact normals. skfem sorts each
     triangle's nodes itself, so any orientation in the file is accepted. Any problem raises
     CaseError naming the file.
@@ -429,12 +429,11 @@ def _no_triangles(label: str, data: meshio.Mesh, names: list[tuple[int, int, str
 
 #: A line of the $PhysicalNames section of a gmsh file: dimension, tag, "name".
 _PHYSICAL_NAME = re.compile(rb'\s*(\d+)\s+(\d+)\s+"(.*)"\s*')
-_DIMENSIONS = ["point", "curve", "surface", "volume"]
 
 
 def _physical_names(path: str) -> list[tuple[int, int, str]]:
     """(dimension, tag, name) of every physical group a gmsh file names (none for other files);
-    CaseError if two groups have one name (meshio would keep only one of them).
+    CaseError if two physical curves have one name (meshio would keep only one of them).
 
     The $PhysicalNames section is text, also in binary files, and comes before the nodes: only the
     head of the file is read."""
@@ -454,14 +453,12 @@ def _physical_names(path: str) -> list[tuple[int, int, str]]:
                 handle.readline(64)  # the number of names
             elif section == b"$PhysicalNames" and (match := _PHYSICAL_NAME.fullmatch(line)):
                 found.append((int(match[1]), int(match[2]), match[3].decode("utf-8", "replace")))
-    by_name: dict[str, tuple[int, int]] = {}
+    tags: dict[str, int] = {}
     for dim, tag, name in found:
-        other = by_name.setdefault(name, (dim, tag))
-        if other != (dim, tag):
-            groups = f"{_DIMENSIONS[other[0]]} {other[1]} and {_DIMENSIONS[dim]} {tag}"
-            raise CaseError(f"mesh file '{path}': two physical groups are named '{name}' ({groups}); a part of "
-                            f"that name would hold only one of them: give each group its own name, or put all "
-                            f"its curves in one Physical Curve(\"{name}\") = {{...}};")
+        if dim == 1 and tags.setdefault(name, tag) != tag:
+            raise CaseError(f"mesh file '{path}': two physical curves are named '{name}' (groups {tags[name]} and "
+                            f"{tag}); a part of that name would hold only one of them: give each group its own name, "
+                            f"or put all its curves in one Physical Curve(\"{name}\") = {{...}};")
     return found
 
 

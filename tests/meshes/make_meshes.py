@@ -147,6 +147,6 @@ if __name__ == "__main__":
     write("shared_curves", shared_curves)
     write("shared_curves_msh22", shared_curves, version=2.2)
     write("cube", cube, dim=3)
-    # gmsh itself refuses two physical groups of one name; other tools and hand edits do not
+    # gmsh itself does not write two physical curves of one name; other tools and hand edits do
     text = (HERE / "square_msh22.msh").read_text()
     (HERE / "duplicate_names.msh").write_text(text.replace('1 2 "right"', '1 2 "bottom"'))
