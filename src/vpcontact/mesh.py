@@ -366,7 +366,8 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     line_nodes, line_tags = _physical_lines(data, names)
     parts: dict[str, np.ndarray] = {}
     if line_nodes.size:
-        nodes = renumber[line_nodes]
+        known = (line_nodes >= 0) & (line_nodes < renumber.size)  # a damaged file may name other nodes
+        nodes = np.where(known, renumber[np.where(known, line_nodes, 0)], -1)
         line_keys = _edge_keys(nodes, used.size)
         where = np.minimum(np.searchsorted(keys, line_keys), keys.size - 1)
         bad = np.flatnonzero((nodes < 0).any(axis=0) | (keys[where] != line_keys))
