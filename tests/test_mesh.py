@@ -251,7 +251,7 @@ def write22(path, points, cells, tags):
 
 
 def test_read_mesh_missing_or_unreadable_file(tmp_path):
-    with pytest.raises(CaseError, match="cannot read mesh file '.*nope.msh': .*not found"):
+    with pytest.raises(CaseError, match="mesh file '.*nope.msh' not found"):
         read_mesh(tmp_path / "nope.msh")
     garbage = tmp_path / "garbage.msh"
     garbage.write_text("this is not a mesh\n")
@@ -265,7 +265,14 @@ def test_read_mesh_without_triangles(tmp_path):
     write22(path, [[0, 0, 0], [1, 0, 0]], [("line", np.array([[0, 1]]))], [1])
     with pytest.raises(CaseError) as info:
         read_mesh(path)
-    assert str(info.value) == f"mesh file '{path}' has no triangles"
+    assert str(info.value).startswith(f"mesh file '{path}' has no triangles, only lines of physical curves: ")
+    assert "add a Physical Surface for the body" in str(info.value)
+    bare = tmp_path / "bare.msh"  # no physical group at all: a 1D mesh
+    meshio.write(bare, meshio.Mesh(np.array([[0.0, 0, 0], [1, 0, 0]]), [("line", np.array([[0, 1]]))]),
+                 file_format="gmsh22")
+    with pytest.raises(CaseError) as info:
+        read_mesh(bare)
+    assert str(info.value) == f"mesh file '{bare}' has no triangles: mesh the surface in 2D (gmsh -2) and save it"
 
 
 def test_read_mesh_rejects_nonplanar_mesh(tmp_path):

@@ -23,6 +23,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationErr
 
 from .errors import CaseError
 from .expressions import parse_expression
+from .inputs import MAX_TOML_BYTES, check_regular_file
 from .solvers.factorization import BACKENDS, installed_backends
 
 # --- value types ---------------------------------------------------------------------------------
@@ -378,6 +379,7 @@ def _load_case(source, overrides) -> Case:
             path = Path(source)
         except TypeError:
             raise CaseError(f"case file {_brief(source)}: not a file name") from None
+        check_regular_file(path, "case file", MAX_TOML_BYTES)
         try:
             text = path.read_text(encoding="utf-8")
         except FileNotFoundError:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
@@ -25,6 +26,9 @@ from scipy.spatial import Delaunay
 import skfem
 
 from vpcontact.errors import CaseError
+from vpcontact.inputs import check_regular_file
+from vpcontact.mesh_checks import check_finite, check_triangles
+from vpcontact.solvers.factorization import available_memory
 
 NormalField = Callable[[np.ndarray], np.ndarray]
 
@@ -39,10 +43,16 @@ class Mesh:
     """Part name -> sorted int64 indices of boundary facets (columns of ``mesh.facets``)."""
     exact_normals: dict[str, NormalField]
     """Part -> f(points (2, ...)) -> unit outward normals, same shape; only where the geometry is known exactly."""
+    file: str | None = None
+    """The mesh file it was read from (None for a built-in shape)."""
 
     def facets(self, part: str | int) -> np.ndarray:
         """Facet indices of `part` (an int n means the part named str(n))."""
         name = str(part)
+        if name not in self.parts and not self.parts:
+            raise CaseError(f"unknown part '{name}': mesh file '{self.file}' has no parts; the parts of a mesh file "
+                            f"are its physical curves: in gmsh add Physical Curve(\"{name}\") = {{...}}; for each "
+                            f"part the case names (and a Physical Surface for the body) and mesh again")
         if name not in self.parts:
             raise CaseError(f"unknown part '{name}'; the mesh has parts: {', '.join(self.part_names)}")
         return self.parts[name]
@@ -75,6 +85,24 @@ def _positive(name: str, value: float) -> float:
     if not (np.isfinite(value) and value > 0):
         raise CaseError(f"{name} must be a positive number, got {value}")
     return value
+
+
+#: Peak memory of a run per triangle (bytes): mesh, stiffness matrix, its factorization and the solver's
+#: arrays. Measured (peak resident memory of `vpcontact run`, PARDISO): the paper's example with 145k
+#: triangles 0.53 GB, with 580k triangles 1.79 GB, i.e. 3.1 kB per triangle; SuperLU (no MKL) needs
+#: about twice as much. A run is refused when even this estimate exceeds the available memory.
+BYTES_PER_TRIANGLE = 4000
+
+
+def check_memory(triangles: float, what: str, fix: str) -> None:
+    """Refuse, before allocating, a mesh of about `triangles` triangles whose run would need more than
+    the available memory; `what` names the mesh (e.g. "mesh.h = 0.001"), `fix` says what to change."""
+    needed = BYTES_PER_TRIANGLE * triangles
+    available = available_memory()
+    if not needed <= available:
+        raise CaseError(f"{what}: about {triangles:.2g} triangles, whose mesh, stiffness matrix and factorization "
+                        f"need about {needed / 2**30:.3g} GiB, more than the {available / 2**30:.3g} GiB of memory "
+                        f"available here: {fix}")
 
 
 def _wrap(p: np.ndarray, t: np.ndarray, classify: Callable[[np.ndarray], dict[str, np.ndarray]],
@@ -139,6 +167,8 @@ def half_disc(h: float, radius: float = 1.0) -> Mesh:
     R = _positive("radius", radius)
     if h > R:
         raise CaseError(f"h = {h} must not exceed the radius {R}")
+    check_memory(0.5 * np.pi * R * R / (0.25 * np.sqrt(3.0) * h * h), f"mesh.h = {h:g} on a half disc of radius {R:g}",
+                 "use a larger mesh.h")
     n_arc = int(np.ceil(0.5 * np.pi * R / h))
     n_axis = int(np.ceil(2.0 * R / h))
     radius, h, R = R, h / R, 1.0  # built for R = 1, then scaled: the same triangles in any unit of length
@@ -241,6 +271,8 @@ def rectangle(width: float, height: float, h: float) -> Mesh:
     width = _positive("width", width)
     height = _positive("height", height)
     h = _positive("h", h)
+    check_memory(2.0 * np.ceil(width / h) * np.ceil(height / h),
+                 f"mesh.h = {h:g} on a {width:g} x {height:g} rectangle", "use a larger mesh.h")
     nx, ny = int(np.ceil(width / h)), int(np.ceil(height / h))
     tensor = skfem.MeshTri.init_tensor(np.linspace(0.0, width, nx + 1), np.linspace(0.0, height, ny + 1))
     tol = 1e-9 * min(width / nx, height / ny)
@@ -274,16 +306,20 @@ def _edge_keys(nodes: np.ndarray, n: int) -> np.ndarray:
 def read_mesh(path: str | os.PathLike) -> Mesh:
     """Read a 2D triangle mesh with meshio (gmsh .msh 2.2 / 4.1, or any format meshio reads).
 
-    Only linear "triangle" cells are used; nodes that no triangle uses are dropped and the
-    rest renumbered in their file order; a z coordinate must be zero and is dropped.
-    Every "line" cell with a "gmsh:physical" tag > 0 joins the part named by the tag number
-    (str) and, if the file names that dimension-1 physical group, by its name too; each
-    such line must be a boundary edge of the triangle mesh. Lines without a physical tag
-    (or tag 0, gmsh's "none") are ignored. No exact normals. skfem sorts each triangle's
-    nodes itself, so any orientation in the file is accepted. Any problem raises CaseError
-    naming the file.
+    The file must hold linear "triangle" cells (besides "line" and "vertex" cells): quadrilaterals,
+    second-order and 3D cells are refused, as are meshes that do not cover a plane body once
+    (`vpcontact.mesh_checks`: non-finite coordinates, zero-area triangles, duplicate nodes, folds,
+    overlaps). Nodes that no triangle uses are dropped and the rest renumbered in their file order;
+    a z coordinate must be zero and is dropped. Every "line" cell of a physical group (tag > 0)
+    joins the part named by the tag number (str) and, if the file names that dimension-1 physical
+    group, by its name too (a curve may be in several named groups); each such line must be a
+    boundary edge of the triangle mesh. Two physical curves of one name are refused. Lines without
+    a physical tag (or tag 0, gmsh's "none") are ignored. No exact normals. skfem sorts each
+    triangle's nodes itself, so any orientation in the file is accepted. Any problem raises
+    CaseError naming the file.
     """
     label = os.fspath(path)
+    check_regular_file(path, "mesh file")
     # meshio prints its per-format failures and then calls sys.exit(1) when no reader
     # accepts the file; other problems surface as assorted exceptions.
     with contextlib.redirect_stdout(io.StringIO()) as said, contextlib.redirect_stderr(said):
@@ -298,21 +334,31 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
         reason = " ".join(reason.replace("Error:", "").split()) or type(failure).__name__
         raise CaseError(f"cannot read mesh file '{label}': {reason}") from failure
 
+    names = _physical_names(label) or [(int(v[1]), int(v[0]), k) for k, v in data.field_data.items() if np.size(v) == 2]
+    _check_cell_types(label, data.cells)
     triangles = [block.data for block in data.cells if block.type == "triangle"]
     if not triangles:
-        raise CaseError(f"mesh file '{label}' has no triangles")
+        raise CaseError(_no_triangles(label, data, names))
     t = np.vstack(triangles).T.astype(np.int64)
+    check_memory(t.shape[1], f"mesh file '{label}'", "use a coarser mesh")
+    outside = (t < 0) | (t >= len(data.points))
+    if outside.any():
+        k = np.flatnonzero(outside.any(axis=0))[0]
+        raise CaseError(f"mesh file '{label}': triangle {k + 1} refers to node {t[outside[:, k], k][0] + 1}, but the "
+                        f"file has nodes 1 to {len(data.points)}: the file is damaged")
     used, t = np.unique(t, return_inverse=True)
     t = t.reshape(3, -1)
     renumber = np.full(len(data.points), -1, dtype=np.int64)
     renumber[used] = np.arange(used.size)
 
     points = np.asarray(data.points, dtype=float)[used].T
+    check_finite(label, points, used + 1)
     if points.shape[0] == 3:
         scale = max(float(np.abs(points[:2]).max()), 1.0)
         if np.abs(points[2]).max() > 1e-12 * scale:
             raise CaseError(f"mesh file '{label}' is not a 2D mesh (nonzero z coordinates)")
         points = points[:2]
+    check_triangles(label, points, t, used + 1)
 
     tri = skfem.MeshTri(np.ascontiguousarray(points), np.ascontiguousarray(t))
     boundary = tri.boundary_facets().astype(np.int64)
@@ -320,30 +366,23 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     order = np.argsort(keys)
     keys, boundary = keys[order], boundary[order]
 
-    physical = data.cell_data.get("gmsh:physical", [None] * len(data.cells))
-    line_nodes, line_tags = [], []
-    for block, tags in zip(data.cells, physical):
-        if block.type == "line" and tags is not None:
-            tags = np.asarray(tags, dtype=np.int64)
-            line_nodes.append(block.data[tags > 0].T)
-            line_tags.append(tags[tags > 0])
-
+    line_nodes, line_tags = _physical_lines(data, names)
     parts: dict[str, np.ndarray] = {}
-    if line_nodes:
-        nodes = renumber[np.hstack(line_nodes)]
-        tags = np.concatenate(line_tags)
+    if line_nodes.size:
+        known = (line_nodes >= 0) & (line_nodes < renumber.size)  # a damaged file may name other nodes
+        nodes = np.where(known, renumber[np.where(known, line_nodes, 0)], -1)
         line_keys = _edge_keys(nodes, used.size)
         where = np.minimum(np.searchsorted(keys, line_keys), keys.size - 1)
         bad = np.flatnonzero((nodes < 0).any(axis=0) | (keys[where] != line_keys))
         if bad.size:
             raise CaseError(
-                f"mesh file '{label}': line of physical group {tags[bad[0]]} is not a boundary edge "
+                f"mesh file '{label}': line of physical group {line_tags[bad[0]]} is not a boundary edge "
                 f"of the triangles ({bad.size} such lines)"
             )
         facets = boundary[where]
-        for tag in np.unique(tags):
-            parts[str(tag)] = np.unique(facets[tags == tag])
-        for name, (tag, dim) in ((k, v[:2]) for k, v in data.field_data.items()):
+        for tag in np.unique(line_tags):
+            parts[str(tag)] = np.unique(facets[line_tags == tag])
+        for dim, tag, name in names:
             if dim != 1 or str(tag) not in parts:
                 continue
             if name in parts and not np.array_equal(parts[name], parts[str(tag)]):
@@ -351,4 +390,101 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
                     f"mesh file '{label}': physical name '{name}' (group {tag}) clashes with physical group {name}"
                 )
             parts[name] = parts[str(tag)]
-    return Mesh(tri.with_boundaries(parts), parts, {})
+    return Mesh(tri.with_boundaries(parts), parts, {}, label)
+
+
+def _check_cell_types(label: str, cells: list) -> None:
+    """Refuse cells other than linear triangles, lines and vertices, with the gmsh setting to change."""
+    counts: dict[str, int] = {}
+    for block in cells:
+        counts[block.type] = counts.get(block.type, 0) + len(block.data)
+    others = {kind: count for kind, count in counts.items() if kind not in ("vertex", "line", "triangle")}
+    if not others:
+        return
+    listed = ", ".join(f"{count} {kind}" for kind, count in others.items())
+    dims = {block.type: block.dim for block in cells}
+    if any(dims[kind] == 3 for kind in others):
+        raise CaseError(f"mesh file '{label}' is a 3D mesh ({listed}): vpcontact needs a plane mesh of triangles; "
+                        f"mesh the surface in 2D (gmsh -2, or Mesh.Dimension 2)")
+    quadrilaterals = sum(count for kind, count in others.items() if kind.startswith("quad"))
+    if quadrilaterals:
+        raise CaseError(f"mesh file '{label}' has {quadrilaterals} quadrilaterals and {counts.get('triangle', 0)} "
+                        f"triangles: vpcontact uses linear triangles only; mesh without recombination: "
+                        f"Mesh.RecombineAll = 0 and no Recombine Surface")
+    if any(kind.startswith(("triangle", "line")) for kind in others):
+        raise CaseError(f"mesh file '{label}' has second-order or higher-order elements ({listed}): use first-order "
+                        f"elements: Mesh.ElementOrder = 1 (gmsh -order 1)")
+    raise CaseError(f"mesh file '{label}' has cells that are not linear triangles ({listed}): vpcontact uses linear "
+                    f"triangles only")
+
+
+def _no_triangles(label: str, data: meshio.Mesh, names: list[tuple[int, int, str]]) -> str:
+    """Why a mesh file has no triangles, and the fix."""
+    curves = any(dim == 1 for dim, _, _ in names) or any(
+        tags is not None and np.any(np.asarray(tags) > 0)
+        for block, tags in zip(data.cells, data.cell_data.get("gmsh:physical", [None] * len(data.cells)))
+        if block.type == "line")
+    if curves:
+        return (f"mesh file '{label}' has no triangles, only lines of physical curves: when a model has physical "
+                f"groups, gmsh saves only their elements; add a Physical Surface for the body (e.g. "
+                f"Physical Surface(\"body\") = {{1}};) and mesh again")
+    return f"mesh file '{label}' has no triangles: mesh the surface in 2D (gmsh -2) and save it"
+
+
+#: A line of the $PhysicalNames section of a gmsh file: dimension, tag, "name".
+_PHYSICAL_NAME = re.compile(rb'\s*(\d+)\s+(\d+)\s+"(.*)"\s*')
+
+
+def _physical_names(path: str) -> list[tuple[int, int, str]]:
+    """(dimension, tag, name) of every physical group a gmsh file names (none for other files);
+    CaseError if two physical curves have one name (meshio would keep only one of them).
+
+    The $PhysicalNames section is text, also in binary files, and comes before the nodes: only the
+    head of the file is read."""
+    found = []
+    with open(path, "rb") as handle:
+        if handle.readline(64).strip() != b"$MeshFormat":
+            return found
+        section = b"$MeshFormat"
+        for line in iter(lambda: handle.readline(4096), b""):
+            line = line.strip()
+            if line.startswith(b"$"):
+                if line.startswith(b"$End"):
+                    continue
+                if line != b"$PhysicalNames":
+                    break
+                section = line
+                handle.readline(64)  # the number of names
+            elif section == b"$PhysicalNames" and (match := _PHYSICAL_NAME.fullmatch(line)):
+                found.append((int(match[1]), int(match[2]), match[3].decode("utf-8", "replace")))
+    tags: dict[str, int] = {}
+    for dim, tag, name in found:
+        if dim == 1 and tags.setdefault(name, tag) != tag:
+            raise CaseError(f"mesh file '{path}': two physical curves are named '{name}' (groups {tags[name]} and "
+                            f"{tag}); a part of that name would hold only one of them: give each group its own name, "
+                            f"or put all its curves in one Physical Curve(\"{name}\") = {{...}};")
+    return found
+
+
+def _physical_lines(data: meshio.Mesh, names: list[tuple[int, int, str]]) -> tuple[np.ndarray, np.ndarray]:
+    """Node pairs (2, k) (file numbering) and physical tags (k,) of the lines of physical groups; a
+    line in several groups appears once for each.
+
+    In a gmsh 2.2 file a line is written once per group; in a 4.1 file once, with its curve's groups
+    listed in the file's entities, of which meshio's cell_data keeps only the first while its
+    cell_sets list each named group's lines."""
+    physical = data.cell_data.get("gmsh:physical", [None] * len(data.cells))
+    nodes, tags = [np.zeros((2, 0), dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
+    for block, block_tags in zip(data.cells, physical):
+        if block.type == "line" and block_tags is not None:
+            block_tags = np.asarray(block_tags, dtype=np.int64)
+            nodes.append(block.data[block_tags > 0].T)
+            tags.append(block_tags[block_tags > 0])
+    for dim, tag, name in names:
+        if dim != 1:
+            continue
+        for block, members in zip(data.cells, data.cell_sets.get(name, [])):
+            if block.type == "line" and members is not None and len(members):
+                nodes.append(block.data[np.asarray(members, dtype=np.int64)].T)
+                tags.append(np.full(len(members), tag, dtype=np.int64))
+    return np.hstack(nodes).astype(np.int64), np.concatenate(tags)

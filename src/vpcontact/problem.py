@@ -12,6 +12,7 @@ from typing import Callable
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 from skfem import Basis
 
 from . import mesh as meshes
@@ -89,6 +90,7 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         law = ContactLaw(p=p or _p_law(case), stiffness=stiffness_law or _stiffness_law(case), g=c.g, rho=c.rho)
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
+    _check_contact_can_move(case, mesh, basis, free, surface)
     _check_rigid_motions(mesh, basis, free, surface)
     done = time.perf_counter()
     timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
@@ -136,17 +138,80 @@ def _viscoplastic_law(case: Case) -> Callable | None:
     return Relaxation(v.mu, Elasticity(v.E_inf, v.nu_inf, case.material.hypothesis))
 
 
+def _check_contact_can_move(case: Case, mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
+    """Refuse a contact part on which the Dirichlet conditions leave no node free to move along its
+    normal: its contact force would be 0 (or fixed) whatever the load. (A few clamped nodes, such as
+    the corners the contact part shares with a clamped part, are fine.)"""
+    if surface.size == 0:
+        return
+    on_free = np.zeros(basis.N)
+    on_free[free] = 1.0
+    normal_freedom = np.sqrt(np.asarray((surface.operator @ sp.diags(on_free)).power(2).sum(axis=1)).ravel())
+    if np.any(normal_freedom > 1e-6):
+        return
+    contact_dofs = basis.nodal_dofs[:, surface.nodes].ravel()
+    entries = []
+    for i, item in enumerate(case.boundary.dirichlet):
+        names = item.components or ["x", "y"]
+        components = [{"x": 0, "y": 1}[c] for c in names]
+        if np.intersect1d(basis.nodal_dofs[components][:, mesh.nodes(item.part)], contact_dofs).size:
+            entries.append(f"boundary.dirichlet[{i}] (part '{item.part}', components {', '.join(names)})")
+    raise CaseError(f"contact part '{case.contact.part}' is clamped: {' and '.join(entries)} fix every contact node "
+                    f"along its normal, so the contact force cannot change whatever the load; remove the contact part "
+                    f"from boundary.dirichlet or fix only components along the contact surface")
+
+
 def _check_rigid_motions(mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
-    """Refuse a body whose rigid motions are held neither by Dirichlet conditions nor by contact."""
+    """Refuse a body, or a separate part of the mesh, whose rigid motions are held neither by
+    Dirichlet conditions nor by contact.
+
+    Each connected part of the mesh (triangles joined through nodes) has three rigid motions: the
+    two translations and the rotation about its centroid scaled by its size. They are held when
+    they stay independent on the fixed dofs and the contact normals of that part: the smallest
+    eigenvalue of their 3 × 3 Gram matrix there is not zero against the largest."""
     x, y = mesh.mesh.p
-    rigid = np.zeros((basis.N, 3))
-    rigid[basis.nodal_dofs[0], 0] = 1.0
-    rigid[basis.nodal_dofs[1], 1] = 1.0
-    rigid[basis.nodal_dofs[0], 2] = -y
-    rigid[basis.nodal_dofs[1], 2] = x
-    fixed = np.setdiff1d(np.arange(basis.N), free)
-    held = [rigid[fixed], surface.operator @ rigid]
-    scale = np.abs(rigid).max()
-    if np.linalg.matrix_rank(np.vstack(held), tol=1e-9 * scale) < 3:
-        where = "the Dirichlet conditions and the contact part" if surface.size else "the Dirichlet conditions"
-        raise CaseError(f"{where} leave a rigid motion of the body free: add boundary.dirichlet entries")
+    t = mesh.mesh.t
+    n = x.size
+    graph = sp.coo_matrix((np.ones(t.size), (t.ravel(), t[[1, 2, 0]].ravel())), shape=(n, n))
+    count, body = connected_components(graph, directed=False)
+    nodes = np.bincount(body, minlength=count)
+    cx, cy = np.bincount(body, x, count) / nodes, np.bincount(body, y, count) / nodes
+    size = np.sqrt(np.bincount(body, (x - cx[body]) ** 2 + (y - cy[body]) ** 2, count) / nodes)
+    size = np.where(size > 0.0, size, 1.0)
+    # rigid motions: column 3b + k is motion k (x translation, y translation, rotation) of part b
+    ux, uy = basis.nodal_dofs
+    rows = np.concatenate((ux, uy, ux, uy))
+    columns = np.concatenate((3 * body, 3 * body + 1, 3 * body + 2, 3 * body + 2))
+    values = np.concatenate((np.ones(n), np.ones(n), -(y - cy[body]) / size[body], (x - cx[body]) / size[body]))
+    rigid = sp.csr_matrix((values, (rows, columns)), shape=(basis.N, 3 * count))
+    fixed = np.ones(basis.N, dtype=bool)
+    fixed[free] = False
+    held = sp.vstack((rigid[fixed], surface.operator @ rigid)).tocsc()
+    gram = (held.T @ held).tocoo()
+    blocks = np.zeros((count, 3, 3))
+    blocks[gram.row // 3, gram.row % 3, gram.col % 3] = gram.data  # parts share no dof: block diagonal
+    eigenvalues, eigenvectors = np.linalg.eigh(blocks)
+    free_motions = np.count_nonzero(eigenvalues <= 1e-12 * np.maximum(eigenvalues[:, 2:], 1.0), axis=1)
+    loose = np.flatnonzero(free_motions)
+    if loose.size == 0:
+        return
+    b = loose[0]
+    where = "the Dirichlet conditions and the contact part" if surface.size else "the Dirichlet conditions"
+    vector = eigenvectors[b, :, 0]
+    tx, ty, spin = vector * np.sign(vector[np.argmax(np.abs(vector))])
+    if free_motions[b] > 1:
+        motion = "all three" if free_motions[b] == 3 else "two of the three"
+    elif abs(spin) < 1e-9:
+        motion = f"a translation along ({np.round(tx, 9) + 0.0:.3g}, {np.round(ty, 9) + 0.0:.3g})"
+    else:
+        center = np.array([cx[b] - ty * size[b] / spin, cy[b] + tx * size[b] / spin])
+        center = np.round(center / size[b], 9) * size[b] + 0.0  # no round-off digits around 0
+        motion = f"a rotation about ({center[0]:.6g}, {center[1]:.6g})"
+    if count == 1:
+        raise CaseError(f"{where} leave a rigid motion of the body free ({motion}): add boundary.dirichlet entries")
+    inside = np.flatnonzero(body == b)
+    point = inside[np.argmin((x[inside] - cx[b]) ** 2 + (y[inside] - cy[b]) ** 2)]
+    raise CaseError(f"the mesh has {count} separate parts; {where} leave a rigid motion of the part of {nodes[b]} "
+                    f"nodes through the node at ({x[point]:.6g}, {y[point]:.6g}) free ({motion})"
+                    f"{f' (and of {loose.size - 1} more)' if loose.size > 1 else ''}: add boundary.dirichlet "
+                    f"entries on it, or join it to the rest of the mesh")

@@ -42,6 +42,7 @@ from tqdm.auto import tqdm
 
 from .case import load_case
 from .errors import CaseError
+from .inputs import MAX_TOML_BYTES, check_regular_file
 from .norms import Snapshot, differences
 
 STUDY_KEYS = {"base", "set", "vary", "runs", "compare"}
@@ -72,6 +73,7 @@ class Study:
 def load_study(path: str | os.PathLike, out: str | os.PathLike) -> Study:
     """Read a study file and validate every run's case (one-line CaseError naming the run)."""
     path = Path(path)
+    check_regular_file(path, "study file", MAX_TOML_BYTES)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
