@@ -12,7 +12,6 @@ from typing import Callable
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 from skfem import Basis
 
 from . import mesh as meshes
@@ -23,6 +22,7 @@ from .contact import (ConstantStiffness, ContactLaw, ContactSurface, Exponential
 from .errors import CaseError
 from .expressions import parse_expression
 from .material import Elasticity, Perzyna, Relaxation
+from .rigid_modes import RigidModes
 
 
 @dataclass
@@ -163,54 +163,35 @@ def _check_contact_can_move(case: Case, mesh: meshes.Mesh, basis: Basis, free: n
 
 def _check_rigid_motions(mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
     """Refuse a body, or a separate part of the mesh, whose rigid motions are held neither by
-    Dirichlet conditions nor by contact.
-
-    Each connected part of the mesh (triangles joined through nodes) has three rigid motions: the
-    two translations and the rotation about its centroid scaled by its size. They are held when
-    they stay independent on the fixed dofs and the contact normals of that part: the smallest
-    eigenvalue of their 3 × 3 Gram matrix there is not zero against the largest."""
+    Dirichlet conditions nor by contact: the motions of each connected part (the two translations
+    and the rotation about its centroid scaled by its size, :mod:`vpcontact.rigid_modes`) must stay
+    independent on the fixed dofs and the contact normals of that part."""
     x, y = mesh.mesh.p
-    t = mesh.mesh.t
-    n = x.size
-    graph = sp.coo_matrix((np.ones(t.size), (t.ravel(), t[[1, 2, 0]].ravel())), shape=(n, n))
-    count, body = connected_components(graph, directed=False)
-    nodes = np.bincount(body, minlength=count)
-    cx, cy = np.bincount(body, x, count) / nodes, np.bincount(body, y, count) / nodes
-    size = np.sqrt(np.bincount(body, (x - cx[body]) ** 2 + (y - cy[body]) ** 2, count) / nodes)
-    size = np.where(size > 0.0, size, 1.0)
-    # rigid motions: column 3b + k is motion k (x translation, y translation, rotation) of part b
-    ux, uy = basis.nodal_dofs
-    rows = np.concatenate((ux, uy, ux, uy))
-    columns = np.concatenate((3 * body, 3 * body + 1, 3 * body + 2, 3 * body + 2))
-    values = np.concatenate((np.ones(n), np.ones(n), -(y - cy[body]) / size[body], (x - cx[body]) / size[body]))
-    rigid = sp.csr_matrix((values, (rows, columns)), shape=(basis.N, 3 * count))
+    modes = RigidModes.of_mesh(mesh.mesh.p, mesh.mesh.t, basis.nodal_dofs)
     fixed = np.ones(basis.N, dtype=bool)
     fixed[free] = False
-    held = sp.vstack((rigid[fixed], surface.operator @ rigid)).tocsc()
-    gram = (held.T @ held).tocoo()
-    blocks = np.zeros((count, 3, 3))
-    blocks[gram.row // 3, gram.row % 3, gram.col % 3] = gram.data  # parts share no dof: block diagonal
-    eigenvalues, eigenvectors = np.linalg.eigh(blocks)
-    free_motions = np.count_nonzero(eigenvalues <= 1e-12 * np.maximum(eigenvalues[:, 2:], 1.0), axis=1)
+    free_motions, least_held = modes.unheld(sp.eye(basis.N, format="csr")[fixed], surface.operator)
     loose = np.flatnonzero(free_motions)
     if loose.size == 0:
         return
-    b = loose[0]
+    b, count = loose[0], modes.count
+    (cx, cy), size = modes.centroid[:, b], modes.size[b]
+    nodes = np.bincount(modes.body, minlength=count)
     where = "the Dirichlet conditions and the contact part" if surface.size else "the Dirichlet conditions"
-    vector = eigenvectors[b, :, 0]
+    vector = least_held[b]
     tx, ty, spin = vector * np.sign(vector[np.argmax(np.abs(vector))])
     if free_motions[b] > 1:
         motion = "all three" if free_motions[b] == 3 else "two of the three"
     elif abs(spin) < 1e-9:
         motion = f"a translation along ({np.round(tx, 9) + 0.0:.3g}, {np.round(ty, 9) + 0.0:.3g})"
     else:
-        center = np.array([cx[b] - ty * size[b] / spin, cy[b] + tx * size[b] / spin])
-        center = np.round(center / size[b], 9) * size[b] + 0.0  # no round-off digits around 0
+        center = np.array([cx - ty * size / spin, cy + tx * size / spin])
+        center = np.round(center / size, 9) * size + 0.0  # no round-off digits around 0
         motion = f"a rotation about ({center[0]:.6g}, {center[1]:.6g})"
     if count == 1:
         raise CaseError(f"{where} leave a rigid motion of the body free ({motion}): add boundary.dirichlet entries")
-    inside = np.flatnonzero(body == b)
-    point = inside[np.argmin((x[inside] - cx[b]) ** 2 + (y[inside] - cy[b]) ** 2)]
+    inside = np.flatnonzero(modes.body == b)
+    point = inside[np.argmin((x[inside] - cx) ** 2 + (y[inside] - cy) ** 2)]
     raise CaseError(f"the mesh has {count} separate parts; {where} leave a rigid motion of the part of {nodes[b]} "
                     f"nodes through the node at ({x[point]:.6g}, {y[point]:.6g}) free ({motion})"
                     f"{f' (and of {loose.size - 1} more)' if loose.size > 1 else ''}: add boundary.dirichlet "

@@ -1,71 +1,109 @@
-"""Rigid-body motions of a mesh: the null space of the elastic stiffness.
+"""Rigid-body motions of a mesh: the null space of the elastic stiffness, body by body.
 
-Each connected body of the mesh has d translations and d(d − 1)/2 rotations (3 in 2D, 6 in 3D),
-which strain nothing: A z = 0 in exact arithmetic. Rotations are taken about the body's centroid
-and scaled by its size, so every mode has entries of order one in any unit of length.
+Each connected body of the mesh (elements joined through nodes) has d translations and d(d − 1)/2
+rotations (3 in 2D, 6 in 3D), which strain nothing: A z = 0 in exact arithmetic. Rotations are taken
+about the body's centroid and scaled by its size, so every mode has entries of order one in any
+unit of length. Two uses:
 
-The modes left free by the Dirichlet conditions (the combinations that vanish on every fixed dof)
-are the motions held by nothing but contact: the step solvers evaluate the elastic forces on the
-displacement with those motions removed, A u = A (u − Z Zᵀu), because a large rigid motion held by a
-soft layer otherwise costs digits (A annihilates it only to rounding, ε E per row).
+- a motion that neither the Dirichlet conditions nor the contact normals hold makes the problem
+  singular (refused before any computation: ``RigidModes.unheld``);
+- the motions the Dirichlet conditions leave free (``RigidModes.free_basis``) are held only by
+  contact: the step solvers evaluate the elastic forces with them removed, A u = A (u − Z Zᵀu),
+  because a large rigid motion held by a soft layer otherwise costs digits (A annihilates it only to
+  rounding, ε E per row).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-#: A combination of modes counts as fixed when the Dirichlet conditions move it by less than this,
-#: relative to the largest entry of the modes (which are of order one).
-NULL_TOLERANCE = 1e-10
+#: A combination of a body's modes counts as held when the constraints move it by more than this,
+#: relative (in the squared, Gram-matrix sense) to the body's most constrained combination.
+HELD = 1e-12
 
 
 def bodies(elements: np.ndarray, nodes: int) -> tuple[int, np.ndarray]:
     """The connected bodies of a mesh with ``elements`` (nodes per element, elements): their number
-    and the body of every node (nodes that no element uses form bodies of their own)."""
-    corners = elements.shape[0]
-    rows = np.concatenate([elements[i] for i in range(corners - 1)])
-    cols = np.concatenate([elements[i + 1] for i in range(corners - 1)])
+    and the body of every node (a node that no element uses is a body of its own)."""
+    rows = elements.ravel()
+    cols = np.roll(elements, -1, axis=0).ravel()
     graph = sp.coo_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)), shape=(nodes, nodes))
     return connected_components(graph, directed=False)
 
 
-def rigid_modes(points: np.ndarray, elements: np.ndarray, nodal_dofs: np.ndarray) -> np.ndarray:
-    """The rigid motions of every body, as columns over all dofs: (ndofs, bodies · d(d + 1)/2).
+@dataclass(frozen=True)
+class RigidModes:
+    """The rigid motions of every body: ``matrix`` (ndofs, count · per_body), column b · per_body + k
+    the motion k of body b (translations first, then rotations in the planes xy, yz, zx)."""
 
-    ``points`` (d, nodes), ``elements`` (nodes per element, elements), ``nodal_dofs`` (d, nodes)."""
-    d, n = points.shape
-    count, body = bodies(elements, n)
-    per_body = d * (d + 1) // 2
-    modes = np.zeros((nodal_dofs.size, count * per_body))
-    sizes = np.bincount(body, minlength=count)
-    centroid = np.vstack([np.bincount(body, weights=x, minlength=count) for x in points]) / sizes
-    x = points - centroid[:, body]
-    extent = np.sqrt(np.bincount(body, weights=np.sum(x * x, axis=0), minlength=count) / sizes)
-    x = x / np.where(extent > 0.0, extent, 1.0)[body]
-    first = body * per_body
-    for c in range(d):  # translations
-        modes[nodal_dofs[c], first + c] = 1.0
-    for k, (a, b) in enumerate([(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]):  # rotations in the a-b plane
-        modes[nodal_dofs[a], first + d + k] = -x[b]
-        modes[nodal_dofs[b], first + d + k] = x[a]
-    return modes
+    matrix: sp.csc_matrix
+    count: int
+    per_body: int
+    body: np.ndarray  # body of each node
+    centroid: np.ndarray  # (d, count)
+    size: np.ndarray  # (count,) root-mean-square distance of the nodes to the centroid
 
+    @classmethod
+    def of_mesh(cls, points: np.ndarray, elements: np.ndarray, nodal_dofs: np.ndarray) -> "RigidModes":
+        """``points`` (d, nodes), ``elements`` (nodes per element, elements), ``nodal_dofs`` (d, nodes)."""
+        d, n = points.shape
+        count, body = bodies(elements, n)
+        per_body = d * (d + 1) // 2
+        nodes = np.bincount(body, minlength=count)
+        centroid = np.vstack([np.bincount(body, weights=x, minlength=count) for x in points]) / nodes
+        x = points - centroid[:, body]
+        size = np.sqrt(np.bincount(body, weights=np.sum(x * x, axis=0), minlength=count) / nodes)
+        size = np.where(size > 0.0, size, 1.0)
+        x = x / size[body]
+        first = body * per_body
+        rows, cols, values = [], [], []
+        for c in range(d):  # translations
+            rows.append(nodal_dofs[c]), cols.append(first + c), values.append(np.ones(n))
+        for k, (a, b) in enumerate([(0, 1)] if d == 2 else [(0, 1), (1, 2), (2, 0)]):  # rotation in the a-b plane
+            rows += [nodal_dofs[a], nodal_dofs[b]]
+            cols += [first + d + k] * 2
+            values += [-x[b], x[a]]
+        matrix = sp.csc_matrix((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
+                               shape=(nodal_dofs.size, count * per_body))
+        return cls(matrix, count, per_body, body, centroid, size)
 
-def free_rigid_modes(modes: np.ndarray, free: np.ndarray) -> np.ndarray:
-    """An orthonormal basis, over the ``free`` dofs, of the rigid motions that vanish on every other
-    dof (the motions the Dirichlet conditions leave free): (free dofs, k), k ≥ 0."""
-    fixed = np.ones(modes.shape[0], dtype=bool)
-    fixed[free] = False
-    k = modes.shape[1]
-    if k == 0:
-        return np.zeros((free.size, 0))
-    held = sla.qr(modes[fixed], mode="r")[0][:k] if fixed.any() else np.zeros((0, k))  # same singular values
-    _, singular, vt = np.linalg.svd(np.vstack([held, np.zeros((k - held.shape[0], k))]))
-    combinations = vt[singular <= NULL_TOLERANCE * max(1.0, np.abs(modes).max())].T
-    if combinations.shape[1] == 0:
-        return np.zeros((free.size, 0))
-    basis, _ = sla.qr(modes[free] @ combinations, mode="economic")
-    return basis
+    def grams(self, *constraints: sp.spmatrix) -> np.ndarray:
+        """Σ (C Z_b)ᵀ (C Z_b) over the ``constraints`` C (rows over all dofs), for every body b:
+        (count, per_body, per_body). A constraint row may couple bodies only if it is a dof selection
+        or a contact normal (one node each): the result is then exactly block diagonal."""
+        p = self.per_body
+        blocks = np.zeros((self.count, p, p))
+        for C in constraints:
+            seen = (sp.csr_matrix(C) @ self.matrix).tocsc()
+            gram = (seen.T @ seen).tocoo()
+            np.add.at(blocks, (gram.row // p, gram.row % p, gram.col % p), gram.data)
+        return blocks
+
+    def unheld(self, *constraints: sp.spmatrix) -> tuple[np.ndarray, np.ndarray]:
+        """The motions the ``constraints`` do not hold: for each body the number of them and a unit
+        combination of its modes that is free (the least held one): (count,), (count, per_body)."""
+        values, vectors = np.linalg.eigh(self.grams(*constraints))
+        free = np.count_nonzero(values <= HELD * np.maximum(values[:, -1:], 1.0), axis=1)
+        return free, vectors[:, :, 0]
+
+    def free_basis(self, free: np.ndarray) -> np.ndarray:
+        """An orthonormal basis, over the ``free`` dofs, of the motions that vanish on every other dof
+        (the motions the Dirichlet conditions leave free): (free dofs, k), k ≥ 0."""
+        fixed = np.ones(self.matrix.shape[0], dtype=bool)
+        fixed[free] = False
+        values, vectors = np.linalg.eigh(self.grams(sp.eye(fixed.size, format="csr")[fixed]))
+        loose = values <= HELD * np.maximum(values[:, -1:], 1.0)
+        if not loose.any():
+            return np.zeros((free.size, 0))
+        b, k = np.nonzero(loose)  # the free combinations: few, and only in bodies held by contact alone
+        combinations = sp.csc_matrix((vectors[b, :, k].ravel(),
+                                      (b.repeat(self.per_body) * self.per_body + np.tile(np.arange(self.per_body), b.size),
+                                       np.arange(b.size).repeat(self.per_body))),
+                                     shape=(self.matrix.shape[1], b.size))
+        motions = (self.matrix @ combinations).toarray()[free]
+        basis, _ = np.linalg.qr(motions)
+        return basis

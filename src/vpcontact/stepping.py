@@ -31,7 +31,7 @@ from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from .material import von_mises
 from .problem import Problem
 from .results import Fields, Result
-from .rigid_modes import free_rigid_modes, rigid_modes
+from .rigid_modes import RigidModes
 from .solvers import StepData, StepSolution, make_solver
 from .solvers.errors import SingularMatrixError
 
@@ -76,7 +76,7 @@ class TimeLoop:
         case, free, surface = problem.case, problem.free, problem.surface
         options = case.solver
         mesh = problem.mesh.mesh
-        held_by_contact = free_rigid_modes(rigid_modes(mesh.p, mesh.t, problem.basis.nodal_dofs), free)
+        held_by_contact = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs).free_basis(free)
         self.solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
                                   surface.weights, surface.gap0, rigid=held_by_contact,
                                   augmentation=options.augmentation, tolerance=options.tolerance,
