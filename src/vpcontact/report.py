@@ -14,6 +14,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from .figures import ARROWS, MESH_DRAWN_UP_TO
+
 
 @dataclass
 class Heading:
@@ -438,9 +440,12 @@ def _figures(data):
         Heading(2, "Figures"),
         Paragraph(
             mesh_text + " Displacements are drawn at true scale (magnification 1): the body mostly translates "
-            "into the soft layer. Arrows: the force per unit length the foundation exerts on the body at each "
-            "contact node (compliance part ρK(ξ)p(u_ν) plus the rigid multiplier), pointing at the body; the "
-            "same arrow scale in Figs. 2, 3 and 5. Red dots: nodes at the limit g (on the rigid base)."
+            "into the soft layer. The deformed body is filled, with its outline; its mesh is drawn when it has at "
+            f"most {MESH_DRAWN_UP_TO:,} triangles (a finer one would be a grey block). Γ3 is coloured by the state "
+            "of its nodes: separated (grey), in normal compliance (blue), at the limit g, on the rigid base "
+            "(orange). Arrows: the force per unit length the foundation exerts on the body (compliance part "
+            f"ρK(ξ)p(u_ν) plus the rigid multiplier), pointing at the body, at no more than {ARROWS} contact nodes "
+            "evenly spaced along Γ3; the same arrow scale in Figs. 2, 3 and 5."
         ),
         Heading(3, "Figs. 2 and 3: deformed meshes and contact forces, β = ±1"),
         Picture(
