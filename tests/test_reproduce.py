@@ -5,10 +5,15 @@ import math
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
+from matplotlib.colors import to_hex
+from matplotlib.quiver import Quiver
 
-from vpcontact import load_case
+from vpcontact import build_problem, load_case
 from vpcontact.cli import main
+from vpcontact.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
+from vpcontact.figures import ARROWS, MESH_DRAWN_UP_TO, STATE_COLORS, Frame, along_curve, deformed_panels
 from vpcontact.reproduce import PAPER_CASE, make_plan
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -89,7 +94,8 @@ def test_report_states_the_deviations_and_the_machine(quick):
         assert text in markdown, text
     assert data["machine"]["cores"] >= 1 and data["wall_time_s"]["total"] > 0
     assert all(math.isfinite(v) for v in data["wall_time_s"].values())
-    assert data["wall_time_s"]["total"] < 120  # --quick: under 2 minutes
+    assert all(math.isfinite(v) and v >= 0 for v in data["cpu_time_s"].values())
+    assert data["cpu_time_s"]["total"] < 120  # --quick: under 2 minutes of CPU time (wall time depends on the load)
 
 
 def test_runs_are_written_as_ordinary_outputs(quick):
@@ -110,3 +116,69 @@ def test_quick_plan_is_coarse():
     assert plan.figure_h == 0.05 and plan.reference_level == 64 and max(plan.levels) == 32
     full = make_plan(False)
     assert full.reference_level == 512 and full.levels[-1] == 256 and full.rho[-1] == 1e-6
+
+
+# --- what the deformed-configuration panels (Figs. 2, 3, 5, 9) draw -------------------------------
+def paper_frame(h: float) -> Frame:
+    """The paper's body at element size h, undeformed, with Γ3 in three zones from the bottom point:
+    at the limit g, in normal compliance, separated; the pressure falls along Γ3."""
+    problem = build_problem(load_case(tomllib.loads(PAPER_CASE), {"mesh.h": h}))
+    surface, mesh = problem.surface, problem.mesh.mesh
+    angle = np.arctan2(surface.coordinates[0], 1.0 - surface.coordinates[1])  # 0 at (0, 0), π/2 at (1, 1)
+    status = np.select([angle < 0.4, angle < 1.2], [AT_LIMIT, IN_COMPLIANCE], SEPARATED)
+    pressure = np.where(status == SEPARATED, 0.0, 10.0 * np.cos(angle))
+    return Frame("test", mesh.p, mesh.t, np.zeros((mesh.p.shape[1], 2)), surface.nodes, surface.normals, pressure,
+                 status, 0.2, 1.1)
+
+
+def drawn_lines(ax) -> list[np.ndarray]:
+    """The vertices (k, 2) of each line drawn in ax."""
+    return [np.asarray(line.get_xydata()) for line in ax.lines]
+
+
+def test_full_resolution_panels_draw_the_outline_and_a_readable_subset_of_arrows():
+    frame = paper_frame(0.0125)
+    elements, m = frame.triangles.shape[1], frame.nodes.size
+    assert elements == 23_204 and m == 127  # the figure mesh of the full reproduction
+    figure = deformed_panels([frame, frame], "test")
+    for ax in figure.axes[:2]:
+        # no line traces the mesh's 35,000 edges: the longest is the outline (about 410 edges, 1,240 vertices)
+        assert max(len(xy) for xy in drawn_lines(ax)) < 2_000
+        # nor a collection its 23,204 triangles: the body is filled as one polygon
+        for collection in ax.collections:
+            assert sum(len(path.vertices) for path in collection.get_paths()) < 2_000
+        # one quiver with 20 to ARROWS arrows, spread along Γ3 (distinct, none closer than half the even spacing)
+        (arrows,) = [c for c in ax.collections if isinstance(c, Quiver)]
+        assert 20 <= arrows.N <= ARROWS
+        tips = arrows.XY
+        gaps = np.linalg.norm(tips[:, None, :] - tips[None, :, :], axis=2) + np.eye(arrows.N)
+        assert gaps.min() > 0.5 * (np.pi / 2) / (arrows.N - 1)
+        assert np.ptp(np.arctan2(tips[:, 0], 1.0 - tips[:, 1])) > 0.95 * np.pi / 2  # from the bottom to the equator
+        # Γ3 in the three colours of the node states
+        contact = [line for line in ax.lines if line.get_linewidth() == 3.0 and len(line.get_xydata())]
+        colors = {to_hex(line.get_color()) for line in contact}
+        assert colors == {to_hex(STATE_COLORS[s]) for s in (SEPARATED, IN_COMPLIANCE, AT_LIMIT)}
+
+
+def test_coarse_mesh_is_drawn_with_an_arrow_at_every_contact_node():
+    frame = paper_frame(0.05)
+    assert frame.triangles.shape[1] <= MESH_DRAWN_UP_TO and frame.nodes.size <= ARROWS
+    ax = deformed_panels([frame], "test").axes[0]
+    edges = np.unique(np.sort(np.hstack([frame.triangles[[0, 1]], frame.triangles[[1, 2]], frame.triangles[[2, 0]]]),
+                              axis=0), axis=1).shape[1]
+    assert 3 * edges in [len(xy) for xy in drawn_lines(ax)]  # every edge: two ends and a break
+    (arrows,) = [c for c in ax.collections if isinstance(c, Quiver)]
+    assert arrows.N == frame.nodes.size
+
+
+def test_along_curve_orders_shuffled_segments():
+    rng = np.random.default_rng(3)
+    path = rng.permutation(12)  # an open piece of 12 nodes and a closed one of 5
+    segments = np.hstack([np.vstack([path[:-1], path[1:]]), np.array([[12, 13, 14, 15, 16], [13, 14, 15, 16, 12]])])
+    segments = segments[:, rng.permutation(segments.shape[1])]
+    segments[:, ::2] = segments[::-1, ::2]  # either direction
+    order = along_curve(segments, 17)
+    assert sorted(order) == list(range(17))
+    pieces = (order[:12], order[12:]) if order[0] < 12 else (order[5:], order[:5])
+    assert list(pieces[0]) in (list(path), list(path[::-1]))
+    assert all(abs(int(a) - int(b)) in (1, 4) for a, b in zip(pieces[1], pieces[1][1:]))

@@ -1,11 +1,14 @@
 """The figures of Sect. 4 of the paper (Figs. 2–10), drawn with matplotlib, PNG and PDF.
 
 No pyplot: every figure is a `matplotlib.figure.Figure` rendered by the Agg canvas, so importing this
-module changes no global matplotlib state. A deformed-mesh panel (`Frame`) shows the deformed mesh,
-the soft layer of thickness g and the rigid base under it (the foundation conforms to Γ3: the layer
-lies between the circle of radius 1 and that of radius 1 + g about (0, 1)), the contact forces on
-Γ3 as arrows pointing at the body (the force per unit length the foundation exerts, −(ρK p + λ/w) ν)
-and the nodes at the limit g.
+module changes no global matplotlib state. A deformed-configuration panel (`Frame`) shows the
+deformed body (filled, with its outline; its mesh too when it has at most `MESH_DRAWN_UP_TO`
+triangles, finer meshes would be a grey block), the undeformed outline, the soft layer of
+thickness g and the rigid base under it (the foundation conforms to Γ3: the layer lies between the
+circle of radius 1 and that of radius 1 + g about (0, 1)), Γ3 coloured by the state of its nodes
+(separated, in normal compliance, at the limit g), and the contact forces as arrows pointing at the
+body (the force per unit length the foundation exerts, −(ρK p + λ/w) ν) at no more than `ARROWS`
+nodes evenly spaced along Γ3.
 """
 
 from __future__ import annotations
@@ -14,15 +17,18 @@ import csv
 import math
 import tomllib
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.tri import Triangulation
+from scipy.sparse.csgraph import connected_components, depth_first_order
 
-from .contact import AT_LIMIT, STATUS_NAMES
+from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, STATUS_NAMES
 
 MAGNIFICATION = 1.0
 """Displacements are drawn at true scale."""
@@ -30,6 +36,18 @@ DPI = 150
 COLORS = {"beta+1": "C0", "beta-1": "C3", "alpha0_g0.2": "C2", "alpha0_g2000": "C1"}
 ARROW = 0.3
 """Length (m) of the longest contact-force arrow of a figure."""
+ARROWS = 40
+"""At most this many contact-force arrows per panel, at nodes evenly spaced along Γ3 (the figure
+mesh has 127 contact nodes: an arrow at each would merge into a band)."""
+MESH_DRAWN_UP_TO = 2000
+"""The mesh is drawn when it has at most this many triangles; a finer one (the figure mesh has
+23,204) would be a grey block, so only the body's outline is drawn."""
+STATE_COLORS = {SEPARATED: "0.6", IN_COMPLIANCE: "#0072B2", AT_LIMIT: "#D55E00"}
+"""Γ3 coloured by the state of its nodes (told apart with red–green colour blindness too)."""
+STATE_LABELS = {SEPARATED: "separated", IN_COMPLIANCE: "in normal compliance", AT_LIMIT: "at the limit g"}
+BODY = "0.86"
+"""Fill colour of the deformed body."""
+ARROW_COLOR = "0.15"
 
 
 @dataclass
@@ -110,11 +128,57 @@ class Frame:
     def deformed(self) -> np.ndarray:
         return self.points + MAGNIFICATION * self.displacement.T
 
+    @cached_property
+    def edges(self) -> tuple[np.ndarray, np.ndarray]:
+        """The edges (2, e) of the mesh, each once, and the number of triangles of each (1: on the boundary)."""
+        t = self.triangles
+        ends = np.sort(np.hstack([t[[0, 1]], t[[1, 2]], t[[2, 0]]]), axis=0).astype(np.int64)
+        n = self.points.shape[1]
+        keys, count = np.unique(ends[0] * n + ends[1], return_counts=True)
+        return np.vstack([keys // n, keys % n]), count
+
+    def contact_segments(self) -> np.ndarray:
+        """The edges of Γ3 (2, s) as indices into ``nodes``: boundary edges between two contact nodes."""
+        edges, count = self.edges
+        local = np.full(self.points.shape[1], -1)
+        local[self.nodes] = np.arange(self.nodes.size)
+        ends = local[edges[:, count == 1]]
+        return ends[:, (ends >= 0).all(axis=0)]
+
+    def arrow_nodes(self, count: int = ARROWS) -> np.ndarray:
+        """Indices into ``nodes`` of the nodes drawn with an arrow: all when there are at most
+        ``count``; else as many as every k-th node would give, for the smallest k that gives at
+        most ``count``, at the nodes nearest to evenly spaced points of Γ3 (undeformed arc length)."""
+        m = self.nodes.size
+        if m <= count:
+            return np.arange(m)
+        order = along_curve(self.contact_segments(), m)
+        xy = self.points[:, self.nodes[order]]
+        s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=1), axis=0))])
+        targets = np.linspace(0.0, s[-1], math.ceil(m / math.ceil(m / count)))
+        return np.unique(order[np.abs(s[None, :] - targets[:, None]).argmin(axis=1)])
+
+
+def along_curve(segments: np.ndarray, count: int) -> np.ndarray:
+    """The nodes 0, …, count − 1 of a curve made of ``segments`` (2, s), in their order along it:
+    each connected piece from one of its ends (any node of a closed piece), piece after piece."""
+    graph = sp.coo_matrix((np.ones(segments.shape[1]), (segments[0], segments[1])), shape=(count, count)).tocsr()
+    pieces, label = connected_components(graph, directed=False)
+    degree = np.bincount(segments.ravel(), minlength=count)
+    order = []
+    for piece in range(pieces):
+        members = np.flatnonzero(label == piece)
+        ends = members[degree[members] == 1]
+        start = ends[0] if ends.size else members[0]
+        order.append(depth_first_order(graph, start, directed=False, return_predecessors=False))
+    return np.concatenate(order)
+
 
 def _save(figure: Figure, folder: Path, stem: str) -> dict:
     folder.mkdir(parents=True, exist_ok=True)
     png, pdf = folder / f"{stem}.png", folder / f"{stem}.pdf"
     figure.savefig(png, dpi=DPI)
+    figure.set_layout_engine("none")  # the PDF keeps the PNG's layout instead of computing it again
     figure.savefig(pdf)
     return {"png": f"{folder.name}/{png.name}", "pdf": f"{folder.name}/{pdf.name}"}
 
@@ -139,7 +203,8 @@ def _foundation(ax, g: float) -> None:
 
 
 def _panel(ax, frame: Frame, scale: float) -> None:
-    """One deformed configuration: undeformed outline, foundation, deformed mesh, forces, limit nodes."""
+    """One deformed configuration: foundation, undeformed outline, deformed body (and mesh when
+    coarse), Γ3 coloured by node state, contact forces at `Frame.arrow_nodes`."""
     _foundation(ax, frame.g)
     angle = np.linspace(-0.5 * np.pi, 0.5 * np.pi, 200)
     ax.plot(
@@ -148,41 +213,53 @@ def _panel(ax, frame: Frame, scale: float) -> None:
         color="0.55",
         lw=0.8,
         ls="--",
-        zorder=1,
+        zorder=2.8,
     )
-    p = frame.deformed()
-    lines = ax.triplot(Triangulation(p[0], p[1], frame.triangles.T), color="0.2", lw=0.12, zorder=2)
-    for line in lines:
-        line.set_rasterized(True)
-    q = p[:, frame.nodes]
-    force = -frame.normals * frame.pressure  # on the body, per unit length
+    p = frame.deformed().T
+    body = Triangulation(p[:, 0], p[:, 1], frame.triangles.T)
+    ax.tricontourf(body, np.zeros(len(p)), levels=[-1.0, 1.0], colors=[BODY], zorder=2)  # one polygon: the body
+    edges, count = frame.edges
+    if frame.triangles.shape[1] <= MESH_DRAWN_UP_TO:
+        _segments(ax, p[edges.T], color="0.45", lw=0.3, zorder=2.5)
+    _segments(ax, p[edges[:, count == 1].T], color="0.15", lw=0.9, zorder=3)
+
+    # Γ3 by node state: each node colours the half of each of its segments next to it
+    q = p[frame.nodes]
+    first, second = frame.contact_segments()
+    middle = 0.5 * (q[first] + q[second])
+    halves = np.concatenate([np.stack([q[first], middle], axis=1), np.stack([middle, q[second]], axis=1)])
+    state = np.concatenate([frame.status[first], frame.status[second]])
+    for value, color in STATE_COLORS.items():
+        _segments(ax, halves[state == value], color=color, lw=3.0, solid_capstyle="butt", zorder=4)
+
+    shown = frame.arrow_nodes()
+    force = -frame.normals[:, shown] * frame.pressure[shown]  # on the body, per unit length
     ax.quiver(
-        q[0],
-        q[1],
+        q[shown, 0],
+        q[shown, 1],
         force[0],
         force[1],
         angles="xy",
         scale_units="xy",
         scale=scale,
         pivot="tip",
-        color="C0",
-        width=0.006 if frame.nodes.size <= 60 else 0.0035,
-        zorder=4,
+        color=ARROW_COLOR,
+        width=0.006,
+        zorder=5,
     )
-    limit = frame.status == AT_LIMIT
-    ax.plot(q[0, limit], q[1, limit], "o", color="red", ms=2.5, zorder=5)
     ax.set_aspect("equal")
     ax.set_xlim(-0.08, 1.5)
     ax.set_ylim(-0.62, 2.08)
     ax.set_xlabel("$x_1$ (m)")
-    ax.set_title(f"{frame.title}\n{int(limit.sum())}/{limit.size} nodes at the limit g", fontsize=9)
+    limit = int(np.sum(frame.status == AT_LIMIT))
+    ax.set_title(f"{frame.title}\n{limit}/{frame.nodes.size} nodes at the limit g", fontsize=9)
 
 
-def deformed_figure(frames: list[Frame], title: str, folder: Path, stem: str, scale: float | None = None) -> dict:
-    """A row of deformed-mesh panels with a shared force scale and a legend."""
+def deformed_panels(frames: list[Frame], title: str, scale: float | None = None) -> Figure:
+    """A row of deformed-configuration panels with a shared force scale, a key and a legend."""
     largest = max(float(np.max(f.pressure, initial=0.0)) for f in frames) or 1.0
     scale = scale or largest / ARROW
-    figure = Figure(figsize=(3.2 * len(frames), 5.6), layout="constrained")
+    figure = Figure(figsize=(3.2 * len(frames), 5.9), layout="constrained")
     axes = figure.subplots(1, len(frames), sharey=True)
     for ax, frame in zip(np.atleast_1d(axes), frames):
         _panel(ax, frame, scale)
@@ -192,21 +269,38 @@ def deformed_figure(frames: list[Frame], title: str, folder: Path, stem: str, sc
     first.quiverkey(
         _arrows(first), 0.22, 0.06, key, f"{key:g} N/m", labelpos="E", coordinates="axes", fontproperties={"size": 7}
     )
+    sample = frames[0]
+    elements = sample.triangles.shape[1]
+    body = "deformed body and mesh" if elements <= MESH_DRAWN_UP_TO else f"deformed body ({elements:,} triangles)"
     handles = [
         Patch(color="tan", alpha=0.35, label="soft layer (thickness g)"),
         Line2D([], [], color="saddlebrown", lw=2, label="rigid base (penetration = g)"),
         Line2D([], [], color="0.55", ls="--", label="undeformed body"),
-        Line2D([], [], color="0.2", lw=0.6, label="deformed mesh"),
-        Line2D([], [], color="C0", marker=r"$\uparrow$", ls="", ms=9, label="contact force on the body (N/m)"),
-        Line2D([], [], color="red", marker="o", ls="", ms=4, label="node at the limit g (unilateral contact)"),
+        Patch(facecolor=BODY, edgecolor="0.15", label=body),
+        *[Line2D([], [], color=color, lw=3, label=f"Γ3: node {STATE_LABELS[s]}") for s, color in STATE_COLORS.items()],
+        Line2D([], [], color=ARROW_COLOR, marker=r"$\uparrow$", ls="", ms=9, label="contact force on the body (N/m)"),
     ]
-    figure.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8, frameon=False)
+    figure.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=8, frameon=False)
+    shown, nodes = sample.arrow_nodes().size, sample.nodes.size
+    where = "every contact node" if shown == nodes else f"{shown} of the {nodes} contact nodes, evenly spaced along Γ3"
     figure.suptitle(
-        f"{title}\ndisplacements drawn at true scale (magnification {MAGNIFICATION:g}); "
-        f"arrow length proportional to the force (key in the first panel)",
+        f"{title}\ndisplacements at true scale (magnification {MAGNIFICATION:g}); arrows at {where}, "
+        "length proportional to the force (key in the first panel)",
         fontsize=10,
     )
-    return _save(figure, folder, stem)
+    return figure
+
+
+def deformed_figure(frames: list[Frame], title: str, folder: Path, stem: str, scale: float | None = None) -> dict:
+    """`deformed_panels` written as PNG and PDF."""
+    return _save(deformed_panels(frames, title, scale), folder, stem)
+
+
+def _segments(ax, segments: np.ndarray, **style) -> None:
+    """Line segments (k, 2, 2) as one line broken by NaNs (one path: a PDF draws it at once)."""
+    gaps = np.full((segments.shape[0], 1, 2), np.nan)
+    xy = np.concatenate([segments, gaps], axis=1).reshape(-1, 2)
+    ax.plot(xy[:, 0], xy[:, 1], **style)
 
 
 def _arrows(ax):
