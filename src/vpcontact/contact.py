@@ -15,7 +15,8 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import CaseError
+from .errors import CaseError, quoted
+from .expressions import Expression
 from .mesh import Mesh
 
 #: Node states reported per contact node and step.
@@ -197,9 +198,16 @@ def contact_surface(mesh: Mesh, part, nodal_dofs: np.ndarray, gap: Callable | No
             [np.bincount(local.ravel(), weights=np.tile(normal[c] * length, 2), minlength=m) for c in range(2)]
         )
         normals = summed / np.linalg.norm(summed, axis=0)
-    gap0 = np.zeros(m) if gap is None else np.broadcast_to(gap(x=coordinates[0], y=coordinates[1]), (m,)).copy()
-    if not np.all(np.isfinite(gap0)):
-        raise CaseError("contact.gap is not finite at some contact nodes")
+    gap0 = np.zeros(m)
+    if gap is not None:
+        with np.errstate(all="ignore"):  # a gap that is not finite is reported below
+            gap0 = np.broadcast_to(gap(x=coordinates[0], y=coordinates[1]), (m,)).copy()
+    bad = np.flatnonzero(~np.isfinite(gap0))
+    if bad.size:
+        name = f"{gap.where} = {quoted(gap.source)}" if isinstance(gap, Expression) else "contact.gap"
+        x, y = coordinates[:, bad[0]]
+        raise CaseError(f"{name}: not finite ({gap0[bad[0]]}) at the contact node (x, y) = ({x:.6g}, {y:.6g}); the "
+                        f"initial gap must be finite at every node of the contact part")
     rows = np.repeat(np.arange(m), 2)
     cols = nodal_dofs[:, nodes].T.ravel()
     operator = sp.csr_matrix((normals.T.ravel(), (rows, cols)), shape=(m, nodal_dofs.size))

@@ -1,12 +1,15 @@
 """From a case to the discrete problem: mesh, spaces, operators, loads and the contact law.
 
-Everything that can fail on user input (mesh file, part names, rigid motions left free) fails
-here, before any computation and before anything is written.
+Everything that can fail on user input (mesh file, part names, rigid motions left free, loads that
+are not finite at a time step, outputs that would not fit in memory, Python objects of the API that
+are not laws) fails here, before any computation and before anything is written.
 """
 
 from __future__ import annotations
 
+import operator
 import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -15,13 +18,53 @@ import scipy.sparse as sp
 from skfem import Basis
 
 from . import mesh as meshes
-from .assembly import Density, LoadVector, displacement_basis, stiffness
-from .case import Case
-from .contact import (ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness, PositivePart, Power,
-                      PowerStiffness, contact_surface, empty_surface)
+from .assembly import Density, ExpressionDensity, LoadVector, displacement_basis, stiffness, stress_force
+from .case import Case, _brief
+from .contact import (CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness, PositivePart,
+                      Power, PowerStiffness, contact_surface, empty_surface)
 from .errors import CaseError
 from .expressions import parse_expression
 from .material import Elasticity, Perzyna, Relaxation
+from .results import check_memory
+
+
+class TimeGrid(Sequence):
+    """The step times t_n = n k, n = 1, …, steps, with t_steps = T exactly (bitwise the values of
+    ``np.linspace(0, T, steps + 1)[1:]``), computed when asked for: a grid of 10⁸ steps costs nothing.
+
+    Indexing gives t_n at index n − 1 (a NumPy float; negative indices count from the end), slicing and
+    ``np.asarray`` give arrays, :meth:`at` gives t_n for an array of step numbers n.
+    """
+
+    def __init__(self, T: float, steps: int):
+        self.T, self.steps, self.k = T, steps, T / steps
+
+    def at(self, n) -> np.ndarray:
+        """t_n for step numbers n (an int or an array of ints in 1, …, steps)."""
+        n = np.asarray(n)
+        return np.where(n == self.steps, self.T, n * self.k)
+
+    def __len__(self) -> int:
+        return self.steps
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return self.at(np.arange(*index.indices(self.steps)) + 1).astype(float)
+        position = operator.index(index)
+        if not -self.steps <= position < self.steps:
+            raise IndexError(f"time step index {position} out of range for {self.steps} steps")
+        return np.float64(self.at(position % self.steps + 1))
+
+    def __iter__(self):
+        chunk = 2**16
+        for start in range(0, self.steps, chunk):
+            yield from self[start:start + chunk]
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        return self[:].astype(dtype or float)
+
+    def __repr__(self) -> str:
+        return f"TimeGrid(T={self.T!r}, steps={self.steps})"
 
 
 @dataclass
@@ -41,30 +84,52 @@ class Problem:
     viscoplastic: Callable | None = None  # 𝒢(σ, ε) over arrays (2, 2, nelements); None: 𝒢 = 0
     timings: dict = field(default_factory=dict)  # seconds: mesh, assembly, build
     initial_stress: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))  # σ_0 (uniform); u_0 = 0
-    times: np.ndarray = field(init=False)
+    times: TimeGrid = field(init=False)  # t_1, …, t_steps
 
     def __post_init__(self):
-        self.times = np.linspace(0.0, self.case.time.T, self.case.time.steps + 1)[1:]
+        self.times = TimeGrid(self.case.time.T, self.case.time.steps)
 
     @property
     def k(self) -> float:
         return self.case.time.T / self.case.time.steps
 
+    def __repr__(self) -> str:
+        """One line: the sizes (not the operators)."""
+        return (f"Problem(dofs={self.basis.N}, free_dofs={self.free.size}, elements={self.mesh.mesh.t.shape[1]}, "
+                f"nodes={self.mesh.mesh.p.shape[1]}, contact_nodes={self.surface.size}, steps={len(self.times)}, "
+                f"k={self.k:g})")
+
 
 def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Callable | None = None,
-                  tractions: dict | None = None, body_force: Density | None = None,
+                  tractions: Mapping | None = None, body_force: Density | None = None,
                   viscoplastic: Callable | None = None) -> Problem:
-    """Assemble the problem of ``case``; the keyword arguments replace the case's laws by Python
-    objects (see :mod:`vpcontact.contact` for the protocol: ``f(r)`` and ``f.derivative(r)``) and
-    its traction or body force densities by callables ``f(x, y, t) -> (fx, fy)``; ``viscoplastic``
-    is 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (2, 2, nelements) (it replaces
-    ``material.viscoplastic``)."""
+    """Assemble the problem of ``case``; the keyword arguments replace parts of the case by Python objects:
+
+    - ``p``, ``stiffness_law``: the laws p(r) and K(ξ) of the contact, vectorized over NumPy arrays; an
+      object with a ``derivative`` method is used as it is (see :mod:`vpcontact.contact`), a plain
+      function is wrapped in :class:`~vpcontact.contact.CallableLaw` (central-difference derivative);
+    - ``tractions``: {part: f(x, y, t) -> (fx, fy)}: f replaces the case's traction on that part (the
+      case's tractions on other parts stay);
+    - ``body_force``: f(x, y, t) -> (fx, fy) replaces the case's body forces;
+    - ``viscoplastic``: 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (2, 2, nelements) (it
+      replaces ``material.viscoplastic``).
+
+    Each is tried before the run (a law at 0 and 10⁻³, a load at every step time, 𝒢 at (σ_0, 0)): one
+    that is not callable, returns the wrong shape or a value that is not finite is a CaseError."""
     started = time.perf_counter()
+    if case.contact is None and (p is not None or stiffness_law is not None):
+        raise CaseError("p and stiffness_law are laws of the contact, and the case has no [contact]")
+    p = None if p is None else _api_law(p, "p")
+    stiffness_law = None if stiffness_law is None else _api_law(stiffness_law, "stiffness_law")
     mesh = _make_mesh(case)
     meshed = time.perf_counter()
     basis = displacement_basis(mesh)
     elasticity = Elasticity(case.material.E, case.material.nu, case.material.hypothesis)
-    A = stiffness(basis, elasticity)
+    with np.errstate(all="ignore"):  # an overflow is reported below
+        A = stiffness(basis, elasticity)
+    if not np.all(np.isfinite(A.data)):
+        raise CaseError(f"material.E = {_brief(case.material.E)}: the stiffness matrix is not finite in float64; "
+                        f"state the moduli in other units")
 
     fixed = [np.zeros(0, dtype=np.int64)]
     for item in case.boundary.dirichlet:
@@ -72,14 +137,11 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         fixed.append(basis.nodal_dofs[components][:, mesh.nodes(item.part)].ravel())
     free = np.setdiff1d(np.arange(basis.N), np.concatenate(fixed))
 
-    traction_terms = [(t.part, _density(t.value, f"boundary.traction[{i}].value")) for i, t in enumerate(case.boundary.traction)]
-    for part, density in (tractions or {}).items():
-        mesh.facets(part)
-        traction_terms.append((part, density))
-    body_terms = [_density(f.value, f"boundary.body_force[{i}].value") for i, f in enumerate(case.boundary.body_force)]
+    body_terms = [(f"boundary.body_force[{i}].value", _density(f.value, f"boundary.body_force[{i}].value"))
+                  for i, f in enumerate(case.boundary.body_force)]
     if body_force is not None:
-        body_terms.append(body_force)
-    loads = LoadVector(basis, mesh, traction_terms, body_terms)
+        body_terms = [("body_force", body_force)]
+    loads = LoadVector(basis, mesh, _traction_terms(case, mesh, tractions), body_terms)
 
     surface, law, probe = empty_surface(basis.N), ContactLaw(PositivePart(), ConstantStiffness(0.0), np.inf), None
     if case.contact is not None:
@@ -90,12 +152,19 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
     _check_rigid_motions(mesh, basis, free, surface)
+
+    elements = mesh.mesh.t.shape[1]
+    initial_stress = np.array(case.initial.stress, dtype=float)
+    viscoplastic = _viscoplastic_law(case) if viscoplastic is None else _api_viscoplastic(viscoplastic, initial_stress,
+                                                                                          elements)
+    check_memory(case, mesh.mesh.p.shape[1], elements, surface.size,
+                 history=viscoplastic is not None or bool(np.any(initial_stress != 0.0)))
+    loads.check(TimeGrid(case.time.T, case.time.steps))
+    _check_initial_stress(basis, initial_stress, elements)
     done = time.perf_counter()
     timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
-    if viscoplastic is None:
-        viscoplastic = _viscoplastic_law(case)
     return Problem(case, mesh, basis, elasticity, A, free, loads, surface, law, probe, viscoplastic, timings,
-                   initial_stress=np.array(case.initial.stress, dtype=float))
+                   initial_stress=initial_stress)
 
 
 def _make_mesh(case: Case) -> meshes.Mesh:
@@ -107,9 +176,86 @@ def _make_mesh(case: Case) -> meshes.Mesh:
     return meshes.rectangle(m.width, m.height, m.h)
 
 
-def _density(values, where: str) -> Density:
-    fx, fy = (parse_expression(v, ("x", "y", "t"), where=f"{where}[{i}]") for i, v in enumerate(values))
-    return lambda x, y, t: (fx(x=x, y=y, t=t), fy(x=x, y=y, t=t))
+def _density(values, where: str) -> ExpressionDensity:
+    """The density of the two expressions ``values`` of the case key ``where``."""
+    return ExpressionDensity(*(parse_expression(v, ("x", "y", "t"), where=f"{where}[{i}]") for i, v in enumerate(values)))
+
+
+def _traction_terms(case: Case, mesh: meshes.Mesh, tractions: Mapping | None) -> list[tuple[str, object, Density]]:
+    """(name, part, density) of the case's tractions, those of ``tractions`` replacing the case's on their part."""
+    terms = [(f"boundary.traction[{i}].value", t.part, _density(t.value, f"boundary.traction[{i}].value"))
+             for i, t in enumerate(case.boundary.traction)]
+    if tractions is None:
+        return terms
+    if not isinstance(tractions, Mapping):
+        raise CaseError(f"tractions = {_brief(tractions)}: expected a dict {{part: f(x, y, t) -> (fx, fy)}}")
+    for part, density in tractions.items():
+        if not (isinstance(part, (str, int)) and str(part) in mesh.parts):
+            raise CaseError(f"tractions: unknown part {_brief(part)}; the mesh has parts: {', '.join(mesh.part_names)}")
+        facets = mesh.facets(part)
+        terms = [term for term in terms if not np.array_equal(mesh.facets(term[1]), facets)]
+        terms.append((f"tractions[{_brief(part)}]", part, density))
+    return terms
+
+
+#: Where a law of the API is tried before the run: at 0 and just above (a penetration, a history ξ ≥ 0).
+_LAW_SAMPLE = (0.0, 1e-3)
+
+
+def _api_law(law, name: str) -> Callable:
+    """A law p or K of the API: an object with a ``derivative`` method as it is, a plain function wrapped
+    in CallableLaw; both tried at _LAW_SAMPLE (elementwise, finite), else CaseError."""
+    if not callable(law):
+        raise CaseError(f"{name} = {_brief(law)}: expected a function f(r) of a NumPy array (optionally with a "
+                        f"method f.derivative(r))")
+    if not callable(getattr(law, "derivative", None)):
+        law = CallableLaw(law)
+    for what, f in ((name, law), (f"{name}.derivative", law.derivative)):
+        sample = np.array(_LAW_SAMPLE)
+        with np.errstate(all="ignore"):  # a non-finite value is reported below
+            values = f(sample.copy())
+        _check_returned(what, f"{what}({', '.join(map(str, _LAW_SAMPLE))})", values, sample.shape)
+    return law
+
+
+def _api_viscoplastic(G, initial_stress: np.ndarray, elements: int) -> Callable:
+    """𝒢 of the API, tried at (σ_0, 0), its first use in the run: callable, the shape of σ, finite."""
+    if not callable(G):
+        raise CaseError(f"viscoplastic = {_brief(G)}: expected a function G(sigma, strain) of arrays of shape "
+                        f"(2, 2, elements)")
+    sigma = np.repeat(initial_stress[:, :, None], elements, axis=2)
+    with np.errstate(all="ignore"):  # a non-finite value is reported below
+        rate = G(sigma, np.zeros_like(sigma))
+    _check_returned("viscoplastic", "G(sigma_0, 0)", rate, sigma.shape)
+    return G
+
+
+def _check_returned(name: str, call: str, values, shape: tuple) -> None:
+    """CaseError unless ``values`` (what ``call`` returned) are finite numbers broadcasting to ``shape``."""
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise CaseError(f"{name}: {call} returned a value of type {type(values).__name__}, not numbers") from None
+    try:
+        broadcast = np.broadcast_shapes(array.shape, shape) == shape
+    except ValueError:
+        broadcast = False
+    if not broadcast:
+        raise CaseError(f"{name}: {call} returned an array of shape {array.shape} for arguments of shape {shape}; "
+                        f"expected that shape (elementwise)")
+    if not np.all(np.isfinite(array)):
+        raise CaseError(f"{name}: {call} is not finite ({array.ravel()[~np.isfinite(array.ravel())][0]})")
+
+
+def _check_initial_stress(basis: Basis, initial_stress: np.ndarray, elements: int) -> None:
+    """Refuse an initial stress whose nodal forces Bᵀσ_0 (in every step's right-hand side) overflow float64."""
+    if not np.any(initial_stress != 0.0):
+        return
+    with np.errstate(all="ignore"):  # an overflow is reported below
+        force = stress_force(basis, np.repeat(initial_stress[:, :, None], elements, axis=2))
+    if not np.all(np.isfinite(force)):
+        raise CaseError(f"initial.stress = {_brief(initial_stress.tolist())}: its nodal forces are not finite in "
+                        f"float64; state the stresses in other units")
 
 
 def _p_law(case: Case):
