@@ -256,21 +256,23 @@ class Result:
 HISTORY_ROW_BYTES = 1100
 #: Bytes of a NumPy array object besides its data.
 ARRAY_BYTES = 112
+#: Bytes the writers add while they write, whatever the run's length (contact.csv is written in blocks).
+WRITING_BYTES = 2**24
 
 
 def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, contact_nodes: int,
                   history: bool) -> dict[str, int]:
     """Bytes a run of ``steps`` steps keeps for its outputs until they are written, by part: the history
     rows, the per-node contact rows and the fields at ``field_steps`` steps (``history``: with the
-    viscoplastic history z), each with the copy a checkpoint or solution.npz makes of them. A step cut
-    into sub-steps adds rows: this is the least a run needs."""
+    viscoplastic history z), each with the copy a checkpoint or solution.npz makes of them, and what
+    the writers add. A step cut into sub-steps adds rows: this is the least a run needs."""
     copies = 8 * len(HISTORY_COLUMNS)
     contact = len(CONTACT_ARRAYS) * ARRAY_BYTES + 2 * (8 * (len(CONTACT_ARRAYS) - 1) + 1) * contact_nodes
     per_field = 5 * ARRAY_BYTES + 8 * (2 * nodes + 6 * elements) + 8 * (2 * nodes + 4 * elements)
     if history:
         per_field += 2 * 8 * 4 * elements
     return {"history rows": steps * (HISTORY_ROW_BYTES + copies), "contact rows": steps * contact,
-            "fields": (field_steps + 1) * per_field}
+            "fields": (field_steps + 1) * per_field, "writing": WRITING_BYTES}
 
 
 def check_memory(case, nodes: int, elements: int, contact_nodes: int, history: bool) -> None:

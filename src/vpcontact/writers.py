@@ -150,7 +150,7 @@ def _write_history(result: Result, path: Path) -> None:
 
 #: Values of each column of contact.csv turned into text at once: the memory the writer adds to the run's
 #: stays the same however many rows the run has.
-CONTACT_BLOCK = 2**16
+CONTACT_BLOCK = 2**14
 
 
 def _write_contact(result: Result, path: Path) -> None:
