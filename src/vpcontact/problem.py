@@ -208,14 +208,13 @@ def _api_law(law, name: str) -> Callable:
     if not callable(law):
         raise CaseError(f"{name} = {_brief(law)}: expected a function f(r) of a NumPy array (optionally with a "
                         f"method f.derivative(r))")
-    if not callable(getattr(law, "derivative", None)):
-        law = CallableLaw(law)
-    for what, f in ((name, law), (f"{name}.derivative", law.derivative)):
+    derivative = getattr(law, "derivative", None)
+    for what, f in ((name, law), (f"{name}.derivative", derivative)) if callable(derivative) else ((name, law),):
         sample = np.array(_LAW_SAMPLE)
         with np.errstate(all="ignore"):  # a non-finite value is reported below
             values = f(sample.copy())
         _check_returned(what, f"{what}({', '.join(map(str, _LAW_SAMPLE))})", values, sample.shape)
-    return law
+    return law if callable(derivative) else CallableLaw(law)
 
 
 def _api_viscoplastic(G, initial_stress: np.ndarray, elements: int) -> Callable:

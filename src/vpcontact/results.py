@@ -45,9 +45,13 @@ class UnknownName(CaseError, KeyError):
     __str__ = CaseError.__str__  # the message as it is, not quoted as a KeyError shows its key
 
 
-def _unknown(kind: str, name, valid: Collection[str]) -> UnknownName:
+def _unknown(kind: str, name, valid: Collection[str], elsewhere: tuple[Collection[str], str]) -> UnknownName:
+    """The error for ``name`` not in ``valid``; ``elsewhere``: the names of the other accessor, and its call."""
     close = difflib.get_close_matches(str(name), valid, n=1)
-    hint = f"did you mean '{close[0]}'? " if close else ""
+    if name in elsewhere[0]:
+        hint = f"{elsewhere[1]}({name!r}) has it; "
+    else:
+        hint = f"did you mean '{close[0]}'? " if close else ""
     return UnknownName(f"unknown {kind} {shown(repr(name))}; {hint}valid names: {', '.join(valid)}")
 
 
@@ -185,7 +189,7 @@ class Result:
         """One column of the history (see HISTORY_COLUMNS) over the rows done; ``substeps=False``:
         only the rows at the step times t_n. An unknown column is a KeyError naming the valid ones."""
         if column not in HISTORY_COLUMNS:
-            raise _unknown("history column", column, HISTORY_COLUMNS)
+            raise _unknown("history column", column, HISTORY_COLUMNS, (CONTACT_ARRAYS, "contact_history"))
         values = np.array([row[column] for row in self.rows])
         return values if substeps else values[self.ends_step()]
 
@@ -193,7 +197,7 @@ class Result:
         """(rows, m) array of a per-node quantity (see CONTACT_ARRAYS); ``substeps=False``: only the
         rows at the step times t_n. An unknown name is a KeyError naming the valid ones."""
         if name not in CONTACT_ARRAYS:
-            raise _unknown("contact array", name, CONTACT_ARRAYS)
+            raise _unknown("contact array", name, CONTACT_ARRAYS, (HISTORY_COLUMNS, "series"))
         values = np.array(self.contact[name]).reshape(len(self.rows), self.contact_nodes)
         return values if substeps else values[self.ends_step()]
 
