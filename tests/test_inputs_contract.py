@@ -197,6 +197,19 @@ def test_a_long_string_for_a_choice_is_cut_and_the_choices_kept(tmp_path):
     assert len(stderr) < 400
 
 
+@pytest.mark.parametrize("override, words", [
+    ('contact.part="' + "q" * 100000 + '"', ["unknown part 'qqqq", "(100000 characters)'",
+                                             "the mesh has parts: bottom, left, right, top"]),
+    ("mesh." + "q" * 100000 + "=1", ["unknown key 'mesh.qqqq", "(100005 characters)'",
+                                     "valid keys: file, h, height, radius, shape, width"]),
+    ("output.field_steps=[" + "1," * 50000 + "0]", ["output.field_steps = [1, 1,", "(150003 characters)",
+                                                    'expected "all", "final", "none" or a list of step numbers']),
+])
+def test_a_long_name_or_value_in_a_case_is_cut_and_the_reason_kept(tmp_path, override, words):
+    stderr = refused(tmp_path, rectangle_case(), override, words=words)
+    assert len(stderr) < 300
+
+
 def test_a_long_part_name_in_the_api_is_cut():
     with pytest.raises(vpcontact.CaseError) as error:
         vpcontact.solve(rectangle_case(), tractions={"q" * 10**6: lambda x, y, t: (0, 0)})

@@ -606,7 +606,7 @@ def _unknown_key(loc, law: str | None = None) -> str:
     name = str(loc[-1])
     close = difflib.get_close_matches(name, valid, n=1)
     hint = f"did you mean '{_dotted((*loc[:-1], close[0]))}'?" if close else f"valid keys: {', '.join(valid)}"
-    return f"unknown key '{_dotted(loc)}' ({hint})"
+    return f"unknown key '{shown(_dotted(loc))}' ({hint})"
 
 
 def _valid_keys(loc, law: str | None = None) -> list[str]:

@@ -24,7 +24,7 @@ import scipy.sparse as sp
 from scipy.spatial import Delaunay
 import skfem
 
-from vpcontact.errors import CaseError
+from vpcontact.errors import CaseError, shown
 
 NormalField = Callable[[np.ndarray], np.ndarray]
 
@@ -44,7 +44,7 @@ class Mesh:
         """Facet indices of `part` (an int n means the part named str(n))."""
         name = str(part)
         if name not in self.parts:
-            raise CaseError(f"unknown part '{name}'; the mesh has parts: {', '.join(self.part_names)}")
+            raise CaseError(f"unknown part '{shown(name)}'; the mesh has parts: {', '.join(self.part_names)}")
         return self.parts[name]
 
     def nodes(self, part: str | int) -> np.ndarray:

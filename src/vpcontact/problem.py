@@ -178,7 +178,8 @@ def _make_mesh(case: Case) -> meshes.Mesh:
 
 def _density(values, where: str) -> ExpressionDensity:
     """The density of the two expressions ``values`` of the case key ``where``."""
-    return ExpressionDensity(*(parse_expression(v, ("x", "y", "t"), where=f"{where}[{i}]") for i, v in enumerate(values)))
+    fx, fy = (parse_expression(v, ("x", "y", "t"), where=f"{where}[{i}]") for i, v in enumerate(values))
+    return ExpressionDensity(fx, fy)
 
 
 def _traction_terms(case: Case, mesh: meshes.Mesh, tractions: Mapping | None) -> list[tuple[str, object, Density]]:

@@ -209,7 +209,8 @@ class TimeLoop:
             cause = (f"the viscoplastic history blows up: is the explicit step k = {problem.k:g} small against the "
                      f"law's relaxation time?" if G is not None else
                      "float64 overflow: state the loads, moduli and laws in units that keep them far from 1e308")
-            return f"step {n} (t = {problem.times[n - 1]:g}) failed: {wrong[0]} is not finite at t = {attempt.t:.10g} ({cause})"
+            return (f"step {n} (t = {problem.times[n - 1]:g}) failed: {wrong[0]} is not finite at t = "
+                    f"{attempt.t:.10g} ({cause})")
         self._substep += 1
         result.record(n, attempt.t, solution, fields, xi=xi, K=K, compliance=compliance,
                       status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step)

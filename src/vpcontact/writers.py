@@ -165,8 +165,9 @@ def _write_contact(result: Result, path: Path) -> None:
         for start in range(0, rows, block):
             chosen = slice(start, min(rows, start + block))
             count = chosen.stop - start
-            columns = [np.repeat(steps[chosen], m), np.repeat(times[chosen], m), np.tile(surface.nodes, count),
-                       *(np.tile(values, count) for values in (*surface.coordinates, *surface.normals, surface.weights))]
+            per_node = (surface.nodes, *surface.coordinates, *surface.normals, surface.weights)
+            columns = [np.repeat(steps[chosen], m), np.repeat(times[chosen], m),
+                       *(np.tile(values, count) for values in per_node)]
             columns += [np.array(result.contact[name][chosen]).ravel() for name in CONTACT_ARRAYS]
             columns[-1] = np.asarray(STATUS_NAMES)[columns[-1].astype(int)]
             columns.append(np.repeat(substeps[chosen], m))
