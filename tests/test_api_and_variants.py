@@ -158,7 +158,8 @@ def test_a_law_with_a_derivative_is_used_as_it_is():
                                                                    "of shapes [(5,), ()]"]),
     ({"body_force": "0"}, ["body_force = str: expected a function"]),
     ({"viscoplastic": 1}, ["viscoplastic = 1: expected a function G(sigma, strain)"]),
-    ({"viscoplastic": lambda sigma, strain: np.nan * sigma}, ["viscoplastic: G(sigma_0, 0) is not finite (nan)"]),
+    ({"viscoplastic": lambda sigma, strain: np.nan * sigma},
+     ["viscoplastic: G(initial.stress, 0) is not finite (nan)"]),
 ])
 def test_bad_arguments_of_the_api_are_one_line_case_errors(arguments, words):
     with pytest.raises(vpcontact.CaseError) as error:

@@ -132,10 +132,26 @@ def test_an_initial_stress_whose_forces_overflow_is_refused(tmp_path):
             words=["initial.stress = [[1e+308, 0.0], [0.0, 1e+308]]", "not finite"])
 
 
+@pytest.mark.parametrize("eta, T, words", [
+    (1e-308, 1.1, ["material.viscoplastic: G(initial.stress, 0) is not finite (-inf)"]),
+    (1e-298, 1100.0, ["material.viscoplastic: the history after the first step", "is the time step k = 100 small"]),
+])
+def test_a_viscoplastic_history_that_cannot_start_finite_is_refused(tmp_path, eta, T, words):
+    """Perzyna with η tiny against the initial stress: 𝒢(σ_0, 0) = −(σ_0 − Pσ_0)/η, or z_1 = σ_0 + k 𝒢, overflows:
+    refused before the first step (not four step cuts and "iterates are not finite")."""
+    case = rectangle_case()
+    case["material"]["viscoplastic"] = {"law": "perzyna", "eta": eta, "yield_stress": 0.0}
+    case["initial"] = {"stress": [[1e10, 0.0], [0.0, -1e10]]}
+    case["time"]["T"] = T
+    refused(tmp_path, case, words=words)
+
+
 # --- no NumPy warnings on the terminal -------------------------------------------------------------------
 @pytest.mark.parametrize("overrides, words", [
     (["material.E=1e308"], ["material.E = 1e+308", "stiffness matrix is not finite"]),
     (["time.T=1e308"], [TOP, "not finite (-inf)"]),
+    (["mesh.width=1e-300", "mesh.height=1e-300", "mesh.h=1e-300"], ["stiffness matrix is not finite",
+                                                                    "sizes of the triangles"]),
 ])
 def test_an_overflow_before_the_run_is_refused_without_warnings(tmp_path, overrides, words):
     refused(tmp_path, rectangle_case(), *overrides, words=words)
@@ -159,6 +175,12 @@ def test_nonsense_physics_fails_with_a_message_and_no_warning(tmp_path, override
     assert status == 3, (status, stderr)
     assert stderr.count("\n") == 1 and "not finite" in stderr, stderr
     assert "Warning" not in stderr and "Traceback" not in stderr
+
+
+def test_a_probe_far_away_is_accepted_without_overflow_warnings(tmp_path):
+    """contact.probe = (1e308, -1e308): a finite point whose squared distances to the nodes would overflow."""
+    status, stdout, stderr, out = cli(tmp_path, rectangle_case(probe=[1e308, -1e308]))
+    assert status == 0 and stdout.startswith("complete") and stderr == "", stderr
 
 
 def test_a_viscoplastic_history_that_blows_up_says_why_without_warnings(tmp_path):

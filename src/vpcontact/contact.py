@@ -163,8 +163,11 @@ class ContactSurface:
         return self.nodes.size
 
     def nearest_node(self, point) -> int:
-        """Index (into the contact nodes) of the node nearest to ``point``."""
-        return int(np.argmin(np.sum((self.coordinates - np.reshape(point, (2, 1))) ** 2, axis=0)))
+        """Index (into the contact nodes) of the node nearest to ``point`` (any finite point: the offsets are
+        scaled so that their squares cannot overflow)."""
+        offsets = self.coordinates - np.reshape(point, (2, 1))
+        scale = np.abs(offsets).max(initial=0.0)
+        return int(np.argmin(np.sum((offsets / scale if scale > 0 else offsets) ** 2, axis=0)))
 
 
 def contact_surface(mesh: Mesh, part, nodal_dofs: np.ndarray, gap: Callable | None = None) -> ContactSurface:

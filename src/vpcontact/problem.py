@@ -123,13 +123,13 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     stiffness_law = None if stiffness_law is None else _api_law(stiffness_law, "stiffness_law")
     mesh = _make_mesh(case)
     meshed = time.perf_counter()
-    basis = displacement_basis(mesh)
     elasticity = Elasticity(case.material.E, case.material.nu, case.material.hypothesis)
-    with np.errstate(all="ignore"):  # an overflow is reported below
+    with np.errstate(all="ignore"):  # a stiffness that is not finite is reported below
+        basis = displacement_basis(mesh)
         A = stiffness(basis, elasticity)
     if not np.all(np.isfinite(A.data)):
-        raise CaseError(f"material.E = {_brief(case.material.E)}: the stiffness matrix is not finite in float64; "
-                        f"state the moduli in other units")
+        raise CaseError(f"material.E = {_brief(case.material.E)}: the stiffness matrix is not finite in float64 (the "
+                        f"moduli or the sizes of the triangles are out of its range); state them in other units")
 
     fixed = [np.zeros(0, dtype=np.int64)]
     for item in case.boundary.dirichlet:
@@ -155,12 +155,16 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
 
     elements = mesh.mesh.t.shape[1]
     initial_stress = np.array(case.initial.stress, dtype=float)
-    viscoplastic = _viscoplastic_law(case) if viscoplastic is None else _api_viscoplastic(viscoplastic, initial_stress,
-                                                                                          elements)
+    law_name = "material.viscoplastic" if viscoplastic is None else "viscoplastic"
+    if viscoplastic is None:
+        viscoplastic = _viscoplastic_law(case)
+    elif not callable(viscoplastic):
+        raise CaseError(f"viscoplastic = {_brief(viscoplastic)}: expected a function G(sigma, strain) of arrays of "
+                        f"shape (2, 2, elements)")
     check_memory(case, mesh.mesh.p.shape[1], elements, surface.size,
                  history=viscoplastic is not None or bool(np.any(initial_stress != 0.0)))
     loads.check(TimeGrid(case.time.T, case.time.steps))
-    _check_initial_stress(basis, initial_stress, elements)
+    _check_first_history(basis, initial_stress, viscoplastic, law_name, case.time.T / case.time.steps)
     done = time.perf_counter()
     timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
     return Problem(case, mesh, basis, elasticity, A, free, loads, surface, law, probe, viscoplastic, timings,
@@ -218,16 +222,95 @@ def _api_law(law, name: str) -> Callable:
     return law if callable(derivative) else CallableLaw(law)
 
 
-def _api_viscoplastic(G, initial_stress: np.ndarray, elements: int) -> Callable:
-    """𝒢 of the API, tried at (σ_0, 0), its first use in the run: callable, the shape of σ, finite."""
-    if not callable(G):
-        raise CaseError(f"viscoplastic = {_brief(G)}: expected a function G(sigma, strain) of arrays of shape "
-                        f"(2, 2, elements)")
-    sigma = np.repeat(initial_stress[:, :, None], elements, axis=2)
-    with np.errstate(all="ignore"):  # a non-finite value is reported below
-        rate = G(sigma, np.zeros_like(sigma))
-    _check_returned("viscoplastic", "G(sigma_0, 0)", rate, sigma.shape)
-    return G
+def _check_returned(name: str, call: str, values, shape: tuple) -> None:
+    """CaseError unless ``values`` (what ``call`` returned) are finite numbers broadcasting to ``shape``."""
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise CaseError(f"{name}: {call} returned a value of type {type(values).__name__}, not numbers") from None
+    try:
+        broadcast = np.broadcast_shapes(array.shape, shape) == shape
+    except ValueError:
+        broadcast = False
+    if not broadcast:
+        raise CaseError(f"{name}: {call} returned an array of shape {array.shape} for arguments of shape {shape}; "
+                        f"expected that shape (elementwise)")
+    if not np.all(np.isfinite(array)):
+        raise CaseError(f"{name}: {call} is not finite ({array.ravel()[~np.isfinite(array.ravel())][0]})")
+
+
+def _check_first_history(basis: Basis, initial_stress: np.ndarray, G: Callable | None, law_name: str,
+                         k: float) -> None:
+    """Refuse initial data whose first step cannot be finite: 𝒢(σ_0, 0) (of the shape of σ, finite), the
+    history z_1 = σ_0 + k 𝒢(σ_0, 0) of (2.28) and its nodal forces Bᵀz_1 in the right-hand side."""
+    if G is None and not np.any(initial_stress != 0.0):
+        return
+    sigma = np.repeat(initial_stress[:, :, None], basis.mesh.t.shape[1], axis=2)
+    rate = 0.0
+    if G is not None:
+        with np.errstate(all="ignore"):  # a value that is not finite is reported
+            rate = G(sigma.copy(), np.zeros_like(sigma))
+        _check_returned(law_name, "G(initial.stress, 0)", rate, sigma.shape)
+    with np.errstate(all="ignore"):  # an overflow is reported below
+        z = sigma + k * np.asarray(rate, dtype=float)
+        force = stress_force(basis, z) if np.all(np.isfinite(z)) else None
+    if force is None:
+        raise CaseError(f"{law_name}: the history after the first step, initial.stress + k G(initial.stress, 0), is "
+                        f"not finite: is the time step k = {k:g} small against the law's relaxation time?")
+    if not np.all(np.isfinite(force)):
+        raise CaseError(f"initial.stress = {_brief(initial_stress.tolist())}: its nodal forces are not finite in "
+                        f"float64; state the stresses in other units")
+
+
+def _make_mesh(case: Case) -> meshes.Mesh:
+    m = case.mesh
+    if m.file is not None:
+        return meshes.read_mesh(case.mesh_path)
+    if m.shape == "half_disc":
+        return meshes.half_disc(m.h, m.radius)
+    return meshes.rectangle(m.width, m.height, m.h)
+
+
+def _density(values, where: str) -> ExpressionDensity:
+    """The density of the two expressions ``values`` of the case key ``where``."""
+    fx, fy = (parse_expression(v, ("x", "y", "t"), where=f"{where}[{i}]") for i, v in enumerate(values))
+    return ExpressionDensity(fx, fy)
+
+
+def _traction_terms(case: Case, mesh: meshes.Mesh, tractions: Mapping | None) -> list[tuple[str, object, Density]]:
+    """(name, part, density) of the case's tractions, those of ``tractions`` replacing the case's on their part."""
+    terms = [(f"boundary.traction[{i}].value", t.part, _density(t.value, f"boundary.traction[{i}].value"))
+             for i, t in enumerate(case.boundary.traction)]
+    if tractions is None:
+        return terms
+    if not isinstance(tractions, Mapping):
+        raise CaseError(f"tractions = {_brief(tractions)}: expected a dict {{part: f(x, y, t) -> (fx, fy)}}")
+    for part, density in tractions.items():
+        if not (isinstance(part, (str, int)) and str(part) in mesh.parts):
+            raise CaseError(f"tractions: unknown part {_brief(part)}; the mesh has parts: {', '.join(mesh.part_names)}")
+        facets = mesh.facets(part)
+        terms = [term for term in terms if not np.array_equal(mesh.facets(term[1]), facets)]
+        terms.append((f"tractions[{_brief(part)}]", part, density))
+    return terms
+
+
+#: Where a law of the API is tried before the run: at 0 and just above (a penetration, a history ξ ≥ 0).
+_LAW_SAMPLE = (0.0, 1e-3)
+
+
+def _api_law(law, name: str) -> Callable:
+    """A law p or K of the API: an object with a ``derivative`` method as it is, a plain function wrapped
+    in CallableLaw; both tried at _LAW_SAMPLE (elementwise, finite), else CaseError."""
+    if not callable(law):
+        raise CaseError(f"{name} = {_brief(law)}: expected a function f(r) of a NumPy array (optionally with a "
+                        f"method f.derivative(r))")
+    derivative = getattr(law, "derivative", None)
+    for what, f in ((name, law), (f"{name}.derivative", derivative)) if callable(derivative) else ((name, law),):
+        sample = np.array(_LAW_SAMPLE)
+        with np.errstate(all="ignore"):  # a non-finite value is reported below
+            values = f(sample.copy())
+        _check_returned(what, f"{what}({', '.join(map(str, _LAW_SAMPLE))})", values, sample.shape)
+    return law if callable(derivative) else CallableLaw(law)
 
 
 def _check_returned(name: str, call: str, values, shape: tuple) -> None:
