@@ -338,8 +338,8 @@ def test_a_step_that_fails_after_every_cut_stops_the_run_cleanly(tmp_path, capsy
     result = vpcontact.solve(hard_case(3, max_step_cuts=0))
     assert result.status == "failed" and result.message.startswith(
         "step 1 (t = 0.1) failed: no convergence in 3 Newton iterations; residual ")
-    assert result.message.endswith("contact nodes separated/in compliance/at limit = 0/17/0; try "
-                                   "solver.max_iterations = 6, smaller time steps (time.steps), or solver.tolerance = 1e-11")
+    assert result.message.endswith("contact nodes separated/in compliance/at limit = 0/17/0; try solver.max_iterations"
+                                   " = 6, smaller time steps (time.steps), or solver.tolerance = 1e-11")
     assert len(result.rows) == 0 and result.step_cuts == 0 and result.summary()["final"] == {}
 
 

@@ -134,3 +134,16 @@ def test_a_singular_stiffness_is_a_typed_error(backend):
     N = sp.csr_matrix((np.ones(1), ([0], [3])), shape=(1, n))
     with pytest.raises(SingularMatrixError):
         factorize(A.tocsr(), N, backend)
+
+
+@pytest.mark.parametrize("L, s", [(1e-3, 1e6), (1e3, 1e-3)])
+def test_python_laws_without_derivatives_are_unit_free(L, s):
+    """K and p as plain functions (derivatives by central differences, with steps taken from the
+    values' own scale): the same iterations and solution in any units."""
+    def laws(L, s):
+        return {"p": lambda r: np.maximum(r, 0.0),
+                "stiffness_law": lambda xi: C_V * s / L * (1.0 + ALPHA / L * xi) ** -1.0}
+
+    expected = vpcontact.solve(paper_case(beta=-1.0), **laws(1.0, 1.0))
+    result = vpcontact.solve(paper_case(L, s, beta=-1.0), **laws(L, s))
+    assert_same_up_to_units(result, expected, L, s, rtol=1e-9)

@@ -5,8 +5,11 @@ hardens or softens with the history of penetration (Barboteu, Han, Sofonea).
     >>> case = vpcontact.load_case("examples/paper_ball.toml", {"contact.stiffness.beta": -1})
     >>> result = vpcontact.solve(case)
     >>> result.series("K_probe")[-1]
+
+The submodules (``vpcontact.norms``, ``vpcontact.contact``, ...) are loaded on first use.
 """
 
+import importlib
 from importlib import metadata
 
 try:
@@ -20,13 +23,31 @@ from .problem import Problem, build_problem  # noqa: E402
 from .results import Result  # noqa: E402
 from .stepping import solve_problem  # noqa: E402
 
+#: The modules of the package a user may reach as ``vpcontact.<name>`` after ``import vpcontact``.
+SUBMODULES = ("assembly", "case", "checkpoint", "contact", "errors", "expressions", "figures", "material", "mesh",
+              "norms", "problem", "report", "reproduce", "results", "rundir", "solvers", "stepping", "studies",
+              "writers")
+
+
+def __getattr__(name: str):
+    """``vpcontact.norms`` and the other SUBMODULES, imported when first used."""
+    if name in SUBMODULES:
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(SUBMODULES))
+
 
 def solve(case, *, progress: bool = False, **laws) -> Result:
     """Solve a case (a :class:`Case`, or a path or dict for :func:`load_case`).
 
-    ``laws`` replace parts of the case by Python objects: ``p``, ``stiffness_law`` (callables with
-    a ``derivative`` method, see :mod:`vpcontact.contact`), ``tractions`` ({part: f(x, y, t)}),
-    ``body_force`` (f(x, y, t)) and ``viscoplastic`` (𝒢(σ, ε)).
+    ``laws`` replace parts of the case by Python objects (see :func:`build_problem`): ``p`` and
+    ``stiffness_law`` (functions of a NumPy array; with a ``derivative`` method, or a central difference is
+    used), ``tractions`` ({part: f(x, y, t) -> (fx, fy)}: replaces the case's traction on that part),
+    ``body_force`` (f(x, y, t) -> (fx, fy): replaces the case's body forces) and ``viscoplastic`` (𝒢(σ, ε)).
+    Bad objects are a :class:`CaseError` before the first step.
     """
     if not isinstance(case, Case):
         case = load_case(case)

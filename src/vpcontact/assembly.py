@@ -7,7 +7,7 @@
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -15,6 +15,8 @@ from skfem import Basis, ElementTriP1, ElementVector, FacetBasis, LinearForm, as
 from skfem.helpers import ddot, sym_grad
 from skfem.models.elasticity import linear_elasticity
 
+from .errors import CaseError, quoted
+from .expressions import Expression
 from .material import Elasticity
 from .mesh import Mesh
 
@@ -41,25 +43,141 @@ def _density_form(v, w):
     return w["f"][0] * v[0] + w["f"][1] * v[1]
 
 
-def _evaluate_density(density: Density, basis, t: float) -> np.ndarray:
-    x = np.asarray(basis.global_coordinates())
-    values = density(x[0], x[1], t)
-    return np.stack([np.broadcast_to(np.asarray(c, dtype=float), x[0].shape) for c in values])
+class ExpressionDensity:
+    """The density (fx, fy) of two expressions in x, y, t of a case (their keys name them in messages)."""
+
+    def __init__(self, fx: Expression, fy: Expression):
+        self.components = (fx, fy)
+
+    def __call__(self, x: np.ndarray, y: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+        return tuple(f(x=x, y=y, t=t) for f in self.components)
+
+
+class NonFiniteLoad(CaseError):
+    """A load density that is not finite at a point where it is applied, at a time of the run."""
+
+
+#: Most values of one expression evaluated at once when the loads are checked over the time grid.
+CHECK_CHUNK = 2**20
+
+
+class _Term:
+    """One load density and where it is applied: the quadrature points of its facets or elements."""
+
+    def __init__(self, name: str, basis: Basis, density: Density):
+        if not callable(density):
+            raise CaseError(f"{name} = {type(density).__name__}: expected a function f(x, y, t) -> (fx, fy)")
+        self.name, self.basis, self.density = name, basis, density
+        self.x, self.y = np.asarray(basis.global_coordinates())  # (cells, points of a cell) each
+
+    def values(self, t: float, step: int | None = None) -> np.ndarray:
+        """(fx, fy) at the quadrature points at time t (of time step ``step``, if given), shape
+        (2, cells, points); NonFiniteLoad where a value is not finite."""
+        with np.errstate(all="ignore"):  # a non-finite value is reported below, with where it is
+            values = self.density(self.x, self.y, t)
+            try:
+                fx, fy = values
+                values = np.stack([np.broadcast_to(np.asarray(f, dtype=float), self.x.shape) for f in (fx, fy)])
+            except (TypeError, ValueError):
+                raise CaseError(f"{self.name}: f(x, y, t) must return (fx, fy), each a number or an array of "
+                                f"x's shape {self.x.shape}; it returned {_kind(values)}") from None
+        bad = ~np.isfinite(values)
+        if bad.any():
+            component, cell, point = np.unravel_index(np.argmax(bad), bad.shape)
+            point = cell * self.x.shape[1] + point if self._uses_space(component) else None
+            when = f"t = {t:.10g}" + ("" if step is None else f" (step {step})")
+            raise NonFiniteLoad(self.message(component, values.reshape(2, -1)[component, point or 0], point, when))
+        return values
+
+    def _uses_space(self, component: int) -> bool:
+        """Does the density's component depend on x or y (a Python function: it may)?"""
+        if isinstance(self.density, ExpressionDensity):
+            return bool(self.density.components[component].depends_on & {"x", "y"})
+        return True
+
+    def check(self, times: Sequence[float]) -> None:
+        """NonFiniteLoad naming the first time of ``times`` and a point where the density is not finite."""
+        if isinstance(self.density, ExpressionDensity):
+            for component, f in enumerate(self.density.components):
+                self._check_expression(component, f, times)
+        else:
+            for n, t in enumerate(times, start=1):
+                self.values(t, n)
+
+    def _check_expression(self, component: int, f: Expression, times: Sequence[float]) -> None:
+        """Evaluate f only over the variables it uses: once if constant, over the times if it uses t
+        alone, over the points if it uses x, y alone, over points × times in chunks otherwise."""
+        x, y = self.x.ravel(), self.y.ravel()
+        space, time = self._uses_space(component), "t" in f.depends_on
+        chunk = max(1, CHECK_CHUNK // x.size) if space else CHECK_CHUNK
+        with np.errstate(all="ignore"):
+            if not time:
+                values = f(x=x, y=y) if space else np.array([f()])
+                bad = np.flatnonzero(~np.isfinite(values))
+                if bad.size:
+                    point = int(bad[0]) if space else None
+                    raise NonFiniteLoad(self.message(component, values[bad[0]], point, "every t"))
+                return
+            for start in range(0, len(times), chunk):
+                t = np.asarray(times[start:start + chunk])
+                values = f(x=x[None, :], y=y[None, :], t=t[:, None]) if space else f(t=t)[:, None]
+                bad = ~np.isfinite(values)
+                if bad.any():
+                    step, point = np.unravel_index(np.argmax(bad), bad.shape)
+                    raise NonFiniteLoad(self.message(component, values[step, point], point if space else None,
+                                                     f"t = {t[step]:.10g} (step {start + step + 1})"))
+
+    def message(self, component: int, value: float, point: int | None, when: str) -> str:
+        """``<key> = "<source>": not finite (inf) at (x, y) = (…), t = …``: the one line of NonFiniteLoad."""
+        if isinstance(self.density, ExpressionDensity):
+            f = self.density.components[component]
+            what = f"{f.where} = {quoted(f.source)}"
+        else:
+            what = f"{self.name} ({'fx' if component == 0 else 'fy'})"
+        where = "every point" if point is None else f"(x, y) = ({self.x.flat[point]:.6g}, {self.y.flat[point]:.6g})"
+        return f"{what}: not finite ({value}) at {where}, {when}; a load must be finite wherever it is applied"
+
+
+def _kind(value) -> str:
+    """A short description of what a user's function returned."""
+    if isinstance(value, (tuple, list)):
+        return f"a {type(value).__name__} of {len(value)} values of shapes {[np.shape(v) for v in value]}"
+    return f"a value of type {type(value).__name__} and shape {np.shape(value)}"
 
 
 class LoadVector:
-    """F(t) of (2.24) for traction densities on boundary parts and body force densities."""
+    """F(t) of (2.24) for traction densities on boundary parts and body force densities.
 
-    def __init__(self, basis: Basis, mesh: Mesh, tractions: list[tuple[object, Density]], body_forces: list[Density]):
+    The densities are evaluated at the quadrature points of the facets of their part (tractions) or of
+    every element (body forces); :meth:`check` evaluates them at all those points at every time of a
+    grid, ``F(t)`` at time t; both raise :class:`NonFiniteLoad` where a value is not finite.
+    """
+
+    def __init__(self, basis: Basis, mesh: Mesh, tractions: list[tuple[str, object, Density]],
+                 body_forces: list[tuple[str, Density]]):
+        """``tractions``: (name, part, density); ``body_forces``: (name, density); a name is the key of
+        the density in messages, e.g. ``boundary.traction[0].value``."""
         self._ndofs = basis.N
-        self._terms = [(FacetBasis(mesh.mesh, basis.elem, facets=mesh.facets(part), intorder=4), f) for part, f in tractions]
-        self._terms += [(Basis(mesh.mesh, basis.elem, intorder=4), f) for f in body_forces]
+        self._terms = [_Term(name, FacetBasis(mesh.mesh, basis.elem, facets=mesh.facets(part), intorder=4), f)
+                       for name, part, f in tractions]
+        self._terms += [_Term(name, Basis(mesh.mesh, basis.elem, intorder=4), f) for name, f in body_forces]
 
     def __call__(self, t: float) -> np.ndarray:
         F = np.zeros(self._ndofs)
-        for term_basis, density in self._terms:
-            F += asm(_density_form, term_basis, f=_evaluate_density(density, term_basis, t))
+        with np.errstate(all="ignore"):  # an overflow is reported below
+            for term in self._terms:
+                F += asm(_density_form, term.basis, f=term.values(t))
+        if not np.all(np.isfinite(F)):
+            raise NonFiniteLoad(f"the load vector F(t) at t = {t:.10g} is not finite: its densities are finite but "
+                                f"too large for float64 once integrated")
         return F
+
+    def check(self, times: Sequence[float]) -> None:
+        """Refuse (NonFiniteLoad) a density that is not finite at a point where it is applied at one of
+        ``times`` (the step times t_n: a run evaluates the loads there, and at the sub-step times of a
+        step it cuts, which ``F(t)`` checks as they come)."""
+        for term in self._terms:
+            term.check(times)
 
 
 def element_strain(basis: Basis, u: np.ndarray) -> np.ndarray:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import datetime
 import difflib
-import json
 import math
 import os
 import re
@@ -21,14 +20,12 @@ from typing import Annotated, Any, Literal, Optional, Union
 import tomli_w
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from .errors import CaseError
+from .errors import CaseError, quoted, shown
 from .expressions import parse_expression
 from .inputs import MAX_TOML_BYTES, check_regular_file
 from .solvers.factorization import BACKENDS, installed_backends
 
 # --- value types ---------------------------------------------------------------------------------
-#: Longest value shown in a message (longer ones are cut, the message stays one short line).
-SHOWN = 60
 #: Most time steps and (estimated) triangles of a built-in shape a case may ask for: beyond, the run
 #: could not even allocate its arrays.
 MAX_STEPS = 10**8
@@ -44,7 +41,7 @@ def _finite(number) -> bool:
 
 
 def _brief(value) -> str:
-    """repr(value), cut to SHOWN characters (a huge number or list stays a short message)."""
+    """repr(value), cut as :func:`~vpcontact.errors.shown` cuts (a huge number or list stays a short message)."""
     if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 200:
         sign = "a negative" if value < 0 else "an"
         return f"{sign} integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
@@ -52,7 +49,7 @@ def _brief(value) -> str:
         text = repr(value)
     except Exception:  # noqa: BLE001 - an object of the API may have any repr
         return f"a value of type {type(value).__name__}"
-    return text if len(text) <= SHOWN else text[: SHOWN - 3] + "..."
+    return shown(text)
 
 
 PositiveFloat = Annotated[float, Field(gt=0)]
@@ -338,8 +335,12 @@ class Case(_Section):
         return None if self.mesh.file is None else Path(self.base_dir) / self.mesh.file
 
     def resolved(self) -> dict:
-        """Every value used, defaults included (the content of case.resolved.toml)."""
-        return self.model_dump(mode="python", exclude_none=True)
+        """Every value used, defaults included (the content of case.resolved.toml); a mesh file by its
+        absolute path, so that the resolved case runs again from any folder (its run directory too)."""
+        data = self.model_dump(mode="python", exclude_none=True)
+        if self.mesh.file is not None:
+            data["mesh"]["file"] = os.path.abspath(self.mesh_path)
+        return data
 
     def to_toml(self) -> str:
         return tomli_w.dumps(self.resolved())
@@ -585,11 +586,10 @@ def _describe(error: dict) -> str:
 
 
 def _show(value) -> str:
-    """A value as a message shows it: strings in double quotes, control characters escaped, cut to
-    SHOWN characters."""
+    """A value as a message shows it: strings in double quotes, control characters escaped, a long one
+    cut (see :func:`~vpcontact.errors.quoted`)."""
     if isinstance(value, str):
-        text = json.dumps(value, ensure_ascii=False)
-        return text if len(text) <= SHOWN else text[: SHOWN - 4] + '..."'
+        return quoted(value)
     if isinstance(value, dict):
         return "{...}"
     return _brief(value)
@@ -608,7 +608,7 @@ def _unknown_key(loc, law: str | None = None) -> str:
     name = str(loc[-1])
     close = difflib.get_close_matches(name, valid, n=1)
     hint = f"did you mean '{_dotted((*loc[:-1], close[0]))}'?" if close else f"valid keys: {', '.join(valid)}"
-    return f"unknown key '{_dotted(loc)}' ({hint})"
+    return f"unknown key '{shown(_dotted(loc))}' ({hint})"
 
 
 def _valid_keys(loc, law: str | None = None) -> list[str]:

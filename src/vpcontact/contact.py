@@ -15,7 +15,8 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import CaseError
+from .errors import CaseError, quoted
+from .expressions import Expression
 from .mesh import Mesh
 
 #: Node states reported per contact node and step.
@@ -97,8 +98,9 @@ class ExponentialStiffness:
 class CallableLaw:
     """A user law f with its derivative df (both vectorized over NumPy arrays), for p or K.
 
-    Without df the derivative is the central difference (f(r + δ) − f(r − δ)) / 2δ,
-    δ = 1e-7 (1 + |r|): Newton then converges fast but not quadratically.
+    Without df the derivative is the central difference (f(r + δ) − f(r − δ)) / 2δ with
+    δ = 1e-7 max|r| over the nodes (r's own scale, so the same in any unit; 1e-7 when every r is 0):
+    Newton then converges fast but not quadratically.
     """
 
     function: Callable[[np.ndarray], np.ndarray]
@@ -110,7 +112,8 @@ class CallableLaw:
     def derivative(self, r: np.ndarray) -> np.ndarray:
         if self.function_derivative is not None:
             return np.asarray(self.function_derivative(r), dtype=float) * np.ones_like(r, dtype=float)
-        delta = 1e-7 * (1.0 + np.abs(r))
+        scale = np.abs(r).max(initial=0.0)
+        delta = 1e-7 * (scale if scale > 0.0 else 1.0)
         return (self(r + delta) - self(r - delta)) / (2.0 * delta)
 
 
@@ -162,8 +165,11 @@ class ContactSurface:
         return self.nodes.size
 
     def nearest_node(self, point) -> int:
-        """Index (into the contact nodes) of the node nearest to ``point``."""
-        return int(np.argmin(np.sum((self.coordinates - np.reshape(point, (2, 1))) ** 2, axis=0)))
+        """Index (into the contact nodes) of the node nearest to ``point`` (any finite point: the offsets are
+        scaled so that their squares cannot overflow)."""
+        offsets = self.coordinates - np.reshape(point, (2, 1))
+        scale = np.abs(offsets).max(initial=0.0)
+        return int(np.argmin(np.sum((offsets / scale if scale > 0 else offsets) ** 2, axis=0)))
 
 
 def contact_surface(mesh: Mesh, part, nodal_dofs: np.ndarray, gap: Callable | None = None) -> ContactSurface:
@@ -197,9 +203,16 @@ def contact_surface(mesh: Mesh, part, nodal_dofs: np.ndarray, gap: Callable | No
             [np.bincount(local.ravel(), weights=np.tile(normal[c] * length, 2), minlength=m) for c in range(2)]
         )
         normals = summed / np.linalg.norm(summed, axis=0)
-    gap0 = np.zeros(m) if gap is None else np.broadcast_to(gap(x=coordinates[0], y=coordinates[1]), (m,)).copy()
-    if not np.all(np.isfinite(gap0)):
-        raise CaseError("contact.gap is not finite at some contact nodes")
+    gap0 = np.zeros(m)
+    if gap is not None:
+        with np.errstate(all="ignore"):  # a gap that is not finite is reported below
+            gap0 = np.broadcast_to(gap(x=coordinates[0], y=coordinates[1]), (m,)).copy()
+    bad = np.flatnonzero(~np.isfinite(gap0))
+    if bad.size:
+        name = f"{gap.where} = {quoted(gap.source)}" if isinstance(gap, Expression) else "contact.gap"
+        x, y = coordinates[:, bad[0]]
+        raise CaseError(f"{name}: not finite ({gap0[bad[0]]}) at the contact node (x, y) = ({x:.6g}, {y:.6g}); the "
+                        f"initial gap must be finite at every node of the contact part")
     rows = np.repeat(np.arange(m), 2)
     cols = nodal_dofs[:, nodes].T.ravel()
     operator = sp.csr_matrix((normals.T.ravel(), (rows, cols)), shape=(m, nodal_dofs.size))

@@ -1,4 +1,6 @@
-"""The one exception a user sees for bad input."""
+"""The one exception a user sees for bad input, and how its messages show a user's values."""
+
+import json
 
 
 class CaseError(ValueError):
@@ -6,3 +8,25 @@ class CaseError(ValueError):
 
     The command line prints the message alone (no traceback) and exits with status 2.
     """
+
+
+#: Most characters of a user's value a message shows; a longer value is cut and its length given, so
+#: that the message stays one short line and its reason is never cut off.
+SHOWN = 60
+
+
+def shown(text: str) -> str:
+    """``text`` as a message shows it: whole up to SHOWN characters, else its first SHOWN characters,
+    "…" and the length of the whole, e.g. ``1+1+1+…+1 (1048575 characters)``."""
+    if len(text) <= SHOWN:
+        return text
+    return f"{text[:SHOWN]}… ({len(text)} characters)"
+
+
+def quoted(text: str) -> str:
+    """A string value as a message shows it: in double quotes with control characters escaped as in
+    TOML (JSON rules), cut as :func:`shown` cuts, e.g. ``"1+1+1+…" (1048575 characters)``."""
+    escaped = json.dumps(text, ensure_ascii=False)[1:-1]
+    if len(escaped) <= SHOWN:
+        return f'"{escaped}"'
+    return f'"{escaped[:SHOWN]}…" ({len(text)} characters)'

@@ -17,14 +17,17 @@ into a tree of small Python closures over NumPy operations, built once at parse 
 All numbers are float64 (integer literals are converted), so Python's unbounded
 integers never appear; a constant exponent is limited to ``MAX_EXPONENT`` in absolute
 value so that ``10**10**10`` is reported instead of silently giving ``inf``.
-Floating-point warnings are not silenced: a result may be ``inf`` or ``nan`` (``1/x`` at
-``x = 0``, ``sqrt(-1)``) and the caller checks finiteness where it matters.
+Floating-point warnings are not silenced here: a result may be ``inf`` or ``nan`` (``1/x`` at
+``x = 0``, ``sqrt(-1)``) and the caller evaluates under ``np.errstate`` and checks finiteness where it
+matters (the loads, the initial gap), reporting the expression and where it is not finite.
+
+Messages show the source as ``<where> = "<source>"``; a long source (or a long part of it) is cut to
+its first characters and its length (:func:`~vpcontact.errors.quoted`), so the reason is always read.
 """
 
 from __future__ import annotations
 
 import ast
-import json
 import keyword
 import math
 import operator
@@ -34,7 +37,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from vpcontact.errors import CaseError
+from vpcontact.errors import CaseError, quoted, shown
 
 __all__ = [
     "CONSTANT_NAMES",
@@ -290,11 +293,8 @@ def _source_text(source: object, where: str) -> str:
     if isinstance(source, str):
         return source
     if isinstance(source, bool) or not isinstance(source, (int, float, np.integer, np.floating)):
-        shown = " ".join(repr(source).split())
-        if len(shown) > 60:
-            shown = shown[:57] + "..."
         raise CaseError(
-            f"{where} = {shown}: expected a number or an expression string,"
+            f"{where} = {shown(' '.join(repr(source).split()))}: expected a number or an expression string,"
             f" got {type(source).__name__}"
         )
     try:
@@ -323,8 +323,8 @@ class _Compiler:
         self.lead = source[: len(source) - len(source.lstrip())]
 
     def error(self, problem: str) -> CaseError:
-        """A CaseError ``<where> = "<source>": <problem>`` (source quoted as in TOML)."""
-        return CaseError(f"{self.where} = {json.dumps(self.source, ensure_ascii=False)}: {problem}")
+        """A CaseError ``<where> = "<source>": <problem>`` (source quoted as in TOML, a long one cut)."""
+        return CaseError(f"{self.where} = {quoted(self.source)}: {problem}")
 
     def compile_source(self) -> tuple[_Evaluator, frozenset[str]]:
         """Parse the source, check it and return its evaluator and the variables it uses."""
@@ -355,8 +355,8 @@ class _Compiler:
         return f" at column {column}"
 
     def segment(self, node: ast.AST) -> str:
-        """The source text of ``node``."""
-        return ast.get_source_segment(self.body, node) or type(node).__name__
+        """The source text of ``node`` (a long one cut, see :func:`~vpcontact.errors.shown`)."""
+        return shown(ast.get_source_segment(self.body, node) or type(node).__name__)
 
     def compile(self, node: ast.AST, depth: int) -> tuple[_Evaluator, frozenset[str]]:
         """Check ``node`` and return its evaluator and the variables occurring in it."""
@@ -409,7 +409,7 @@ class _Compiler:
             return (lambda values: constant), frozenset()
         if name in _FUNCTIONS:
             raise self.error(f"'{name}' is a function; call it as {name}(...)")
-        raise self.error(f"unknown name '{name}' (allowed: {self.allowed_names()})")
+        raise self.error(f"unknown name '{shown(name)}' (allowed: {self.allowed_names()})")
 
     def compile_unary(self, node: ast.UnaryOp, depth: int) -> tuple[_Evaluator, frozenset[str]]:
         """Unary plus or minus."""
@@ -450,7 +450,7 @@ class _Compiler:
         if function is None:
             if name in self.variables or name in _CONSTANTS:
                 raise self.error(f"'{name}' is not a function")
-            raise self.error(f"unknown function '{name}' (allowed: {', '.join(FUNCTION_NAMES)})")
+            raise self.error(f"unknown function '{shown(name)}' (allowed: {', '.join(FUNCTION_NAMES)})")
         if node.keywords:
             raise self.error(f"keyword arguments are not allowed (in the call of {name})")
         if any(isinstance(arg, ast.Starred) for arg in node.args):

@@ -25,7 +25,7 @@ import scipy.sparse as sp
 from scipy.spatial import Delaunay
 import skfem
 
-from vpcontact.errors import CaseError
+from vpcontact.errors import CaseError, shown
 from vpcontact.inputs import check_regular_file
 from vpcontact.mesh_checks import check_finite, check_triangles
 from vpcontact.solvers.factorization import available_memory
@@ -54,7 +54,7 @@ class Mesh:
                             f"are its physical curves: in gmsh add Physical Curve(\"{name}\") = {{...}}; for each "
                             f"part the case names (and a Physical Surface for the body) and mesh again")
         if name not in self.parts:
-            raise CaseError(f"unknown part '{name}'; the mesh has parts: {', '.join(self.part_names)}")
+            raise CaseError(f"unknown part '{shown(name)}'; the mesh has parts: {', '.join(self.part_names)}")
         return self.parts[name]
 
     def nodes(self, part: str | int) -> np.ndarray:

@@ -1,12 +1,14 @@
 """From a case to the discrete problem: mesh, spaces, operators, loads and the contact law.
 
-Everything that can fail on user input (mesh file, part names, rigid motions left free) fails
-here, before any computation and before anything is written.
+Everything that can fail on user input (mesh file, part names, rigid motions left free, loads that
+are not finite at a time step, outputs that would not fit in memory, Python objects of the API that
+are not laws) fails here, before any computation and before anything is written.
 """
 
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -15,14 +17,18 @@ import scipy.sparse as sp
 from skfem import Basis
 
 from . import mesh as meshes
-from .assembly import Density, LoadVector, displacement_basis, stiffness
-from .case import Case
-from .contact import (ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness, PositivePart, Power,
-                      PowerStiffness, contact_surface, empty_surface)
+from .assembly import Density, ExpressionDensity, LoadVector, displacement_basis, stiffness, stress_force
+from .case import Case, _brief
+from .contact import (CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness, PositivePart,
+                      Power, PowerStiffness, contact_surface, empty_surface)
 from .errors import CaseError
 from .expressions import parse_expression
 from .material import Elasticity, Perzyna, Relaxation
+from .results import check_memory
 from .rigid_modes import RigidModes
+from .time_grid import TimeGrid
+
+
 
 
 @dataclass
@@ -42,45 +48,64 @@ class Problem:
     viscoplastic: Callable | None = None  # 𝒢(σ, ε) over arrays (2, 2, nelements); None: 𝒢 = 0
     timings: dict = field(default_factory=dict)  # seconds: mesh, assembly, build
     initial_stress: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))  # σ_0 (uniform); u_0 = 0
-    times: np.ndarray = field(init=False)
+    times: TimeGrid = field(init=False)  # t_1, …, t_steps
 
     def __post_init__(self):
-        self.times = np.linspace(0.0, self.case.time.T, self.case.time.steps + 1)[1:]
+        self.times = TimeGrid(self.case.time.T, self.case.time.steps)
 
     @property
     def k(self) -> float:
         return self.case.time.T / self.case.time.steps
 
+    def __repr__(self) -> str:
+        """One line: the sizes (not the operators)."""
+        return (f"Problem(dofs={self.basis.N}, free_dofs={self.free.size}, elements={self.mesh.mesh.t.shape[1]}, "
+                f"nodes={self.mesh.mesh.p.shape[1]}, contact_nodes={self.surface.size}, steps={len(self.times)}, "
+                f"k={self.k:g})")
+
 
 def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Callable | None = None,
-                  tractions: dict | None = None, body_force: Density | None = None,
+                  tractions: Mapping | None = None, body_force: Density | None = None,
                   viscoplastic: Callable | None = None) -> Problem:
-    """Assemble the problem of ``case``; the keyword arguments replace the case's laws by Python
-    objects (see :mod:`vpcontact.contact` for the protocol: ``f(r)`` and ``f.derivative(r)``) and
-    its traction or body force densities by callables ``f(x, y, t) -> (fx, fy)``; ``viscoplastic``
-    is 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (2, 2, nelements) (it replaces
-    ``material.viscoplastic``)."""
+    """Assemble the problem of ``case``; the keyword arguments replace parts of the case by Python objects:
+
+    - ``p``, ``stiffness_law``: the laws p(r) and K(ξ) of the contact, vectorized over NumPy arrays; an
+      object with a ``derivative`` method is used as it is (see :mod:`vpcontact.contact`), a plain
+      function is wrapped in :class:`~vpcontact.contact.CallableLaw` (central-difference derivative);
+    - ``tractions``: {part: f(x, y, t) -> (fx, fy)}: f replaces the case's traction on that part (the
+      case's tractions on other parts stay);
+    - ``body_force``: f(x, y, t) -> (fx, fy) replaces the case's body forces;
+    - ``viscoplastic``: 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (2, 2, nelements) (it
+      replaces ``material.viscoplastic``).
+
+    Each is tried before the run (a law at 0 and 10⁻³, a load at every step time, 𝒢 at (σ_0, 0)): one
+    that is not callable, returns the wrong shape or a value that is not finite is a CaseError."""
     started = time.perf_counter()
+    if case.contact is None and (p is not None or stiffness_law is not None):
+        raise CaseError("p and stiffness_law are laws of the contact, and the case has no [contact]")
+    p = None if p is None else _api_law(p, "p")
+    stiffness_law = None if stiffness_law is None else _api_law(stiffness_law, "stiffness_law")
     mesh = _make_mesh(case)
     meshed = time.perf_counter()
-    basis = displacement_basis(mesh)
     elasticity = Elasticity(case.material.E, case.material.nu, case.material.hypothesis)
-    A = stiffness(basis, elasticity)
+    with np.errstate(all="ignore"):  # a stiffness that is not finite is reported below
+        basis = displacement_basis(mesh)
+        A = stiffness(basis, elasticity)
+    if not np.all(np.isfinite(A.data)):
+        raise CaseError(f"material.E = {_brief(case.material.E)}: the stiffness matrix is not finite in float64 (the "
+                        f"moduli or the sizes of the triangles are out of its range); state them in other units")
 
-    fixed = [np.zeros(0, dtype=np.int64)]
+    fixed = np.zeros(basis.N, dtype=bool)
     for item in case.boundary.dirichlet:
         components = [{"x": 0, "y": 1}[c] for c in (item.components or ["x", "y"])]
-        fixed.append(basis.nodal_dofs[components][:, mesh.nodes(item.part)].ravel())
-    free = np.setdiff1d(np.arange(basis.N), np.concatenate(fixed))
+        fixed[basis.nodal_dofs[components][:, mesh.nodes(item.part)]] = True
+    free = np.flatnonzero(~fixed)
 
-    traction_terms = [(t.part, _density(t.value, f"boundary.traction[{i}].value")) for i, t in enumerate(case.boundary.traction)]
-    for part, density in (tractions or {}).items():
-        mesh.facets(part)
-        traction_terms.append((part, density))
-    body_terms = [_density(f.value, f"boundary.body_force[{i}].value") for i, f in enumerate(case.boundary.body_force)]
+    body_terms = [(f"boundary.body_force[{i}].value", _density(f.value, f"boundary.body_force[{i}].value"))
+                  for i, f in enumerate(case.boundary.body_force)]
     if body_force is not None:
-        body_terms.append(body_force)
-    loads = LoadVector(basis, mesh, traction_terms, body_terms)
+        body_terms = [("body_force", body_force)]
+    loads = LoadVector(basis, mesh, _traction_terms(case, mesh, tractions), body_terms)
 
     surface, law, probe = empty_surface(basis.N), ContactLaw(PositivePart(), ConstantStiffness(0.0), np.inf), None
     if case.contact is not None:
@@ -92,12 +117,23 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         probe = surface.nearest_node(target)
     _check_contact_can_move(case, mesh, basis, free, surface)
     _check_rigid_motions(mesh, basis, free, surface)
-    done = time.perf_counter()
-    timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
+
+    elements = mesh.mesh.t.shape[1]
+    initial_stress = np.array(case.initial.stress, dtype=float)
+    law_name = "material.viscoplastic" if viscoplastic is None else "viscoplastic"
     if viscoplastic is None:
         viscoplastic = _viscoplastic_law(case)
+    elif not callable(viscoplastic):
+        raise CaseError(f"viscoplastic = {_brief(viscoplastic)}: expected a function G(sigma, strain) of arrays of "
+                        f"shape (2, 2, elements)")
+    check_memory(case, mesh.mesh.p.shape[1], elements, surface.size,
+                 history=viscoplastic is not None or bool(np.any(initial_stress != 0.0)))
+    loads.check(TimeGrid(case.time.T, case.time.steps))
+    _check_first_history(basis, initial_stress, viscoplastic, law_name, case.time.T / case.time.steps)
+    done = time.perf_counter()
+    timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
     return Problem(case, mesh, basis, elasticity, A, free, loads, surface, law, probe, viscoplastic, timings,
-                   initial_stress=np.array(case.initial.stress, dtype=float))
+                   initial_stress=initial_stress)
 
 
 def _make_mesh(case: Case) -> meshes.Mesh:
@@ -109,9 +145,165 @@ def _make_mesh(case: Case) -> meshes.Mesh:
     return meshes.rectangle(m.width, m.height, m.h)
 
 
-def _density(values, where: str) -> Density:
+def _density(values, where: str) -> ExpressionDensity:
+    """The density of the two expressions ``values`` of the case key ``where``."""
     fx, fy = (parse_expression(v, ("x", "y", "t"), where=f"{where}[{i}]") for i, v in enumerate(values))
-    return lambda x, y, t: (fx(x=x, y=y, t=t), fy(x=x, y=y, t=t))
+    return ExpressionDensity(fx, fy)
+
+
+def _traction_terms(case: Case, mesh: meshes.Mesh, tractions: Mapping | None) -> list[tuple[str, object, Density]]:
+    """(name, part, density) of the case's tractions, those of ``tractions`` replacing the case's on their part."""
+    terms = [(f"boundary.traction[{i}].value", t.part, _density(t.value, f"boundary.traction[{i}].value"))
+             for i, t in enumerate(case.boundary.traction)]
+    if tractions is None:
+        return terms
+    if not isinstance(tractions, Mapping):
+        raise CaseError(f"tractions = {_brief(tractions)}: expected a dict {{part: f(x, y, t) -> (fx, fy)}}")
+    for part, density in tractions.items():
+        if not (isinstance(part, (str, int)) and str(part) in mesh.parts):
+            raise CaseError(f"tractions: unknown part {_brief(part)}; the mesh has parts: {', '.join(mesh.part_names)}")
+        facets = mesh.facets(part)
+        terms = [term for term in terms if not np.array_equal(mesh.facets(term[1]), facets)]
+        terms.append((f"tractions[{_brief(part)}]", part, density))
+    return terms
+
+
+#: Where a law of the API is tried before the run: at 0 and just above (a penetration, a history ξ ≥ 0).
+_LAW_SAMPLE = (0.0, 1e-3)
+
+
+def _api_law(law, name: str) -> Callable:
+    """A law p or K of the API: an object with a ``derivative`` method as it is, a plain function wrapped
+    in CallableLaw; both tried at _LAW_SAMPLE (elementwise, finite), else CaseError."""
+    if not callable(law):
+        raise CaseError(f"{name} = {_brief(law)}: expected a function f(r) of a NumPy array (optionally with a "
+                        f"method f.derivative(r))")
+    derivative = getattr(law, "derivative", None)
+    for what, f in ((name, law), (f"{name}.derivative", derivative)) if callable(derivative) else ((name, law),):
+        sample = np.array(_LAW_SAMPLE)
+        with np.errstate(all="ignore"):  # a non-finite value is reported below
+            values = f(sample.copy())
+        _check_returned(what, f"{what}({', '.join(map(str, _LAW_SAMPLE))})", values, sample.shape)
+    return law if callable(derivative) else CallableLaw(law)
+
+
+def _check_returned(name: str, call: str, values, shape: tuple) -> None:
+    """CaseError unless ``values`` (what ``call`` returned) are finite numbers broadcasting to ``shape``."""
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise CaseError(f"{name}: {call} returned a value of type {type(values).__name__}, not numbers") from None
+    try:
+        broadcast = np.broadcast_shapes(array.shape, shape) == shape
+    except ValueError:
+        broadcast = False
+    if not broadcast:
+        raise CaseError(f"{name}: {call} returned an array of shape {array.shape} for arguments of shape {shape}; "
+                        f"expected that shape (elementwise)")
+    if not np.all(np.isfinite(array)):
+        raise CaseError(f"{name}: {call} is not finite ({array.ravel()[~np.isfinite(array.ravel())][0]})")
+
+
+def _check_first_history(basis: Basis, initial_stress: np.ndarray, G: Callable | None, law_name: str,
+                         k: float) -> None:
+    """Refuse initial data whose first step cannot be finite: 𝒢(σ_0, 0) (of the shape of σ, finite), the
+    history z_1 = σ_0 + k 𝒢(σ_0, 0) of (2.28) and its nodal forces Bᵀz_1 in the right-hand side."""
+    if G is None and not np.any(initial_stress != 0.0):
+        return
+    sigma = np.repeat(initial_stress[:, :, None], basis.mesh.t.shape[1], axis=2)
+    rate = 0.0
+    if G is not None:
+        with np.errstate(all="ignore"):  # a value that is not finite is reported
+            rate = G(sigma.copy(), np.zeros_like(sigma))
+        _check_returned(law_name, "G(initial.stress, 0)", rate, sigma.shape)
+    with np.errstate(all="ignore"):  # an overflow is reported below
+        z = sigma + k * np.asarray(rate, dtype=float)
+        force = stress_force(basis, z) if np.all(np.isfinite(z)) else None
+    if force is None:
+        raise CaseError(f"{law_name}: the history after the first step, initial.stress + k G(initial.stress, 0), is "
+                        f"not finite: is the time step k = {k:g} small against the law's relaxation time?")
+    if not np.all(np.isfinite(force)):
+        raise CaseError(f"initial.stress = {_brief(initial_stress.tolist())}: its nodal forces are not finite in "
+                        f"float64; state the stresses in other units")
+
+
+def _make_mesh(case: Case) -> meshes.Mesh:
+    m = case.mesh
+    if m.file is not None:
+        return meshes.read_mesh(case.mesh_path)
+    if m.shape == "half_disc":
+        return meshes.half_disc(m.h, m.radius)
+    return meshes.rectangle(m.width, m.height, m.h)
+
+
+def _density(values, where: str) -> ExpressionDensity:
+    """The density of the two expressions ``values`` of the case key ``where``."""
+    fx, fy = (parse_expression(v, ("x", "y", "t"), where=f"{where}[{i}]") for i, v in enumerate(values))
+    return ExpressionDensity(fx, fy)
+
+
+def _traction_terms(case: Case, mesh: meshes.Mesh, tractions: Mapping | None) -> list[tuple[str, object, Density]]:
+    """(name, part, density) of the case's tractions, those of ``tractions`` replacing the case's on their part."""
+    terms = [(f"boundary.traction[{i}].value", t.part, _density(t.value, f"boundary.traction[{i}].value"))
+             for i, t in enumerate(case.boundary.traction)]
+    if tractions is None:
+        return terms
+    if not isinstance(tractions, Mapping):
+        raise CaseError(f"tractions = {_brief(tractions)}: expected a dict {{part: f(x, y, t) -> (fx, fy)}}")
+    for part, density in tractions.items():
+        if not (isinstance(part, (str, int)) and str(part) in mesh.parts):
+            raise CaseError(f"tractions: unknown part {_brief(part)}; the mesh has parts: {', '.join(mesh.part_names)}")
+        facets = mesh.facets(part)
+        terms = [term for term in terms if not np.array_equal(mesh.facets(term[1]), facets)]
+        terms.append((f"tractions[{_brief(part)}]", part, density))
+    return terms
+
+
+#: Where a law of the API is tried before the run: at 0 and just above (a penetration, a history ξ ≥ 0).
+_LAW_SAMPLE = (0.0, 1e-3)
+
+
+def _api_law(law, name: str) -> Callable:
+    """A law p or K of the API: an object with a ``derivative`` method as it is, a plain function wrapped
+    in CallableLaw; both tried at _LAW_SAMPLE (elementwise, finite), else CaseError."""
+    if not callable(law):
+        raise CaseError(f"{name} = {_brief(law)}: expected a function f(r) of a NumPy array (optionally with a "
+                        f"method f.derivative(r))")
+    derivative = getattr(law, "derivative", None)
+    for what, f in ((name, law), (f"{name}.derivative", derivative)) if callable(derivative) else ((name, law),):
+        sample = np.array(_LAW_SAMPLE)
+        with np.errstate(all="ignore"):  # a non-finite value is reported below
+            values = f(sample.copy())
+        _check_returned(what, f"{what}({', '.join(map(str, _LAW_SAMPLE))})", values, sample.shape)
+    return law if callable(derivative) else CallableLaw(law)
+
+
+def _check_returned(name: str, call: str, values, shape: tuple) -> None:
+    """CaseError unless ``values`` (what ``call`` returned) are finite numbers broadcasting to ``shape``."""
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise CaseError(f"{name}: {call} returned a value of type {type(values).__name__}, not numbers") from None
+    try:
+        broadcast = np.broadcast_shapes(array.shape, shape) == shape
+    except ValueError:
+        broadcast = False
+    if not broadcast:
+        raise CaseError(f"{name}: {call} returned an array of shape {array.shape} for arguments of shape {shape}; "
+                        f"expected that shape (elementwise)")
+    if not np.all(np.isfinite(array)):
+        raise CaseError(f"{name}: {call} is not finite ({array.ravel()[~np.isfinite(array.ravel())][0]})")
+
+
+def _check_initial_stress(basis: Basis, initial_stress: np.ndarray, elements: int) -> None:
+    """Refuse an initial stress whose nodal forces Bᵀσ_0 (in every step's right-hand side) overflow float64."""
+    if not np.any(initial_stress != 0.0):
+        return
+    with np.errstate(all="ignore"):  # an overflow is reported below
+        force = stress_force(basis, np.repeat(initial_stress[:, :, None], elements, axis=2))
+    if not np.all(np.isfinite(force)):
+        raise CaseError(f"initial.stress = {_brief(initial_stress.tolist())}: its nodal forces are not finite in "
+                        f"float64; state the stresses in other units")
 
 
 def _p_law(case: Case):

@@ -11,15 +11,23 @@ one row (``substep`` 1, ``k`` the case's step), a step cut into s sub-steps is s
 ``step`` n, ``substep`` 1, …, s, their own ``t`` and ``k``, the last one at t_n. Fields are kept per
 step n, at t_n. ``series(..., substeps=False)`` and ``contact_history(..., substeps=False)`` keep
 only the rows at the step times t_n.
+
+Memory: the rows and the fields at the field steps are kept until the run is written; a case whose
+outputs would not fit in the memory available is refused before its first step (:func:`check_memory`).
 """
 
 from __future__ import annotations
 
+import difflib
+import os
+from collections.abc import Collection
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
+from .errors import CaseError, quoted, shown
 
 HISTORY_COLUMNS = (
     "step", "t", "newton_iterations", "residual", "complementarity", "max_penetration", "mean_penetration",
@@ -31,7 +39,31 @@ INTEGER_COLUMNS = ("step", "newton_iterations", "nodes_separated", "nodes_in_com
 CONTACT_ARRAYS = ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid", "status")
 
 
-@dataclass
+class UnknownName(CaseError, KeyError):
+    """A history column or contact array that does not exist (a KeyError, and a CaseError: one line)."""
+
+    __str__ = CaseError.__str__  # the message as it is, not quoted as a KeyError shows its key
+
+
+def _unknown(kind: str, name, valid: Collection[str], elsewhere: tuple[Collection[str], str]) -> UnknownName:
+    """The error for ``name`` not in ``valid``; ``elsewhere``: the names of the other accessor, and its call."""
+    close = difflib.get_close_matches(str(name), valid, n=1)
+    if name in elsewhere[0]:
+        hint = f"{elsewhere[1]}({name!r}) has it; "
+    else:
+        hint = f"did you mean '{close[0]}'? " if close else ""
+    return UnknownName(f"unknown {kind} {shown(repr(name))}; {hint}valid names: {', '.join(valid)}")
+
+
+def field_step_numbers(field_steps, steps: int) -> Collection[int]:
+    """The steps whose fields are kept, for ``output.field_steps`` ("all", "final", "none" or a list) in a
+    run of ``steps`` steps (a range for "all": no set of every step is built)."""
+    if isinstance(field_steps, str):
+        return {"all": range(1, steps + 1), "final": range(steps, steps + 1), "none": range(0)}[field_steps]
+    return frozenset(field_steps)
+
+
+@dataclass(repr=False)
 class Fields:
     """Displacement at the nodes (nnodes, 2); per element: in-plane stress (nelements, 2, 2), the
     out-of-plane σ33 of the elastic response and the von Mises stress of the 3D tensor; with a
@@ -44,20 +76,26 @@ class Fields:
     von_mises: np.ndarray
     z: np.ndarray | None = None
 
+    def __repr__(self) -> str:
+        """The shapes, not the values."""
+        shapes = ", ".join(f"{name}{getattr(self, name).shape}" for name in
+                           ("displacement", "stress", "stress33", "von_mises", "z") if getattr(self, name) is not None)
+        return f"Fields({shapes})"
 
-@dataclass
+
+@dataclass(repr=False)
 class Result:
     """Everything a run computed. Arrays per contact node are (rows, m): one row per converged time
-    level, sub-steps included (see the module's docstring)."""
+    level, sub-steps included (see the module's docstring). ``times`` is the array of the rows' times."""
 
     dofs: int
     elements: int
     nodes: int
     contact_nodes: int
     probe: int | None
-    field_steps: set[int]
+    field_steps: Collection[int]
     augmentation: float
-    times: list = field(default_factory=list)
+    _times: list = field(default_factory=list)  # t of each row (a list: appending is cheap)
     rows: list = field(default_factory=list)
     contact: dict = field(default_factory=lambda: {name: [] for name in CONTACT_ARRAYS})
     fields: dict[int, Fields] = field(default_factory=dict)
@@ -75,9 +113,7 @@ class Result:
 
     @classmethod
     def start(cls, problem, solver) -> "Result":
-        steps = problem.case.output.field_steps
-        count = len(problem.times)
-        wanted = {"all": set(range(1, count + 1)), "final": {count}, "none": set()}.get(steps) if isinstance(steps, str) else set(steps)
+        wanted = field_step_numbers(problem.case.output.field_steps, len(problem.times))
         return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
                    contact_nodes=problem.surface.size, probe=problem.probe, field_steps=wanted,
                    augmentation=solver.r, method=solver.name, problem=problem)
@@ -110,7 +146,7 @@ class Result:
             "nodes_at_limit": int(np.sum(status == AT_LIMIT)),
             "contact_force_x": force[0], "contact_force_y": force[1], "substep": substep, "k": k,
         })
-        self.times.append(t)
+        self._times.append(t)
         if ends_step:
             self.completed_steps = n
         if fields is not None:
@@ -134,20 +170,34 @@ class Result:
         """Time steps t_n reached (the history has more rows when steps were cut)."""
         return self.completed_steps
 
+    @property
+    def times(self) -> np.ndarray:
+        """The time t of each history row (a new array)."""
+        return np.array(self._times, dtype=float)
+
+    @times.setter
+    def times(self, values) -> None:
+        self._times = [np.float64(t) for t in values]
+
     def ends_step(self) -> np.ndarray:
         """Per history row: does it end a time step (t = t_n), rather than being an earlier sub-step?"""
-        times = self.problem.times
-        return np.array([row["t"] == times[row["step"] - 1] for row in self.rows], dtype=bool)
+        if not self.rows:
+            return np.zeros(0, dtype=bool)
+        return self.times == self.problem.times.at(self.series("step"))
 
     def series(self, column: str, *, substeps: bool = True) -> np.ndarray:
         """One column of the history (see HISTORY_COLUMNS) over the rows done; ``substeps=False``:
-        only the rows at the step times t_n."""
+        only the rows at the step times t_n. An unknown column is a KeyError naming the valid ones."""
+        if column not in HISTORY_COLUMNS:
+            raise _unknown("history column", column, HISTORY_COLUMNS, (CONTACT_ARRAYS, "contact_history"))
         values = np.array([row[column] for row in self.rows])
         return values if substeps else values[self.ends_step()]
 
     def contact_history(self, name: str, *, substeps: bool = True) -> np.ndarray:
         """(rows, m) array of a per-node quantity (see CONTACT_ARRAYS); ``substeps=False``: only the
-        rows at the step times t_n."""
+        rows at the step times t_n. An unknown name is a KeyError naming the valid ones."""
+        if name not in CONTACT_ARRAYS:
+            raise _unknown("contact array", name, CONTACT_ARRAYS, (HISTORY_COLUMNS, "series"))
         values = np.array(self.contact[name]).reshape(len(self.rows), self.contact_nodes)
         return values if substeps else values[self.ends_step()]
 
@@ -156,6 +206,11 @@ class Result:
         for :func:`vpcontact.norms.differences`."""
         from .norms import Snapshot
 
+        if step is not None and step not in self.fields:
+            kept = ", ".join(map(str, sorted(self.fields))) or "none (output.field_steps)"
+            raise UnknownName(f"no fields kept at step {shown(repr(step))}; steps kept: {kept}")
+        if self.final is None:
+            raise CaseError("no fields computed: the run did not complete a step")
         fields = self.final if step is None else self.fields[step]
         mesh = self.problem.mesh.mesh
         return Snapshot(mesh.p, mesh.t, fields.displacement, fields.stress)
@@ -177,3 +232,73 @@ class Result:
             "timings_s": self.timings, "final": final,
             "history_rows": len(self.rows), "step_cuts": self.step_cuts, "resumed_at_steps": list(self.resumed_at),
         }
+
+    def write(self, out: str | os.PathLike, *, overwrite: bool = False) -> Path:
+        """Write the files of a run directory (README, "Outputs") into ``out``: created if missing; if it
+        is not empty, FileExistsError unless ``overwrite``. Returns ``out`` as a Path."""
+        from .writers import write_run
+
+        return write_run(self, out, overwrite=overwrite)
+
+    def __repr__(self) -> str:
+        """One line: status, sizes and the final values (not the arrays)."""
+        planned = len(self.problem.times) if self.problem is not None else "?"
+        text = (f"Result(status={self.status!r}, steps={self.steps}/{planned}, history_rows={len(self.rows)}, "
+                f"dofs={self.dofs}, contact_nodes={self.contact_nodes}")
+        if self.rows:
+            last = self.rows[-1]
+            text += (f", final t={last['t']:g}: K_probe={last['K_probe']:.6g}, penetration_probe="
+                     f"{last['penetration_probe']:.6g}, nodes separated/compliance/limit={last['nodes_separated']}/"
+                     f"{last['nodes_in_compliance']}/{last['nodes_at_limit']}")
+        if self.message:
+            text += f", message={shown(self.message)!r}"
+        return text + ")"
+
+
+# --- memory ----------------------------------------------------------------------------------------
+#: Bytes of one history row in memory: a dict of the HISTORY_COLUMNS and its time (CPython 3.11, measured).
+HISTORY_ROW_BYTES = 1100
+#: Bytes of a NumPy array object besides its data.
+ARRAY_BYTES = 112
+#: Bytes the writers add while they write, whatever the run's length (contact.csv is written in blocks).
+WRITING_BYTES = 2**24
+
+
+def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, contact_nodes: int,
+                  history: bool) -> dict[str, int]:
+    """Bytes a run of ``steps`` steps keeps for its outputs until they are written, by part: the history
+    rows, the per-node contact rows and the fields at ``field_steps`` steps (``history``: with the
+    viscoplastic history z), each with the copy a checkpoint or solution.npz makes of them, and what
+    the writers add. A step cut into sub-steps adds rows: this is the least a run needs."""
+    copies = 8 * len(HISTORY_COLUMNS)
+    contact = len(CONTACT_ARRAYS) * ARRAY_BYTES + 2 * (8 * (len(CONTACT_ARRAYS) - 1) + 1) * contact_nodes
+    per_field = 5 * ARRAY_BYTES + 8 * (2 * nodes + 6 * elements) + 8 * (2 * nodes + 4 * elements)
+    if history:
+        per_field += 2 * 8 * 4 * elements
+    return {"history rows": steps * (HISTORY_ROW_BYTES + copies), "contact rows": steps * contact,
+            "fields": (field_steps + 1) * per_field, "writing": WRITING_BYTES}
+
+
+def check_memory(case, nodes: int, elements: int, contact_nodes: int, history: bool) -> None:
+    """Refuse, before anything per step is allocated, a run whose outputs would not fit in the memory
+    available now: one line naming time.steps (and output.field_steps when the fields are the most)."""
+    from .solvers.factorization import available_memory
+
+    steps = case.time.steps
+    field_steps = len(field_step_numbers(case.output.field_steps, steps))
+    parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history)
+    needed, available = sum(parts.values()), available_memory()
+    if needed <= available:
+        return
+    gib = 2.0**30
+    detail = (f"history rows {parts['history rows'] / gib:.3g} GiB, contact rows of {contact_nodes} nodes "
+              f"{parts['contact rows'] / gib:.3g} GiB, fields at {field_steps} steps of {nodes} nodes and {elements} "
+              f"triangles {parts['fields'] / gib:.3g} GiB")
+    key = f"time.steps = {steps}"
+    fix = "use fewer steps"
+    if parts["fields"] > parts["history rows"] + parts["contact rows"]:
+        chosen = case.output.field_steps
+        key += f" with output.field_steps = {quoted(chosen) if isinstance(chosen, str) else shown(repr(chosen))}"
+        fix = "keep the fields at fewer steps (output.field_steps) or use fewer steps"
+    raise CaseError(f"{key}: the run's outputs need about {needed / gib:.3g} GiB of memory ({detail}), more than "
+                    f"the {available / gib:.3g} GiB available; {fix}")

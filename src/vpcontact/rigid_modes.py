@@ -100,9 +100,9 @@ class RigidModes:
         if not loose.any():
             return np.zeros((free.size, 0))
         b, k = np.nonzero(loose)  # the free combinations: few, and only in bodies held by contact alone
-        combinations = sp.csc_matrix((vectors[b, :, k].ravel(),
-                                      (b.repeat(self.per_body) * self.per_body + np.tile(np.arange(self.per_body), b.size),
-                                       np.arange(b.size).repeat(self.per_body))),
+        p = self.per_body
+        rows = b.repeat(p) * p + np.tile(np.arange(p), b.size)  # the modes of body b
+        combinations = sp.csc_matrix((vectors[b, :, k].ravel(), (rows, np.arange(b.size).repeat(p))),
                                      shape=(self.matrix.shape[1], b.size))
         motions = (self.matrix @ combinations).toarray()[free]
         basis, _ = np.linalg.qr(motions)

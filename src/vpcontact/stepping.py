@@ -26,7 +26,7 @@ from typing import Callable
 import numpy as np
 from tqdm.auto import tqdm
 
-from .assembly import element_strain, stress_force
+from .assembly import NonFiniteLoad, element_strain, stress_force
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from .material import von_mises
 from .problem import Problem
@@ -121,7 +121,9 @@ class TimeLoop:
                 bar.set_postfix(newton=row["newton_iterations"], residual=f"{row['residual']:.1e}",
                                 at_limit=row["nodes_at_limit"], cuts=result.step_cuts, refresh=False)
                 bar.update()
-                if self.state.rate is not None and not np.all(np.isfinite(self.state.z_after(problem.k))):
+                with np.errstate(all="ignore"):  # a history that is not finite is reported
+                    finite = self.state.rate is None or np.all(np.isfinite(self.state.z_after(problem.k)))
+                if not finite:
                     result.fail(f"after step {n} (t = {times[n - 1]:g}): the viscoplastic history is not finite (is "
                                 f"the explicit step k = {problem.k:g} small against the law's relaxation time?)")
                     break
@@ -141,11 +143,16 @@ class TimeLoop:
 
     def _advance(self, n: int, t: float, h: float, cuts: int) -> str | None:
         """Reach time t of step n from the current level by one step of length h, or by two halves if
-        its Newton iteration fails (recursively); None, or the failure's message."""
-        attempt = self._attempt(t, h)
+        its Newton iteration fails (recursively); None, or the failure's message. A load that is not
+        finite at t (only a sub-step time can hold one: the step times are checked before the run)
+        ends the run: no cut can help."""
+        try:
+            attempt = self._attempt(t, h)
+        except NonFiniteLoad as error:
+            t_n = self.problem.times[n - 1]
+            return f"step {n} (t = {t_n:g}) failed{'' if t == t_n else ' at a sub-step'}: {error}"
         if attempt.solution.converged:
-            self._accept(n, t == self.problem.times[n - 1], attempt)
-            return None
+            return self._accept(n, t == self.problem.times[n - 1], attempt)
         if cuts == self.max_cuts:
             return self._failure_message(n, attempt, cuts)
         self.result.step_cuts += 1
@@ -157,11 +164,12 @@ class TimeLoop:
         problem, state = self.problem, self.state
         z = state.z_after(h)
         b = problem.loads(t)
-        if z is not None:
-            b -= stress_force(problem.basis, z)
-        step = StepData(b[problem.free], problem.law, state.xi, h)
         try:
-            solution = self.solver.solve(step, state.previous)
+            with np.errstate(all="ignore"):  # the solvers report iterates that are not finite
+                if z is not None:
+                    b -= stress_force(problem.basis, z)
+                step = StepData(b[problem.free], problem.law, state.xi, h)
+                solution = self.solver.solve(step, state.previous)
         except SingularMatrixError as error:
             m = problem.surface.size
             solution = StepSolution(None, np.zeros(m), np.full(m, np.nan), np.zeros(m, dtype=bool), 0, np.nan, np.nan,
@@ -170,13 +178,20 @@ class TimeLoop:
                                     "boundary.dirichlet entries, or try smaller time steps (time.steps)")
         return _Attempt(t, h, step, z, solution)
 
-    def _accept(self, n: int, ends_step: bool, attempt: _Attempt) -> None:
-        """Make a converged attempt the new level: ξ, fields, z and 𝒢 there; record it."""
+    def _accept(self, n: int, ends_step: bool, attempt: _Attempt) -> str | None:
+        """Make a converged attempt the new level: ξ, fields, z and 𝒢 there; record it. Values that are
+        not finite there (float64 overflow: loads, moduli or laws in unsuitable units) are not recorded:
+        the failure's message instead."""
+        with np.errstate(all="ignore"):  # values that are not finite are reported
+            return self._accept_finite(n, ends_step, attempt)
+
+    def _accept_finite(self, n: int, ends_step: bool, attempt: _Attempt) -> str | None:
         problem, state, result = self.problem, self.state, self.result
         solution, law, h = attempt.solution, problem.law, attempt.h
         d = solution.d
         compliance, _ = law.pressure(d, state.xi, h)
         xi = state.xi + h * np.maximum(d, 0.0)
+        K = law.K(xi)
         fields, rate = None, None
         G = problem.viscoplastic
         if G is not None or (ends_step and (n in result.field_steps or n == len(problem.times))):
@@ -191,10 +206,21 @@ class TimeLoop:
                             z=None if z is None else np.moveaxis(z, -1, 0).copy())
             if G is not None:
                 rate = viscoplastic_rate(G, sigma, strain)
+        values = {"ξ": xi, "K": K, "the compliance pressure": compliance}
+        if fields is not None:
+            values.update({"the displacement": fields.displacement, "the stress": fields.von_mises})
+        wrong = [name for name, value in values.items() if not np.all(np.isfinite(value))]
+        if wrong:
+            cause = (f"the viscoplastic history blows up: is the explicit step k = {problem.k:g} small against the "
+                     f"law's relaxation time?" if G is not None else
+                     "float64 overflow: state the loads, moduli and laws in units that keep them far from 1e308")
+            return (f"step {n} (t = {problem.times[n - 1]:g}) failed: {wrong[0]} is not finite at t = "
+                    f"{attempt.t:.10g} ({cause})")
         self._substep += 1
-        result.record(n, attempt.t, solution, fields, xi=xi, K=law.K(xi), compliance=compliance,
+        result.record(n, attempt.t, solution, fields, xi=xi, K=K, compliance=compliance,
                       status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step)
         self.state = LoopState(state.step, xi, attempt.z, rate, solution)
+        return None
 
     def _failure_message(self, n: int, attempt: _Attempt, cuts: int) -> str:
         """One line: the step, its time, where the cuts ended, the residuals, the contact counts and what to try."""

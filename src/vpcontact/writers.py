@@ -148,27 +148,30 @@ def _write_history(result: Result, path: Path) -> None:
             writer.writerow({k: (repr(float(v)) if isinstance(v, (float, np.floating)) else v) for k, v in row.items()})
 
 
+#: Values of each column of contact.csv turned into text at once: the memory the writer adds to the run's
+#: stays the same however many rows the run has.
+CONTACT_BLOCK = 2**14
+
+
 def _write_contact(result: Result, path: Path) -> None:
     surface = result.problem.surface
-    steps, m = len(result.rows), surface.size
-    columns = {
-        "step": np.repeat(result.series("step").astype(int) if steps else np.zeros(0, dtype=int), m),
-        "t": np.repeat(result.times, m),
-        "node": np.tile(surface.nodes, steps),
-        "x": np.tile(surface.coordinates[0], steps),
-        "y": np.tile(surface.coordinates[1], steps),
-        "normal_x": np.tile(surface.normals[0], steps),
-        "normal_y": np.tile(surface.normals[1], steps),
-        "weight": np.tile(surface.weights, steps),
-    }
-    for name in CONTACT_ARRAYS:
-        columns[name] = result.contact_history(name).ravel()
-    columns["status"] = np.asarray(STATUS_NAMES)[columns["status"].astype(int)]
-    columns["substep"] = np.repeat(result.series("substep").astype(int) if steps else np.zeros(0, dtype=int), m)
+    rows, m = len(result.rows), surface.size
+    steps, substeps, times = result.series("step").astype(int), result.series("substep").astype(int), result.times
+    names = ["step", "t", "node", "x", "y", "normal_x", "normal_y", "weight", *CONTACT_ARRAYS, "substep"]
+    block = max(1, CONTACT_BLOCK // max(m, 1))
     with replacing(path) as temporary, temporary.open("w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(columns)
-        writer.writerows(zip(*(c.tolist() for c in columns.values())))
+        writer.writerow(names)
+        for start in range(0, rows, block):
+            chosen = slice(start, min(rows, start + block))
+            count = chosen.stop - start
+            per_node = (surface.nodes, *surface.coordinates, *surface.normals, surface.weights)
+            columns = [np.repeat(steps[chosen], m), np.repeat(times[chosen], m),
+                       *(np.tile(values, count) for values in per_node)]
+            columns += [np.array(result.contact[name][chosen]).ravel() for name in CONTACT_ARRAYS]
+            columns[-1] = np.asarray(STATUS_NAMES)[columns[-1].astype(int)]
+            columns.append(np.repeat(substeps[chosen], m))
+            writer.writerows(zip(*(c.tolist() for c in columns)))
 
 
 def _write_fields(result: Result, folder: Path) -> None:

@@ -7,7 +7,8 @@ active set methods; a step that keeps it (the smooth regime of the compliance la
 backtracking on the solver's merit function (Armijo). Stopping: the relative equilibrium residual
 ≤ tolerance (or, when rounding does not allow that, once it is below the level rounding leaves in
 it, :attr:`Evaluation.residual_floor`, and has stopped decreasing) and the complementarity error
-max|min(λ/r, g − d)| ≤ tolerance × body size. Every threshold is relative to a scale of the problem (forces, r, the body's size), so
+max|min(λ/r, g − d)| ≤ tolerance × body size. Every threshold is relative to a scale of the problem
+(forces, r, the body's size), so
 the iteration does not depend on the units or on the ratio of the body's and the layer's stiffness.
 """
 

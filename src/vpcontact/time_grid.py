@@ -1,0 +1,47 @@
+"""The time grid of a run: t_n = n k, n = 1, …, steps (k = T / steps), computed when asked for."""
+
+from __future__ import annotations
+
+import operator
+from collections.abc import Sequence
+
+import numpy as np
+
+
+class TimeGrid(Sequence):
+    """The step times t_n = n k, n = 1, …, steps, with t_steps = T exactly (bitwise the values of
+    ``np.linspace(0, T, steps + 1)[1:]``), computed when asked for: a grid of 10⁸ steps costs nothing.
+
+    Indexing gives t_n at index n − 1 (a NumPy float; negative indices count from the end), slicing and
+    ``np.asarray`` give arrays, :meth:`at` gives t_n for an array of step numbers n.
+    """
+
+    def __init__(self, T: float, steps: int):
+        self.T, self.steps, self.k = T, steps, T / steps
+
+    def at(self, n) -> np.ndarray:
+        """t_n for step numbers n (an int or an array of ints in 1, …, steps)."""
+        n = np.asarray(n)
+        return np.where(n == self.steps, self.T, n * self.k)
+
+    def __len__(self) -> int:
+        return self.steps
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return self.at(np.arange(*index.indices(self.steps)) + 1).astype(float)
+        position = operator.index(index)
+        if not -self.steps <= position < self.steps:
+            raise IndexError(f"time step index {position} out of range for {self.steps} steps")
+        return np.float64(self.at(position % self.steps + 1))
+
+    def __iter__(self):
+        chunk = 2**16
+        for start in range(0, self.steps, chunk):
+            yield from self[start:start + chunk]
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        return self[:].astype(dtype or float)
+
+    def __repr__(self) -> str:
+        return f"TimeGrid(T={self.T!r}, steps={self.steps})"
