@@ -2,6 +2,7 @@
 unusable --out or a damaged checkpoint is refused with one line (exit 2) before anything is computed
 or written, and a run whose directory is removed or replaced under it stops writing (exit 4)."""
 
+import errno
 import json
 import os
 import signal
@@ -16,6 +17,7 @@ import tomli_w
 
 import vpcontact
 from vpcontact import checkpoint, directory, writers
+from vpcontact.cli import main
 from vpcontact.problem import build_problem
 from vpcontact.stepping import TimeLoop
 from conftest import assert_refused, half_disc_case, rectangle_case, run_cli, snapshot_tree
@@ -471,6 +473,19 @@ def test_a_swap_between_the_check_and_the_write_still_misses_the_new_directory(t
     held.release()
     assert contents(out) == {"summary.json": b"the user's"} and [p.name for p in out.iterdir()] == ["summary.json"]
     assert sorted(p.name for p in (tmp_path / "moved").iterdir()) == ["fields"]
+
+
+def test_a_write_that_fails_ends_the_run_with_one_line(tmp_path, monkeypatch, capsys):
+    """A full disk (say) during the run: exit 4 and one line naming the file and the reason."""
+    def disk_full(result, path):
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(writers, "write_solution", disk_full)
+    out = tmp_path / "run"
+    assert main(["run", str(write_case(tmp_path)), "--out", str(out), "--quiet"]) == 4
+    stderr = capsys.readouterr().err
+    assert stderr == f"vpcontact: the run stopped: No space left on device: '{out / 'solution.npz'}'\n"
+    assert not (out / "summary.json").exists() and not (out / directory.LOCK).exists()
 
 
 def test_two_processes_never_hold_one_directory(tmp_path):

@@ -205,7 +205,17 @@ def _loop(out):
     os.symlink("other", out)
 
 
+def _table_folder(out):
+    (out / "study.csv").mkdir(parents=True)
+
+
+def _summary_folder(out):
+    (out / "runs" / "b" / "summary.json").mkdir(parents=True)
+
+
 STUDY_OUT = {
+    "study.csv a folder": (_table_folder, "study.csv' is a folder"),
+    "a folder where a run writes summary.json": (_summary_folder, "summary.json' is a folder"),
     "a file": (_file, "exists and is not a directory"),
     "a symbolic link loop": (_loop, "symbolic link loop"),
     "runs/ a file": (_runs_file, "runs' is not a directory"),
@@ -267,8 +277,10 @@ def running(pid):
 
 
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc")
-@pytest.mark.parametrize("number, code", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
-def test_a_signal_stops_the_study_its_workers_and_writes_the_table(tmp_path, number, code):
+@pytest.mark.parametrize("number, code, group", [(signal.SIGTERM, 143, False), (signal.SIGINT, 130, False),
+                                                 (signal.SIGTERM, 143, True)],
+                         ids=["SIGTERM", "SIGINT", "SIGTERM to the process group"])
+def test_a_signal_stops_the_study_its_workers_and_writes_the_table(tmp_path, number, code, group):
     path = write_study(tmp_path, steps=600, h=0.1)
     out = tmp_path / "out"
     process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "study", str(path), "--out", str(out),
@@ -282,7 +294,10 @@ def test_a_signal_stops_the_study_its_workers_and_writes_the_table(tmp_path, num
             workers |= children(process.pid)
             time.sleep(0.02)
         workers |= children(process.pid)
-        process.send_signal(number)
+        if group:  # as a service manager or `kill -TERM -PGID` does: the workers get it too
+            os.killpg(process.pid, number)
+        else:
+            process.send_signal(number)
         _, stderr = process.communicate(timeout=60)
     finally:
         if process.poll() is None:
@@ -296,11 +311,12 @@ def test_a_signal_stops_the_study_its_workers_and_writes_the_table(tmp_path, num
     assert len(table) == 4 and statuses <= {"complete", "interrupted"} and "interrupted" in statuses
     complete = {run_id for run_id, row in table.items() if row["status"] == "complete"}
     assert complete == {p.parent.name for p in out.glob("runs/*/summary.json")}
+    assert f"{len(complete)} of 4 runs complete, {4 - len(complete)} not finished" in stderr
     assert not list(out.glob(".*tmp*")) and not (out / ".vpcontact.lock").exists()
     before = snapshot_tree(out)
     time.sleep(2.0)
     assert snapshot_tree(out) == before, "written after the study exited"
-    if number == signal.SIGTERM:  # a rerun does what is left
+    if number == signal.SIGTERM and not group:  # a rerun does what is left
         finished = {run_id: (out / "runs" / run_id / "summary.json").stat().st_mtime_ns for run_id in complete}
         status, stdout, stderr = run_cli("study", path, "--out", out, "--workers", "2", "--quiet", timeout=300)
         assert status == 0, stderr

@@ -51,7 +51,7 @@ from . import directory
 from .case import _brief, load_case
 from .errors import CaseError
 from .norms import Snapshot, differences
-from .writers import replacing
+from .writers import check_room, replacing
 
 STUDY_KEYS = {"base", "set", "vary", "runs", "compare"}
 MAX_ID = 100
@@ -277,10 +277,10 @@ def _run_pending(pending: list[RunSpec], report: dict, executor: Executor | None
         with tqdm(total=len(pending), disable=not progress, unit="run", desc="runs") as bar:
             futures = {executor.submit(execute_run, spec): spec for spec in pending}
             while futures:
-                if stop is not None and (reason := stop()):
-                    report["stopped"] = reason
-                    break
                 done, _ = wait(futures, timeout=POLL_SECONDS, return_when=FIRST_COMPLETED)
+                if stop is not None and (reason := stop()):  # before the results: a signal sent to the
+                    report["stopped"] = reason              # whole process group has ended the workers too
+                    break
                 for future in done:
                     spec = futures.pop(future)
                     summary = future.result()
@@ -299,11 +299,12 @@ def _run_pending(pending: list[RunSpec], report: dict, executor: Executor | None
                                     left=len(futures), refresh=False)
     finally:
         if futures:  # stopped (or an exception): abandon the runs not finished
-            report["interrupted"] = [spec.id for spec in futures.values()]
             for future in futures:
                 future.cancel()
             if owned:
                 _stop_workers(executor)
+            for spec in futures.values():  # one may have completed just before
+                report["completed" if is_complete(spec) else "interrupted"].append(spec.id)
         if owned:
             executor.shutdown(cancel_futures=True)
     return errors
@@ -331,7 +332,8 @@ def _stop_workers(executor: ProcessPoolExecutor) -> None:
 
 def _check_run_directories(study: Study, out: Path) -> None:
     """Every run writes into DIR/runs/<id> and nowhere else: refuse a run directory elsewhere (a study
-    loaded for another DIR) and a runs/ or runs/<id> that is a symbolic link or not a directory."""
+    loaded for another DIR), a runs/ or runs/<id> that is a symbolic link or not a directory, and
+    anything standing where a run or the table is written (see ``writers.check_room``)."""
     runs = out / "runs"
     for spec in study.runs:
         if spec.out != runs / spec.id:
@@ -341,6 +343,11 @@ def _check_run_directories(study: Study, out: Path) -> None:
         if path.is_symlink() or (path.exists() and not path.is_dir()):
             what = "a symbolic link" if path.is_symlink() else "not a directory"
             raise CaseError(f"--out '{out}': '{path}' is {what}; runs write only into directories inside '{runs}'")
+        if path != runs and path.is_dir():
+            check_room(path)
+    if (out / "study.csv").is_dir():
+        raise CaseError(f"--out '{out}': '{out / 'study.csv'}' is a folder, and the study writes its table there: "
+                        f"move it away")
 
 
 # --- the table -----------------------------------------------------------------------------------
@@ -382,7 +389,7 @@ def _summary(spec: RunSpec, error: str | None, interrupted: bool) -> dict:
     finish, what happened instead (a summary.json there is an earlier run's)."""
     if error is not None:
         return {"status": "error", "message": error}
-    if interrupted and not is_complete(spec):
+    if interrupted:
         return {"status": "interrupted", "message": "the study was stopped before this run finished; rerun the "
                                                     "study to do it"}
     try:
