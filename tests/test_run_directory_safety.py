@@ -484,7 +484,7 @@ def test_a_write_that_fails_ends_the_run_with_one_line(tmp_path, monkeypatch, ca
     out = tmp_path / "run"
     assert main(["run", str(write_case(tmp_path)), "--out", str(out), "--quiet"]) == 4
     stderr = capsys.readouterr().err
-    assert stderr == f"vpcontact: the run stopped: No space left on device: '{out / 'solution.npz'}'\n"
+    assert stderr == f"vpcontact: stopped: No space left on device: '{out / 'solution.npz'}'\n"
     assert not (out / "summary.json").exists() and not (out / directory.LOCK).exists()
 
 

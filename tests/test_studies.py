@@ -341,3 +341,32 @@ def test_a_second_study_into_a_directory_in_use_is_refused(tmp_path):
     finally:
         os.killpg(process.pid, signal.SIGKILL)
         process.wait()
+
+
+def test_a_study_whose_directory_is_replaced_stops_and_writes_nothing_there(tmp_path):
+    path = write_study(tmp_path, steps=600, h=0.1)
+    out = tmp_path / "out"
+    process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "study", str(path), "--out", str(out),
+                                "--workers", "2", "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, start_new_session=True)
+    workers = set()
+    try:
+        deadline = time.time() + 180
+        while not list(out.glob("runs/*/summary.json")):
+            assert process.poll() is None and time.time() < deadline, process.communicate()
+            workers |= children(process.pid)
+            time.sleep(0.02)
+        out.rename(tmp_path / "moved")
+        out.mkdir()
+        (out / "notes.txt").write_text("a new directory of the user")
+        before = snapshot_tree(out)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 4, stderr
+    assert stderr.count("\n") == 1 and f"the directory '{out}' was replaced by another directory" in stderr
+    assert not [pid for pid in workers if running(pid)]
+    time.sleep(1.0)
+    assert snapshot_tree(out) == before
+    assert not (tmp_path / "moved" / ".vpcontact.lock").exists()

@@ -102,7 +102,7 @@ def _describe(error: OSError) -> str:
     if error.strerror is None:
         return str(error)
     where = f": '{error.filename}'" if error.filename else ""
-    return f"the run stopped: {error.strerror}{where}"
+    return f"stopped: {error.strerror}{where}"
 
 
 def _study(args) -> int:
@@ -123,6 +123,9 @@ def _study(args) -> int:
     except CaseError as error:
         print(f"vpcontact: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except OSError as error:  # the study directory was replaced, or a write failed: the study stopped
+        print(f"vpcontact: {_describe(error)}", file=sys.stderr)
+        return EXIT_OUTPUT
     finally:
         if client is not None:
             client.close()

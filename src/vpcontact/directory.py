@@ -41,10 +41,11 @@ class DirectoryReplaced(OSError):
 
 class Held:
     """A directory this process holds: its path as given, its descriptor (None where the system has
-    no operations relative to a directory), its identity and lock, and what ``acquire`` changed to
-    get it (to leave no trace when the run is refused: see ``release``)."""
+    no operations relative to a directory), its identity and lock (None: watched only, see
+    ``watch``), and what ``acquire`` changed to get it (to leave no trace when the run is refused: see
+    ``release``)."""
 
-    def __init__(self, path: Path, descriptor: int | None, identity: tuple[int, int], lock: int,
+    def __init__(self, path: Path, descriptor: int | None, identity: tuple[int, int], lock: int | None,
                  created: list[Path], lock_existed: bool, changed: tuple[Path, os.stat_result]):
         self.path, self.descriptor, self.identity, self.lock = path, descriptor, identity, lock
         self.created, self.lock_existed, self.changed = created, lock_existed, changed
@@ -127,6 +128,7 @@ def acquire(path: Path, label: str = "--out") -> Held:
     CaseError when it cannot be used, or when another vpcontact process holds it."""
     path = Path(path)
     usable(path, label)
+    check(path)  # inside a directory held (or watched) by this process: still that one
     missing = list(itertools.takewhile(lambda p: not os.path.lexists(p), (path, *path.parents)))
     parent = missing[-1].parent if missing else path  # the folder whose entries acquire changes
     changed = (parent, os.stat(parent))
@@ -232,10 +234,17 @@ def forget_inherited() -> None:
     """In a process forked from one that holds directories: let go of the copies of their locks (the
     parent holds them; a worker process writes only into the directories it acquires itself)."""
     for held in _HELD.values():
-        os.close(held.lock)
-        if held.descriptor is not None:
-            os.close(held.descriptor)
+        for descriptor in (held.lock, held.descriptor):
+            if descriptor is not None:
+                os.close(descriptor)
     _HELD.clear()
+
+
+def watch(path: Path, identity: tuple[int, int]) -> None:
+    """In a worker process: check every write below ``path`` (a directory its parent process holds,
+    with this ``identity``) as if this process held it: nothing is written below a replacement."""
+    held = Held(Path(path), None, identity, None, [], False, None)
+    _HELD[held.key] = held
 
 
 def _holders(path: Path) -> list[Held]:

@@ -253,7 +253,7 @@ def run_study(study: Study, out: str | os.PathLike, *, executor: Executor | None
         pending = [spec for spec in study.runs if not is_complete(spec)]
         report = {"skipped": [s.id for s in study.runs if s not in pending], "completed": [], "failed": [],
                   "retried": [], "interrupted": [], "stopped": None}
-        errors = _run_pending(pending, report, executor, workers, progress, stop)
+        errors = _run_pending(pending, report, held, executor, workers, progress, stop)
         write_study_table(study, out, errors, report["interrupted"])
     finally:
         held.release()
@@ -264,14 +264,16 @@ POLL_SECONDS = 0.1
 """How often run_study asks ``stop()`` while it waits for runs."""
 
 
-def _run_pending(pending: list[RunSpec], report: dict, executor: Executor | None, workers: int | None,
-                 progress: bool, stop) -> dict[str, str]:
+def _run_pending(pending: list[RunSpec], report: dict, held: directory.Held, executor: Executor | None,
+                 workers: int | None, progress: bool, stop) -> dict[str, str]:
     """Run ``pending`` (filling ``report``) until done or ``stop()``; returns {id: message} of the runs
-    that ended with an exception (they wrote nothing)."""
+    that ended with an exception (they wrote nothing). The study directory ``held`` removed or
+    replaced meanwhile stops the study too (DirectoryReplaced)."""
     errors = {}
     owned = executor is None
     if owned:
-        executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count(), initializer=_start_worker)
+        executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count(), initializer=_start_worker,
+                                       initargs=(held.path, held.identity))
     futures = {}
     try:
         with tqdm(total=len(pending), disable=not progress, unit="run", desc="runs") as bar:
@@ -281,6 +283,7 @@ def _run_pending(pending: list[RunSpec], report: dict, executor: Executor | None
                 if stop is not None and (reason := stop()):  # before the results: a signal sent to the
                     report["stopped"] = reason              # whole process group has ended the workers too
                     break
+                held.check()
                 for future in done:
                     spec = futures.pop(future)
                     summary = future.result()
@@ -310,13 +313,15 @@ def _run_pending(pending: list[RunSpec], report: dict, executor: Executor | None
     return errors
 
 
-def _start_worker() -> None:
+def _start_worker(out: Path, identity: tuple[int, int]) -> None:
     """In a worker of the local pool: Ctrl-C (sent to the whole process group) is for the study
     process, which stops the workers; SIGTERM has its default action (not the handler inherited from
-    the study process); the study directory stays held by the study process alone."""
+    the study process); the study directory stays held by the study process alone, and the worker
+    writes nothing below it once it was replaced (``directory.watch``)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     directory.forget_inherited()
+    directory.watch(out, identity)
 
 
 def _stop_workers(executor: ProcessPoolExecutor) -> None:
