@@ -14,7 +14,8 @@ directory that was locked (else :class:`DirectoryReplaced`: the run stops) and t
 the open directory itself, so that even a directory swapped between the check and the act is never
 written into: a process writes only into the directory it locked. (A temporary file is written by
 path before its rename; in that instant's window it can land in the new directory, where the failed
-rename leaves it to be removed again.)
+rename leaves it to be removed again.) A worker process of a study ``watch``-es the study directory
+its parent holds: its writes below it are checked the same way.
 """
 
 from __future__ import annotations
