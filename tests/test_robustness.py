@@ -16,7 +16,7 @@ import tomli_w
 
 import vpcontact
 import vpcontact.stepping
-from vpcontact import rundir
+from vpcontact import directory, rundir
 from vpcontact.cli import main
 from vpcontact.results import INTEGER_COLUMNS
 from vpcontact.solvers import StepSolution
@@ -231,7 +231,7 @@ def test_resume_without_a_checkpoint(tmp_path):
         rundir.run(vpcontact.load_case(creeping_case(steps=10, h=0.2), {"material.E": 900.0}), out, resume=True)
     outcome = rundir.run(case, out, resume=True)
     assert outcome.status == "complete" and outcome.result.resumed_at == [] and outcome.result.steps == 10
-    assert not list(out.rglob(".*tmp-*")) and not (out / rundir.LOCK).exists()
+    assert not list(out.rglob(".*tmp-*")) and not (out / directory.LOCK).exists()
     other = tmp_path / "other"
     other.mkdir()
     (other / "notes.txt").write_text("mine")

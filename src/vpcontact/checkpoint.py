@@ -28,21 +28,24 @@ from __future__ import annotations
 
 import hashlib
 import json
-import shutil
 import tomllib
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
+from . import directory
 from .case import _brief
 from .errors import CaseError
 from .results import CONTACT_ARRAYS, HISTORY_COLUMNS, INTEGER_COLUMNS, Fields
 from .solvers import StepSolution
 from .stepping import LoopState, TimeLoop
-from .writers import replacing, versions
+from .writers import OUTPUTS, remove_files, replacing, versions
 
 FOLDER = "checkpoint"
 STATE = "state.npz"
+FILES = tuple(pattern for pattern in OUTPUTS if pattern.startswith(f"{FOLDER}/"))
+"""state.npz and fields_NNNNN.npz, as listed among the outputs of a run directory."""
 FORMAT = 1
 #: Output keys that do not change the numbers: they may differ between a run and its resumption.
 FREE_KEYS = ("progress", "checkpoint_every_steps", "checkpoint_every_seconds")
@@ -61,7 +64,8 @@ def exists(out: Path) -> bool:
 
 
 def remove(out: Path) -> None:
-    shutil.rmtree(folder(out), ignore_errors=True)
+    """Delete the checkpoint's files (and checkpoint/, if that leaves it empty)."""
+    remove_files(out, FILES)
 
 
 def comparable(case_dict: dict) -> dict:
@@ -82,7 +86,7 @@ def mesh_digest(problem) -> str:
 def save(loop: TimeLoop, out: Path) -> None:
     """Write the checkpoint of ``loop`` (at the end of its last completed step) into ``out``."""
     target = folder(out)
-    target.mkdir(parents=True, exist_ok=True)
+    directory.mkdir(target)
     result, state = loop.result, loop.state
     saved = sorted(result.fields)
     for n in saved:
@@ -130,13 +134,18 @@ def restore(loop: TimeLoop, out: Path) -> int:
     """Load the checkpoint in ``out`` into a fresh ``loop`` (same case, same mesh: else ResumeError);
     returns the step it continues after. Warns (stderr) when the versions differ."""
     path = folder(out) / STATE
+    arrays = _read(path)
     try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {key: data[key] for key in data.files}
-        meta = json.loads(str(arrays["meta"]))
-        stored_case = tomllib.loads(str(arrays["case"]))
-    except (OSError, ValueError, KeyError, tomllib.TOMLDecodeError) as error:
-        raise ResumeError(f"cannot resume from '{path}': unreadable checkpoint ({error})") from None
+        return _restore(loop, out, path, arrays)
+    except (KeyError, IndexError, TypeError, json.JSONDecodeError, tomllib.TOMLDecodeError) as error:
+        raise ResumeError(f"cannot resume from '{path}': unreadable checkpoint ({type(error).__name__}: {error}); "
+                          f"{RESTART}") from None
+
+
+def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray]) -> int:
+    """``restore`` once state.npz (at ``path``) is read into ``arrays``."""
+    meta = json.loads(str(arrays["meta"]))
+    stored_case = tomllib.loads(str(arrays["case"]))
     if int(arrays["format"]) != FORMAT:
         raise ResumeError(f"cannot resume from '{path}': checkpoint format {int(arrays['format'])}, expected {FORMAT}")
     problem = loop.problem
@@ -165,14 +174,32 @@ def restore(loop: TimeLoop, out: Path) -> int:
     result.step_cuts = int(meta["step_cuts"])
     result.resumed_at = [*meta["resumed_at"], step]
     for n in meta["field_steps"]:
-        with np.load(folder(out) / f"fields_{n:05d}.npz", allow_pickle=False) as data:
-            result.fields[n] = Fields(data["displacement"], data["stress"], data["stress33"], data["von_mises"],
-                                      data["z"] if "z" in data.files else None)
+        data = _read(folder(out) / f"fields_{n:05d}.npz")
+        result.fields[n] = Fields(data["displacement"], data["stress"], data["stress33"], data["von_mises"],
+                                  data.get("z"))
     if result.fields:
         result.final = result.fields[max(result.fields)]
     loop.earlier_time, loop.earlier_solves = float(meta["elapsed_s"]), int(meta["linear_solves"])
     loop.stored_versions = meta.get("versions", {})
     return step
+
+
+RESTART = "the checkpoint cannot be used: start the run again with --overwrite"
+
+
+def _read(path: Path) -> dict[str, np.ndarray]:
+    """Every array of a checkpoint file; ResumeError naming the file when it is missing, empty,
+    truncated or damaged."""
+    if path.exists() and not path.is_file():
+        raise ResumeError(f"cannot resume: the checkpoint file '{path}' is not a regular file; {RESTART}")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {key: data[key] for key in data.files}
+    except FileNotFoundError:
+        raise ResumeError(f"cannot resume: the checkpoint file '{path}' is missing; {RESTART}") from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        what = "empty" if path.stat().st_size == 0 else f"truncated or damaged ({error})"
+        raise ResumeError(f"cannot resume: the checkpoint file '{path}' is {what}; {RESTART}") from None
 
 
 def first_difference(a, b, where: str = "") -> str:

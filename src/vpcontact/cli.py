@@ -3,10 +3,12 @@
     vpcontact run CASE.toml [--set key=value ...] --out DIR [--resume | --overwrite]
     vpcontact study STUDY.toml --out DIR [--workers N | --scheduler tcp://HOST:PORT]
 
-Exit status: 0 complete; 2 bad input (one line on stderr, nothing written); 3 a step failed even
-after its cuts (the converged steps are written, summary.json has "status": "failed") or, for a
-study, a run failed; 130 / 143 a run stopped by SIGINT / SIGTERM at the end of a step (outputs and a
-checkpoint written, "status": "interrupted"; ``--resume`` continues it).
+Exit status: 0 complete; 2 bad input or an unusable --out (one line on stderr, nothing written); 3 a
+step failed even after its cuts (the converged steps are written, summary.json has "status":
+"failed") or, for a study, a run failed; 4 the run directory was removed or replaced during the run,
+or a write failed (one line; nothing more written); 130 / 143 a run stopped by SIGINT / SIGTERM at
+the end of a step (outputs and a checkpoint written, "status": "interrupted"; ``--resume`` continues
+it), a study stopped by them (its workers stopped, study.csv written; rerun to continue).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from . import __version__
 from .case import load_case
 from .errors import CaseError
 
-EXIT_BAD_INPUT, EXIT_FAILED = 2, 3
+EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OUTPUT = 2, 3, 4
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -71,6 +73,9 @@ def _run(args) -> int:
     except CaseError as error:
         print(f"vpcontact: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except OSError as error:  # the run directory was replaced, or a write failed: the run stopped
+        print(f"vpcontact: {_describe(error)}", file=sys.stderr)
+        return EXIT_OUTPUT
     if outcome.status == "interrupted":
         print(f"vpcontact: {outcome.message}", file=sys.stderr)
         return EXIT_SIGNAL[outcome.signal]
@@ -92,36 +97,63 @@ def _run(args) -> int:
     return 0
 
 
+def _describe(error: OSError) -> str:
+    """One line for an OSError: its message, or its reason and the file."""
+    if error.strerror is None:
+        return str(error)
+    where = f": '{error.filename}'" if error.filename else ""
+    return f"stopped: {error.strerror}{where}"
+
+
 def _study(args) -> int:
+    from .rundir import EXIT_SIGNAL, StopOnSignals
     from .studies import load_study, run_study
 
+    client = None
     try:
         study = load_study(args.study, args.out)
         if args.workers is not None and args.workers < 1:
             raise CaseError(f"--workers {args.workers}: must be at least 1")
-        executor = client = None
         if args.scheduler is not None:
-            from distributed import Client
-
-            try:
-                client = Client(args.scheduler, timeout="10s")
-            except OSError as error:
-                raise CaseError(f"--scheduler {args.scheduler}: cannot connect ({error})") from None
-            executor = client.get_executor()
+            client = _connect(args.scheduler)
+        with StopOnSignals() as stopper:
+            report = run_study(study, args.out, executor=client.get_executor() if client else None,
+                               workers=args.workers, progress=not args.quiet and sys.stderr.isatty(),
+                               stop=stopper.reason)
     except CaseError as error:
         print(f"vpcontact: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    try:
-        report = run_study(study, args.out, executor=executor, workers=args.workers,
-                           progress=not args.quiet and sys.stderr.isatty())
+    except OSError as error:  # the study directory was replaced, or a write failed: the study stopped
+        print(f"vpcontact: {_describe(error)}", file=sys.stderr)
+        return EXIT_OUTPUT
     finally:
         if client is not None:
             client.close()
+    table = args.out / "study.csv"
+    if report["stopped"]:
+        complete = len(report["skipped"]) + len(report["completed"])
+        print(f"vpcontact: study {report['stopped']}: {complete} of {len(study.runs)} runs complete, "
+              f"{len(report['interrupted'])} not finished -> {table} (rerun the study to continue)", file=sys.stderr)
+        return EXIT_SIGNAL[stopper.signal]
     print(f"study: {len(study.runs)} runs: {len(report['completed'])} run, {len(report['skipped'])} already complete, "
-          f"{len(report['retried'])} retried, {len(report['failed'])} failed -> {args.out / 'study.csv'}")
+          f"{len(report['retried'])} retried, {len(report['failed'])} failed -> {table}")
     for run_id in report["failed"]:
         print(f"vpcontact: run '{run_id}' failed (see {args.out / 'runs' / run_id})", file=sys.stderr)
     return EXIT_FAILED if report["failed"] else 0
+
+
+def _connect(address: str):
+    """A client of the Dask scheduler at ``address`` (CaseError without the cluster extra, or when it
+    cannot be reached)."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise CaseError(f'--scheduler {address}: the Dask client is not installed; install it with: '
+                        f'pip install "vpcontact[cluster]"') from None
+    try:
+        return Client(address, timeout="10s")
+    except (OSError, ValueError, TypeError) as error:
+        raise CaseError(f"--scheduler {address}: cannot connect ({error})") from None
 
 
 def _reproduce(args) -> int:

@@ -13,13 +13,18 @@ Status (summary.json) and exit status of the command line:
                        converged steps (and sub-steps) are written
     interrupted   130  SIGINT (Ctrl-C) / 143 SIGTERM: the run stopped at the end of the current
                        step, wrote what exists and its checkpoint; ``--resume`` continues it
-    (bad input)   2    one line on stderr; nothing computed, nothing written
+    (bad input)   2    one line on stderr; nothing computed, nothing written (an unusable ``--out`` too)
+    (no summary)  4    the run directory was removed or replaced during the run (the run stopped
+                       and wrote nothing into what is now at that path), or a write failed
+                       (disk full, ...): one line on stderr
+
+The directory is held while the run writes (see :mod:`vpcontact.directory`); ``--overwrite`` removes
+the outputs of an earlier run (``writers.OUTPUTS``) and nothing else.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import signal
 import sys
 import threading
@@ -27,18 +32,14 @@ import time as clock
 from dataclasses import dataclass
 from pathlib import Path
 
-try:
-    import fcntl
-except ImportError:  # not POSIX: no directory lock
-    fcntl = None
-
-from . import checkpoint
+from . import checkpoint, directory
 from .case import Case, load_case
 from .errors import CaseError
 from .problem import build_problem
 from .results import Result
 from .stepping import TimeLoop
-from .writers import clear_directory, remove_temporaries, versions, write_outputs, write_resolved_case
+from .writers import (check_room, remove_files, remove_outputs, remove_temporaries, versions, write_outputs,
+                      write_resolved_case)
 
 SIGNAL_NAMES = {signal.SIGINT: "SIGINT", signal.SIGTERM: "SIGTERM"}
 EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
@@ -58,58 +59,59 @@ class Outcome:
 def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = False,
         progress: bool = False) -> Outcome:
     """Solve ``case`` into the run directory ``out`` (see the module's docstring). Bad input, an
-    unusable ``out`` or a checkpoint of another case raise CaseError before anything is written."""
+    unusable ``out`` or a checkpoint of another case raise CaseError before anything is written; a
+    run directory removed or replaced during the run raises DirectoryReplaced (an OSError, as does a
+    write that fails) and nothing more is written."""
     out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise CaseError(f"--out '{out}' exists and is not a directory")
-    used = out.exists() and any(out.iterdir())
-    if used and not (resume or overwrite):
-        raise CaseError(f"--out '{out}' is not empty (use --overwrite to replace it, or --resume to continue the run "
-                        f"in it)")
     if resume and overwrite:
         raise CaseError("--resume and --overwrite exclude each other")
+    directory.usable(out)
+    check_room(out)
+    used = directory.holds_files(out)
+    if used and not (resume or overwrite):
+        raise CaseError(f"--out '{out}' is not empty (use --overwrite to replace the outputs of a run in it, or "
+                        f"--resume to continue the run in it)")
     if resume and used:
         done = _finished(case, out)
         if done is not None:
             return done
-    with _StopOnSignals() as stopper:
-        problem = build_problem(case)
-        loop = TimeLoop(problem)
-        resuming = resume and checkpoint.exists(out)
-        if resuming:
-            checkpoint.restore(loop, out)
-            now = versions()
-            changed = [f"{name} {loop.stored_versions.get(name)} -> {version}" for name, version in now.items()
-                       if loop.stored_versions.get(name) != version]
-            if changed:
-                print(f"vpcontact: warning: resuming with other versions ({', '.join(changed)}): the numbers may "
-                      f"differ in the last digits from an uninterrupted run", file=sys.stderr)
-        elif resume and used:
-            _check_same_case(case, out)
-        # from here on the directory is ours: nothing above wrote to it
-        out.mkdir(parents=True, exist_ok=True)
-        lock = _lock(out)
-        try:
-            result = _run_locked(loop, case, out, clear=overwrite and used, stopper=stopper, progress=progress)
-        finally:
-            (out / LOCK).unlink(missing_ok=True)
-            os.close(lock)
+    held = directory.acquire(out)  # before any computation: an unusable directory is refused at once
+    started = False
+    try:
+        with StopOnSignals() as stopper:
+            problem = build_problem(case)
+            loop = TimeLoop(problem)
+            resuming = resume and checkpoint.exists(out)
+            if resuming:
+                checkpoint.restore(loop, out)
+                now = versions()
+                changed = [f"{name} {loop.stored_versions.get(name)} -> {version}" for name, version in now.items()
+                           if loop.stored_versions.get(name) != version]
+                if changed:
+                    print(f"vpcontact: warning: resuming with other versions ({', '.join(changed)}): the numbers "
+                          f"may differ in the last digits from an uninterrupted run", file=sys.stderr)
+            elif resume and used:
+                _check_same_case(case, out)
+            started = True  # from here on the directory is written to: nothing above wrote to it
+            result = _run_locked(loop, case, held, clear=overwrite and used, stopper=stopper, progress=progress)
+    finally:
+        held.release(undo=not started)
     return Outcome(result, result.status, result.message, stopper.signal)
 
 
-LOCK = ".vpcontact.lock"
-
-
-def _run_locked(loop: TimeLoop, case: Case, out: Path, *, clear: bool, stopper, progress: bool) -> Result:
-    """The run proper, in a directory this process holds: prepare it, loop with checkpoints, write."""
+def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool, stopper, progress: bool) -> Result:
+    """The run proper, in a directory this process holds: prepare it, loop with checkpoints, write.
+    Every step and every write first checks that the directory is still the one locked."""
+    out = held.path
     if clear:
-        clear_directory(out, keep=(LOCK,))
+        remove_outputs(out)
     remove_temporaries(out)
-    (out / "summary.json").unlink(missing_ok=True)
+    remove_files(out, ("summary.json",))
     write_resolved_case(case, out)
     cadence = _Cadence(case.output.checkpoint_every_steps, case.output.checkpoint_every_seconds, loop.state.step)
 
     def after_step(loop: TimeLoop) -> None:
+        held.check()
         if cadence.due(loop.state.step):
             checkpoint.save(loop, out)
             write_outputs(loop.result, out, history_only=True)
@@ -124,20 +126,6 @@ def _run_locked(loop: TimeLoop, case: Case, out: Path, *, clear: bool, stopper, 
     if result.status != "interrupted":
         checkpoint.remove(out)
     return result
-
-
-def _lock(out: Path) -> int:
-    """Hold an exclusive lock on the run directory while this process writes to it (released by the
-    kernel if the process dies): two runs never write into one directory."""
-    fd = os.open(out / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
-    if fcntl is None:
-        return fd
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        os.close(fd)
-        raise CaseError(f"--out '{out}': another vpcontact run is writing to it") from None
-    return fd
 
 
 def _finished(case: Case, out: Path) -> Outcome | None:
@@ -184,9 +172,10 @@ class _Cadence:
         self.last_step, self.last_time = step, clock.monotonic()
 
 
-class _StopOnSignals:
+class StopOnSignals:
     """While active (main thread only), SIGINT and SIGTERM ask the time loop to stop at the end of the
-    current step; a second signal of the same kind acts at once (the default action)."""
+    current step (a study: to stop its runs, see ``studies.run_study``); a second signal of the same
+    kind acts at once (the default action)."""
 
     def __init__(self):
         self.signal: int | None = None

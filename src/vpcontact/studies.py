@@ -17,11 +17,14 @@ A study file (TOML) names a base case and its runs:
     reference = "signorini"
     times = [1.1]
 
-Each run writes the standard outputs to DIR/runs/<id>/; DIR/study.csv has a row per run. A run
-whose directory holds a complete result of the same resolved case is not run again; a run that
-fails is retried once. Runs execute through a ``concurrent.futures`` executor: a local process pool,
-or the executor of a ``distributed.Client`` (a shared file system is assumed). The numbers do not
-depend on the executor.
+Each run writes the standard outputs to DIR/runs/<id>/ (an explicit id is a single path component:
+letters, digits and ``= . , + - _``, not starting with "."; ids are unique, letter case aside; the
+ids made from the varied values get a suffix -2, -3, ... where they would collide); DIR/study.csv has
+a row per run. A run whose directory holds a complete result of the same resolved case is not run
+again; a run that fails is retried once; a stopped study (``stop``, SIGINT/SIGTERM on the command
+line) writes study.csv with its unfinished runs "interrupted", and a rerun does them. Runs execute
+through a ``concurrent.futures`` executor: a local process pool, or the executor of a
+``distributed.Client`` (a shared file system is assumed). The numbers do not depend on the executor.
 """
 
 from __future__ import annotations
@@ -32,20 +35,28 @@ import json
 import math
 import os
 import re
+import signal
 import tomllib
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+import unicodedata
+import zipfile
+from collections.abc import Callable, Collection
+from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from tqdm.auto import tqdm
 
-from .case import load_case
+from . import directory
+from .case import _brief, load_case
 from .errors import CaseError
 from .inputs import MAX_TOML_BYTES, check_regular_file
 from .norms import Snapshot, differences
+from .writers import check_room, replacing
 
 STUDY_KEYS = {"base", "set", "vary", "runs", "compare"}
+MAX_ID = 100
+"""The longest run id (characters): an id names a directory, DIR/runs/<id>."""
 
 
 @dataclass
@@ -88,10 +99,16 @@ def load_study(path: str | os.PathLike, out: str | os.PathLike) -> Study:
     base = path.parent / data["base"]
     common = _table(data.get("set", {}), "set")
     override_sets = [{**common, **combo} for combo in _grid(data.get("vary", []))] if data.get("vary") else []
-    explicit_ids = []
+    explicit_ids, where = [], {}
     for i, run in enumerate(data.get("runs", [])):
         run = dict(_table(run, f"runs[{i}]"))
-        explicit_ids.append(str(run.pop("id")) if "id" in run else None)
+        given = _explicit_id(run.pop("id"), f"runs[{i}]") if "id" in run else None
+        if given is not None and _folded(given) in where:
+            raise CaseError(f"study runs[{where[_folded(given)]}] and runs[{i}] have the same id {_brief(given)} "
+                            f"(ids name directories: they must differ in more than letter case)")
+        if given is not None:
+            where[_folded(given)] = i
+        explicit_ids.append(given)
         override_sets.append({**common, **run})
     explicit_ids = [None] * (len(override_sets) - len(explicit_ids)) + explicit_ids
     if not override_sets:
@@ -131,15 +148,38 @@ def _grid(axes: list) -> list[dict]:
     return [{k: v for part in combo for k, v in part.items()} for combo in itertools.product(*columns)]
 
 
+def _explicit_id(value, where: str) -> str:
+    """A run id given in the study file: a single, visible path component (DIR/runs/<id> is its
+    directory), else CaseError."""
+    if not isinstance(value, str):
+        raise CaseError(f"study {where}: id = {_brief(value)} must be a string")
+    if not re.fullmatch(r"[\w=.,+\-]+", value) or value.startswith(".") or len(value) > MAX_ID:
+        raise CaseError(f"study {where}: id = {_brief(value)} cannot name a run directory: use 1 to {MAX_ID} letters, "
+                        f"digits and = . , + - _, not starting with '.'")
+    return value
+
+
 def _run_ids(override_sets: list[dict], common: dict, explicit: list) -> list[str]:
-    """Readable ids from the varied values ("h=0.05,steps=22"), made unique."""
+    """The explicit ids as given (no two alike, see load_study), and readable ids from the varied
+    values ("h=0.05,steps=22") for the other runs, made unique against all ids by a suffix -2, -3, ...
+    (letter case aside: one directory on a case-insensitive file system)."""
+    taken = {_folded(given) for given in explicit if given is not None}
     ids = []
-    for i, (overrides, given) in enumerate(zip(override_sets, explicit)):
-        varied = {k: v for k, v in overrides.items() if k not in common or common[k] != v}
-        text = given or ",".join(f"{k.split('.')[-1]}={_short(v)}" for k, v in varied.items()) or "base"
-        text = re.sub(r"[^A-Za-z0-9=.,+\-_]", "_", text)
-        ids.append(text if text not in ids else f"{text}-{i}")
+    for overrides, given in zip(override_sets, explicit):
+        if given is None:
+            varied = {k: v for k, v in overrides.items() if k not in common or common[k] != v}
+            text = ",".join(f"{k.split('.')[-1]}={_short(v)}" for k, v in varied.items()) or "base"
+            text = re.sub(r"[^A-Za-z0-9=.,+\-_]", "_", text)[:MAX_ID]
+            candidates = itertools.chain([text], (f"{text}-{n}" for n in itertools.count(2)))
+            given = next(candidate for candidate in candidates if _folded(candidate) not in taken)
+            taken.add(_folded(given))
+        ids.append(given)
     return ids
+
+
+def _folded(run_id: str) -> str:
+    """The id as a case-insensitive, normalizing file system sees it."""
+    return unicodedata.normalize("NFC", run_id).casefold()
 
 
 def _short(value) -> str:
@@ -194,57 +234,140 @@ def is_complete(spec: RunSpec) -> bool:
 
 
 def run_study(study: Study, out: str | os.PathLike, *, executor: Executor | None = None, workers: int | None = None,
-              progress: bool = False) -> dict:
+              progress: bool = False, stop: Callable[[], str | None] | None = None) -> dict:
     """Run every incomplete run (each failed one retried once), then write DIR/study.csv.
 
-    Returns a report: {"skipped": [...], "completed": [...], "failed": [...], "retried": [...]}.
+    DIR is held while the study runs (see :mod:`vpcontact.directory`: CaseError before any run if it
+    cannot be used or another vpcontact process holds it). ``stop()`` is asked while the runs go (a
+    signal, see :mod:`vpcontact.cli`); once it gives a reason, the runs not finished are abandoned (the
+    workers of the local pool are killed and waited for: nothing is written after run_study returns;
+    on a Dask cluster, runs already started finish there), study.csv marks them "interrupted", and a
+    rerun of the study does them.
+
+    Returns a report: {"skipped", "completed", "failed", "retried", "interrupted": [ids], "stopped":
+    the reason or None}.
     """
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    pending = [spec for spec in study.runs if not is_complete(spec)]
-    report = {"skipped": [s.id for s in study.runs if s not in pending], "completed": [], "failed": [], "retried": []}
-    messages = {}
+    directory.usable(out)
+    _check_run_directories(study, out)
+    held = directory.acquire(out)
+    try:
+        pending = [spec for spec in study.runs if not is_complete(spec)]
+        report = {"skipped": [s.id for s in study.runs if s not in pending], "completed": [], "failed": [],
+                  "retried": [], "interrupted": [], "stopped": None}
+        errors = _run_pending(pending, report, held, executor, workers, progress, stop)
+        write_study_table(study, out, errors, report["interrupted"])
+    finally:
+        held.release()
+    return report
+
+
+POLL_SECONDS = 0.1
+"""How often run_study asks ``stop()`` while it waits for runs."""
+
+
+def _run_pending(pending: list[RunSpec], report: dict, held: directory.Held, executor: Executor | None,
+                 workers: int | None, progress: bool, stop) -> dict[str, str]:
+    """Run ``pending`` (filling ``report``) until done or ``stop()``; returns {id: message} of the runs
+    that ended with an exception (they wrote nothing). The study directory ``held`` removed or
+    replaced meanwhile stops the study too (DirectoryReplaced)."""
+    errors = {}
     owned = executor is None
-    executor = executor or ProcessPoolExecutor(max_workers=workers or os.cpu_count())
+    if owned:
+        executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count(), initializer=_start_worker,
+                                       initargs=(held.path, held.identity))
+    futures = {}
     try:
         with tqdm(total=len(pending), disable=not progress, unit="run", desc="runs") as bar:
             futures = {executor.submit(execute_run, spec): spec for spec in pending}
             while futures:
-                done = next(as_completed(futures))
-                spec = futures.pop(done)
-                summary = done.result()
-                if summary.get("status") == "complete":
-                    report["completed"].append(spec.id)
-                elif spec.id not in report["retried"]:
-                    report["retried"].append(spec.id)
-                    futures[executor.submit(execute_run, spec)] = spec
-                    continue
-                else:
-                    report["failed"].append(spec.id)
-                    messages[spec.id] = summary.get("message", "")
-                bar.update()
-                bar.set_postfix(done=len(report["completed"]), failed=len(report["failed"]),
-                                left=len(futures), refresh=False)
+                done, _ = wait(futures, timeout=POLL_SECONDS, return_when=FIRST_COMPLETED)
+                if stop is not None and (reason := stop()):  # before the results: a signal sent to the
+                    report["stopped"] = reason              # whole process group has ended the workers too
+                    break
+                held.check()
+                for future in done:
+                    spec = futures.pop(future)
+                    summary = future.result()
+                    if summary.get("status") == "complete":
+                        report["completed"].append(spec.id)
+                    elif spec.id not in report["retried"]:
+                        report["retried"].append(spec.id)
+                        futures[executor.submit(execute_run, spec)] = spec
+                        continue
+                    else:
+                        report["failed"].append(spec.id)
+                        if summary.get("status") == "error":
+                            errors[spec.id] = summary.get("message", "")
+                    bar.update()
+                    bar.set_postfix(done=len(report["completed"]), failed=len(report["failed"]),
+                                    left=len(futures), refresh=False)
     finally:
+        if futures:  # stopped (or an exception): abandon the runs not finished
+            for future in futures:
+                future.cancel()
+            if owned:
+                _stop_workers(executor)
+            for spec in futures.values():  # one may have completed just before
+                report["completed" if is_complete(spec) else "interrupted"].append(spec.id)
         if owned:
-            executor.shutdown()
-    write_study_table(study, out, messages)
-    return report
+            executor.shutdown(cancel_futures=True)
+    return errors
+
+
+def _start_worker(out: Path, identity: tuple[int, int]) -> None:
+    """In a worker of the local pool: Ctrl-C (sent to the whole process group) is for the study
+    process, which stops the workers; SIGTERM has its default action (not the handler inherited from
+    the study process); the study directory stays held by the study process alone, and the worker
+    writes nothing below it once it was replaced (``directory.watch``)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    directory.forget_inherited()
+    directory.watch(out, identity)
+
+
+def _stop_workers(executor: ProcessPoolExecutor) -> None:
+    """Kill the pool's worker processes and wait until they are gone: the runs they were doing are
+    lost (their directories hold no summary.json of them) and nothing is written after this."""
+    processes = list((executor._processes or {}).values())  # no public way before Python 3.14's kill_workers()
+    executor.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        process.kill()
+    for process in processes:
+        process.join()
+
+
+def _check_run_directories(study: Study, out: Path) -> None:
+    """Every run writes into DIR/runs/<id> and nowhere else: refuse a run directory elsewhere (a study
+    loaded for another DIR), a runs/ or runs/<id> that is a symbolic link or not a directory, and
+    anything standing where a run or the table is written (see ``writers.check_room``)."""
+    runs = out / "runs"
+    for spec in study.runs:
+        if spec.out != runs / spec.id:
+            raise CaseError(f"run '{spec.id}': its directory '{spec.out}' is not in '{runs}' (load the study with "
+                            f"the same output directory)")
+    for path in (runs, *(spec.out for spec in study.runs)):
+        if path.is_symlink() or (path.exists() and not path.is_dir()):
+            what = "a symbolic link" if path.is_symlink() else "not a directory"
+            raise CaseError(f"--out '{out}': '{path}' is {what}; runs write only into directories inside '{runs}'")
+        if path != runs and path.is_dir():
+            check_room(path)
+    if (out / "study.csv").is_dir():
+        raise CaseError(f"--out '{out}': '{out / 'study.csv'}' is a folder, and the study writes its table there: "
+                        f"move it away")
 
 
 # --- the table -----------------------------------------------------------------------------------
-def write_study_table(study: Study, out: Path, messages: dict[str, str] | None = None) -> list[dict]:
+def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = None,
+                      interrupted: Collection[str] = ()) -> list[dict]:
     """DIR/study.csv: per run its overrides, status, wall time, summary values and difference norms
-    (``messages``: why runs that wrote nothing failed)."""
+    (``errors``: why runs that wrote nothing failed; ``interrupted``: runs a stopped study did not
+    finish)."""
     rows = []
     reference = _snapshots(study, study.reference) if study.reference else {}
     for spec in study.runs:
         row = {"id": spec.id, **{k: _cell(v) for k, v in spec.overrides.items() if k != "output.field_steps"}}
-        try:
-            summary = json.loads((spec.out / "summary.json").read_text())
-        except (OSError, ValueError):
-            summary = {"status": "error" if spec.id in (messages or {}) else "missing",
-                       "message": (messages or {}).get(spec.id, "")}
+        summary = _summary(spec, (errors or {}).get(spec.id), spec.id in interrupted)
         row.update({"status": summary.get("status"), "message": summary.get("message", ""),
                     "wall_time_s": summary.get("wall_time_s"), "dofs": summary.get("dofs"),
                     "contact_nodes": summary.get("contact_nodes"), "steps": summary.get("steps"),
@@ -261,13 +384,25 @@ def write_study_table(study: Study, out: Path, messages: dict[str, str] | None =
                 row[f"norm_Q_t{t:g}"] = norms.get("Q", math.nan)
         rows.append(row)
     columns = list(dict.fromkeys(key for row in rows for key in row))
-    temporary = out / ".study.csv.partial"
-    with temporary.open("w", newline="") as handle:
+    with replacing(out / "study.csv") as temporary, temporary.open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=columns)
         writer.writeheader()
         writer.writerows(rows)
-    temporary.replace(out / "study.csv")
     return rows
+
+
+def _summary(spec: RunSpec, error: str | None, interrupted: bool) -> dict:
+    """The run's summary.json; for a run that ended with an exception, or that a stopped study did not
+    finish, what happened instead (a summary.json there is an earlier run's)."""
+    if error is not None:
+        return {"status": "error", "message": error}
+    if interrupted:
+        return {"status": "interrupted", "message": "the study was stopped before this run finished; rerun the "
+                                                    "study to do it"}
+    try:
+        return json.loads((spec.out / "summary.json").read_text())
+    except (OSError, ValueError):
+        return {"status": "missing", "message": ""}
 
 
 def _cell(value):
@@ -278,8 +413,9 @@ def _snapshots(study: Study, run_id: str) -> dict[float, Snapshot]:
     """The run's fields at the compared times, from its solution.npz."""
     spec = next(s for s in study.runs if s.id == run_id)
     try:
-        data = np.load(spec.out / "solution.npz")
-    except OSError:
+        with np.load(spec.out / "solution.npz") as solution:
+            data = {key: solution[key] for key in ("times", "points", "triangles", "displacement", "stress")}
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):  # missing or damaged: no norms
         return {}
     found = {}
     for t in study.times:

@@ -20,7 +20,6 @@ import functools
 import json
 import math
 import os
-import shutil
 import xml.etree.ElementTree as ET
 from contextlib import contextmanager
 from importlib import metadata
@@ -29,7 +28,9 @@ from pathlib import Path
 import meshio
 import numpy as np
 
+from . import directory
 from .contact import STATUS_NAMES
+from .errors import CaseError
 from .results import CONTACT_ARRAYS, HISTORY_COLUMNS, Result
 
 PACKAGES = ("vpcontact", "numpy", "scipy", "scikit-fem", "meshio", "pydantic")
@@ -51,19 +52,41 @@ def versions() -> dict[str, str]:
     return dict(_installed_versions())
 
 
+def _temporary(path: Path, tag: str) -> Path:
+    """The temporary file beside ``path`` written by the process ``tag`` (a process id, or a glob
+    pattern for any)."""
+    return path.with_name(f".{path.stem}.tmp-{tag}{path.suffix}")
+
+
+#: Every file vpcontact writes in a run directory, as glob patterns (those in checkpoint/ are the
+#: files of :mod:`vpcontact.checkpoint`), summary.json first: ``--overwrite`` removes these, their
+#: temporaries, and fields/ or checkpoint/ if that leaves them empty; nothing else.
+OUTPUTS = ("summary.json", "history.csv", "contact.csv", "solution.npz", "case.resolved.toml",
+           "fields/body.pvd", "fields/contact.pvd", "fields/body_*.vtu", "fields/contact_*.vtu",
+           "checkpoint/state.npz", "checkpoint/fields_*.npz")
+TEMPORARIES = tuple(str(_temporary(Path(pattern), "[0-9]*")) for pattern in OUTPUTS)
+"""The temporary files of the OUTPUTS (of any process: a killed writer leaves its own)."""
+
+
 @contextmanager
 def replacing(path: Path):
     """Yield a temporary path beside ``path`` (same suffix); once the caller has written it, flush it to
-    disk and rename it to ``path`` (atomic: ``path`` is the old file or the new one, never a part)."""
+    disk and rename it to ``path`` (atomic: ``path`` is the old file or the new one, never a part).
+    In a held directory nothing is written once it was removed or replaced (DirectoryReplaced, see
+    :mod:`vpcontact.directory`; an error of the write caused by that is reported so too)."""
     path = Path(path)
-    temporary = path.with_name(f".{path.stem}.tmp-{os.getpid()}{path.suffix}")
+    temporary = _temporary(path, str(os.getpid()))
     try:
+        directory.check(path)
         yield temporary
         with open(temporary, "rb+") as handle:
             os.fsync(handle.fileno())
-        os.replace(temporary, path)
+        directory.replace(temporary, path)
+    except OSError:
+        directory.check(path)
+        raise
     finally:
-        temporary.unlink(missing_ok=True)
+        directory.discard(temporary)
 
 
 def write_text(path: Path, text: str) -> None:
@@ -72,37 +95,61 @@ def write_text(path: Path, text: str) -> None:
         temporary.write_text(text, encoding="utf-8")
 
 
-def remove_temporaries(folder: Path) -> None:
-    """Delete the temporary files a killed writer left in ``folder`` and its subfolders."""
-    for leftover in Path(folder).rglob(".*.tmp-*"):
-        if leftover.is_file():
-            leftover.unlink(missing_ok=True)
-
-
-def clear_directory(out: Path, keep: tuple[str, ...] = ()) -> None:
-    """Empty a run directory for a new run, summary.json first (it must never describe other files)."""
+def remove_files(out: Path, patterns: tuple[str, ...]) -> None:
+    """Delete the files in ``out`` that match ``patterns`` (in their order), then the folders of the
+    patterns that this leaves empty. Nothing else is touched: no other file, no folder that holds
+    anything."""
     out = Path(out)
-    (out / "summary.json").unlink(missing_ok=True)
-    for entry in out.iterdir():
-        if entry.name in keep:
-            continue
-        if entry.is_dir() and not entry.is_symlink():
-            shutil.rmtree(entry)
-        else:
-            entry.unlink()
+    directory.check(out)
+    for pattern in patterns:
+        for path in sorted(out.glob(pattern)):
+            if path.is_file() or path.is_symlink():
+                directory.unlink(path)
+    for folder in dict.fromkeys(out / Path(pattern).parent for pattern in patterns if "/" in pattern):
+        if folder.is_dir() and not folder.is_symlink() and not any(folder.iterdir()):
+            directory.rmdir(folder)
+
+
+def check_room(out: Path, label: str = "--out") -> None:
+    """CaseError naming what stands where a run writes in ``out`` (a folder named like an output file,
+    a file named fields or checkpoint), before anything is computed."""
+    out = Path(out)
+    for name in OUTPUTS:
+        path = out / name
+        if path.parent != out and os.path.lexists(path.parent) and not path.parent.is_dir():
+            raise CaseError(f"{label} '{out}': '{path.parent}' is not a folder, and a run writes its "
+                            f"{path.parent.name}/ there: move it away")
+        if "*" not in name and path.is_dir():
+            raise CaseError(f"{label} '{out}': '{path}' is a folder, and a run writes a file there: move it away")
+
+
+def remove_outputs(out: Path) -> None:
+    """Delete what a run wrote in ``out`` (OUTPUTS and TEMPORARIES, see there), summary.json first: it
+    must never describe files that are gone."""
+    remove_files(out, OUTPUTS + TEMPORARIES)
+
+
+def remove_temporaries(out: Path) -> None:
+    """Delete the temporary files that a killed writer left beside the OUTPUTS in ``out``."""
+    remove_files(out, TEMPORARIES)
 
 
 def write_run(result: Result, out: str | os.PathLike, *, overwrite: bool = False) -> Path:
-    """Write every output of ``result`` to ``out`` (created; emptied first with ``overwrite``), each file
-    atomically and summary.json last."""
+    """Write every output of ``result`` to ``out`` (created; with ``overwrite`` the outputs of an earlier
+    run there are removed first, and nothing else), each file atomically and summary.json last, while
+    holding the directory (see :mod:`vpcontact.directory`)."""
     out = Path(out)
-    if out.exists() and any(out.iterdir()):
-        if not overwrite:
-            raise FileExistsError(f"output directory '{out}' is not empty (use --overwrite to replace it)")
-        clear_directory(out)
-    out.mkdir(parents=True, exist_ok=True)
-    write_resolved_case(result.problem.case, out)
-    write_outputs(result, out)
+    directory.usable(out, "output directory")
+    check_room(out, "output directory")
+    if directory.holds_files(out, "output directory") and not overwrite:
+        raise FileExistsError(f"output directory '{out}' is not empty (use --overwrite to replace it)")
+    held = directory.acquire(out, "output directory")
+    try:
+        remove_outputs(out)
+        write_resolved_case(result.problem.case, out)
+        write_outputs(result, out)
+    finally:
+        held.release()
     return out
 
 
@@ -177,7 +224,7 @@ def _write_contact(result: Result, path: Path) -> None:
 def _write_fields(result: Result, folder: Path) -> None:
     if not result.fields:
         return
-    folder.mkdir(exist_ok=True)
+    directory.mkdir(folder)
     problem = result.problem
     points = np.column_stack([problem.mesh.mesh.p.T, np.zeros(result.nodes)])
     triangles = [("triangle", problem.mesh.mesh.t.T)]

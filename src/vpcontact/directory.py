@@ -1,0 +1,308 @@
+"""An output directory held by this process while it writes into it (a run directory, a study
+directory, a directory of ``write_run``).
+
+``acquire(path)`` refuses, with a one-line CaseError naming the path and the reason, a path that
+cannot be a directory to write in (a symbolic link loop, a dangling link, a file in the way, a file
+system that refuses: read-only, /proc, no permission); otherwise it creates the directory (and its
+missing parents), takes an exclusive lock on it (``.vpcontact.lock``, ``flock``: two processes never
+write into one directory; the kernel releases it when a process dies), and opens it: its identity
+(device and inode) is remembered. All of this happens before any computation.
+
+The writers create, rename and remove files and folders in a held directory through ``replace``,
+``unlink``, ``mkdir`` and ``rmdir`` below: each first checks that the path still leads to the
+directory that was locked (else :class:`DirectoryReplaced`: the run stops) and then acts relative to
+the open directory itself, so that even a directory swapped between the check and the act is never
+written into: a process writes only into the directory it locked. (A temporary file is written by
+path before its rename; in that instant's window it can land in the new directory, where the failed
+rename leaves it to be removed again.) A worker process of a study ``watch``-es the study directory
+its parent holds: its writes below it are checked the same way.
+"""
+
+from __future__ import annotations
+
+import errno
+import itertools
+import os
+import stat
+from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # not POSIX: no lock, and no operations relative to a directory
+    fcntl = None
+
+from .errors import CaseError
+
+LOCK = ".vpcontact.lock"
+
+
+class DirectoryReplaced(OSError):
+    """A held directory was removed or replaced while this process was writing into it."""
+
+
+class Held:
+    """A directory this process holds: its path as given, its descriptor (None where the system has
+    no operations relative to a directory), its identity and lock (None: watched only, see
+    ``watch``), and what ``acquire`` changed to get it (to leave no trace when the run is refused: see
+    ``release``)."""
+
+    def __init__(self, path: Path, descriptor: int | None, identity: tuple[int, int], lock: int | None,
+                 created: list[Path], lock_existed: bool, changed: tuple[Path, os.stat_result]):
+        self.path, self.descriptor, self.identity, self.lock = path, descriptor, identity, lock
+        self.created, self.lock_existed, self.changed = created, lock_existed, changed
+        self.key = os.path.abspath(path)
+
+    def check(self) -> None:
+        """Raise DirectoryReplaced unless ``path`` still is the directory that was locked."""
+        try:
+            now = os.stat(self.path)
+        except OSError:
+            now = None
+        if now is None or _identity(now) != self.identity:
+            what = "removed" if now is None else "replaced by another directory"
+            raise DirectoryReplaced(f"the directory '{self.path}' was {what} while vpcontact was writing to it: "
+                                    f"vpcontact stopped and wrote nothing into what is now at that path")
+
+    def at(self, path: Path) -> tuple[str | Path, int | None]:
+        """``path`` for an os function: (the path relative to the open directory, its descriptor), or
+        (the path as it is, None)."""
+        if self.descriptor is None:
+            return path, None
+        return os.path.relpath(os.path.abspath(path), self.key), self.descriptor
+
+    def release(self, *, undo: bool = False) -> None:
+        """Unlock and remove the lock file (in the directory locked, wherever it is now). ``undo``
+        (nothing was written: the run was refused): remove only what ``acquire`` created (the lock
+        file, folders) and restore the times of the folder whose entries that changed."""
+        _HELD.pop(self.key, None)
+        try:
+            self.check()
+            same = True
+        except DirectoryReplaced:
+            same = False  # what is at the path now is not ours: touch nothing there
+        if not (undo and self.lock_existed) and (same or self.descriptor is not None):
+            name, descriptor = self.at(self.path / LOCK)
+            _quietly(os.unlink, name, dir_fd=descriptor)
+        os.close(self.lock)
+        if self.descriptor is not None:
+            os.close(self.descriptor)
+        if undo and same:
+            _undo(self.created, self.changed)
+
+
+_HELD: dict[str, Held] = {}
+"""The directories this process holds, by absolute path."""
+
+
+def usable(path: Path, label: str = "--out") -> None:
+    """Refuse (CaseError) a path that cannot be a directory to write in, without writing anything: its
+    nearest existing component must be a directory (after following symbolic links)."""
+    path = Path(path)
+    existing = next(p for p in (path, *path.parents) if os.path.lexists(p))
+    subject = f"{label} '{path}'" if existing == path else f"{label} '{path}': '{existing}'"
+    try:
+        mode = os.stat(existing).st_mode
+    except OSError as error:
+        if os.path.islink(existing) and error.errno == errno.ELOOP:
+            raise CaseError(f"{subject} is a symbolic link loop (it leads back to itself); remove it or give "
+                            f"another path") from None
+        if os.path.islink(existing) and error.errno == errno.ENOENT:
+            raise CaseError(f"{subject} is a symbolic link to '{os.readlink(existing)}', which does not exist; "
+                            f"create that directory or give another path") from None
+        raise CaseError(f"{subject}: cannot use it ({_reason(error)})") from None
+    if not stat.S_ISDIR(mode):
+        raise CaseError(f"{subject} exists and is not a directory")
+
+
+def holds_files(path: Path, label: str = "--out") -> bool:
+    """Does the directory ``path`` exist and hold anything besides a lock file?"""
+    try:
+        return any(entry.name != LOCK for entry in Path(path).iterdir())
+    except FileNotFoundError:
+        return False
+    except OSError as error:
+        raise CaseError(f"{label} '{path}': cannot read the directory ({_reason(error)})") from None
+
+
+def acquire(path: Path, label: str = "--out") -> Held:
+    """Create the directory ``path`` if needed, lock it and open it (see the module's docstring);
+    CaseError when it cannot be used, or when another vpcontact process holds it."""
+    path = Path(path)
+    usable(path, label)
+    check(path)  # inside a directory held (or watched) by this process: still that one
+    missing = list(itertools.takewhile(lambda p: not os.path.lexists(p), (path, *path.parents)))
+    parent = missing[-1].parent if missing else path  # the folder whose entries acquire changes
+    changed = (parent, os.stat(parent))
+    lock_existed = os.path.lexists(path / LOCK)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        _undo(missing, changed)
+        raise CaseError(f"{label} '{path}': cannot create the directory ({_reason(error)})") from None
+    descriptor = None
+    try:
+        descriptor = os.open(path, os.O_RDONLY | os.O_DIRECTORY) if fcntl is not None else None
+        lock = os.open(LOCK if descriptor is not None else path / LOCK, os.O_RDWR | os.O_CREAT, 0o644,
+                       dir_fd=descriptor)
+    except OSError as error:
+        if descriptor is not None:
+            os.close(descriptor)
+        _undo(missing, changed)
+        raise CaseError(f"{label} '{path}': cannot write in the directory ({_reason(error)})") from None
+    if fcntl is not None:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            if _identity(os.stat(LOCK, dir_fd=descriptor)) != _identity(os.fstat(lock)):
+                raise OSError(errno.EAGAIN, "the lock file was just replaced")  # by a process releasing it
+        except OSError:
+            os.close(lock)
+            os.close(descriptor)
+            raise CaseError(f"{label} '{path}': another vpcontact run is writing to it") from None
+    identity = _identity(os.fstat(descriptor) if descriptor is not None else os.stat(path))
+    held = Held(path, descriptor, identity, lock, missing, lock_existed, changed)
+    _HELD[held.key] = held
+    return held
+
+
+def check(path: Path) -> None:
+    """Before writing at ``path``: every held directory that contains it is still the one locked (else
+    DirectoryReplaced)."""
+    for held in _holders(path):
+        held.check()
+
+
+def replace(source: Path, target: Path) -> None:
+    """``os.replace(source, target)``, both in one held directory (see the module's docstring)."""
+    held = _checked(target)
+    if held is None:
+        os.replace(source, target)
+        return
+    (source, descriptor), (target, _) = held.at(Path(source)), held.at(Path(target))
+    _act(held, lambda: os.replace(source, target, src_dir_fd=descriptor, dst_dir_fd=descriptor))
+
+
+def unlink(path: Path) -> None:
+    """Remove the file ``path`` (if it is there) in its held directory."""
+    held = _checked(path)
+    if held is None:
+        Path(path).unlink(missing_ok=True)
+        return
+    name, descriptor = held.at(Path(path))
+    _act(held, lambda: _quietly(os.unlink, name, dir_fd=descriptor))
+
+
+def mkdir(path: Path) -> None:
+    """Create the folder ``path`` (if it is not there) in its held directory."""
+    held = _checked(path)
+    if held is None:
+        Path(path).mkdir(exist_ok=True)
+        return
+
+    name, descriptor = held.at(Path(path))
+
+    def make():
+        try:
+            os.mkdir(name, dir_fd=descriptor)
+        except FileExistsError:
+            if not stat.S_ISDIR(os.stat(name, dir_fd=descriptor).st_mode):
+                raise
+
+    _act(held, make)
+
+
+def rmdir(path: Path) -> None:
+    """Remove the empty folder ``path`` in its held directory."""
+    held = _checked(path)
+    if held is None:
+        Path(path).rmdir()
+        return
+    name, descriptor = held.at(Path(path))
+    _act(held, lambda: os.rmdir(name, dir_fd=descriptor))
+
+
+def discard(path: Path) -> None:
+    """Remove this process's own temporary file ``path`` wherever it is, never raising: in its held
+    directory (which may have been moved) and at the path (where a write racing a swap of the
+    directory may have put it)."""
+    holders = _holders(path)
+    if holders:
+        name, descriptor = holders[-1].at(Path(path))
+        _quietly(os.unlink, name, dir_fd=descriptor)
+    _quietly(os.unlink, path)
+
+
+def forget_inherited() -> None:
+    """In a process forked from one that holds directories: let go of the copies of their locks (the
+    parent holds them; a worker process writes only into the directories it acquires itself)."""
+    for held in _HELD.values():
+        for descriptor in (held.lock, held.descriptor):
+            if descriptor is not None:
+                os.close(descriptor)
+    _HELD.clear()
+
+
+def watch(path: Path, identity: tuple[int, int]) -> None:
+    """In a worker process: check every write below ``path`` (a directory its parent process holds,
+    with this ``identity``) as if this process held it: nothing is written below a replacement."""
+    held = Held(Path(path), None, identity, None, [], False, None)
+    _HELD[held.key] = held
+
+
+def _holders(path: Path) -> list[Held]:
+    """The held directories that contain ``path``, innermost last."""
+    target = os.path.abspath(path)
+    found = [held for held in list(_HELD.values())
+             if target == held.key or target.startswith(held.key.rstrip(os.sep) + os.sep)]
+    return sorted(found, key=lambda held: len(held.key))
+
+
+def _checked(path: Path) -> Held | None:
+    """Check the held directories that contain ``path``; the innermost (None: not in one)."""
+    holders = _holders(path)
+    for held in holders:
+        held.check()
+    return holders[-1] if holders else None
+
+
+def _act(held: Held, action) -> None:
+    """Do ``action``; an OSError it raises because the directory was removed or replaced meanwhile
+    becomes DirectoryReplaced."""
+    try:
+        action()
+    except OSError:
+        held.check()
+        raise
+
+
+def _quietly(function, *arguments, **keywords) -> None:
+    """``function(*arguments, **keywords)``, a missing file being no error."""
+    try:
+        function(*arguments, **keywords)
+    except FileNotFoundError:
+        pass
+
+
+def _identity(status: os.stat_result) -> tuple[int, int]:
+    return status.st_dev, status.st_ino
+
+
+def _undo(created: list[Path], changed: tuple[Path, os.stat_result]) -> None:
+    """Remove the folders ``acquire`` created (deepest first, if empty) and restore the times of the
+    folder whose entries that changed: a refused run leaves no trace."""
+    for folder in created:
+        try:
+            folder.rmdir()
+        except OSError:
+            break
+    folder, before = changed
+    try:
+        os.utime(folder, ns=(before.st_atime_ns, before.st_mtime_ns))
+    except OSError:
+        pass  # a folder we cannot write in: it did not change
+
+
+def _reason(error: OSError) -> str:
+    """The OS's reason; ENOENT where the folders exist means the file system refuses (/proc, ...)."""
+    if error.errno == errno.ENOENT:
+        return f"the file system refuses: {error.strerror}"
+    return error.strerror or str(error)

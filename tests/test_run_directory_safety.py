@@ -1,0 +1,499 @@
+"""Run directories that never lose a user's file: --overwrite removes only vpcontact's outputs, an
+unusable --out or a damaged checkpoint is refused with one line (exit 2) before anything is computed
+or written, and a run whose directory is removed or replaced under it stops writing (exit 4)."""
+
+import errno
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import tomli_w
+
+import vpcontact
+from vpcontact import checkpoint, directory, writers
+from vpcontact.cli import main
+from vpcontact.problem import build_problem
+from vpcontact.stepping import TimeLoop
+from conftest import assert_refused, half_disc_case, rectangle_case, run_cli, snapshot_tree
+
+
+def write_case(folder, name="case.toml", **output):
+    """A fast case (11 steps, 0.1 s) writing the fields of every step (fields/ is used)."""
+    case = rectangle_case()
+    case["output"] = {"field_steps": "all", **output}
+    path = Path(folder) / name
+    path.write_text(tomli_w.dumps(case))
+    return path
+
+
+def contents(folder):
+    """{relative path: bytes} of every file under ``folder``."""
+    folder = Path(folder)
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def put_user_files(out):
+    """What a user keeps in a run directory: the case and mesh, notes, a folder with files named like
+    outputs, a file in fields/ and in checkpoint/, hidden files; returns them ({path: bytes})."""
+    out.mkdir(parents=True, exist_ok=True)
+    before = contents(out)
+    write_case(out, "my_case.toml")
+    (out / "mesh.msh").write_bytes(b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n")
+    (out / "notes.txt").write_text("calibration notes")
+    (out / "old").mkdir(exist_ok=True)
+    (out / "old" / "summary.json").write_text('{"status": "complete", "mine": true}')
+    (out / "old" / "history.csv").write_text("mine\n")
+    (out / "fields").mkdir(exist_ok=True)
+    (out / "fields" / "my_view.pvsm").write_text("<ParaView/>")
+    (out / "checkpoint").mkdir(exist_ok=True)
+    (out / "checkpoint" / "README").write_text("do not delete")
+    (out / ".hidden").write_text("mine")
+    (out / ".history.tmp-notes.csv").write_text("named like a temporary, but not one")
+    return {name: data for name, data in contents(out).items() if name not in before}
+
+
+def assert_user_files_intact(out, before):
+    after = contents(out)
+    for name, data in before.items():
+        assert after.get(name) == data, f"{name} changed or deleted"
+
+
+# --- 1. --overwrite removes only vpcontact's outputs -------------------------------------------------
+def test_overwrite_keeps_every_file_vpcontact_did_not_write(tmp_path):
+    out = tmp_path / "run"
+    case = write_case(tmp_path)
+    assert run_cli("run", case, "--out", out, "--quiet")[0] == 0
+    mine = put_user_files(out)
+    (tmp_path / "elsewhere.csv").write_text("a user's table")
+    (out / "contact.csv").unlink()
+    (out / "contact.csv").symlink_to(tmp_path / "elsewhere.csv")  # an output name that is a link to a user's file
+    vtu_before = sorted(p.name for p in (out / "fields").glob("*.vtu"))
+    assert len(vtu_before) == 22
+
+    # the new run writes no fields: the old ones go, fields/ stays for the user's file in it
+    status, stdout, stderr = run_cli("run", case, "--out", out, "--quiet", "--overwrite",
+                                     "--set", 'output.field_steps="none"', "--set", "contact.g=0.15")
+    assert status == 0, stderr
+    assert_user_files_intact(out, mine)
+    assert (tmp_path / "elsewhere.csv").read_text() == "a user's table"
+    assert sorted(p.name for p in (out / "fields").iterdir()) == ["my_view.pvsm"]
+    assert sorted(p.name for p in (out / "checkpoint").iterdir()) == ["README"]
+    assert not (out / "solution.npz").exists() and not (out / directory.LOCK).exists()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "complete" and vpcontact.load_case(out / "case.resolved.toml").contact.g == 0.15
+    assert not (out / "contact.csv").is_symlink()
+
+
+def test_overwrite_removes_fields_and_checkpoint_folders_it_empties(tmp_path):
+    out = tmp_path / "run"
+    case = write_case(tmp_path)
+    assert run_cli("run", case, "--out", out, "--quiet")[0] == 0
+    (out / "notes.txt").write_text("mine")
+    assert run_cli("run", case, "--out", out, "--quiet", "--overwrite", "--set", 'output.field_steps="none"')[0] == 0
+    assert sorted(p.name for p in out.iterdir()) == ["case.resolved.toml", "contact.csv", "history.csv", "notes.txt",
+                                                     "summary.json"]
+
+
+def test_the_list_of_outputs_names_every_file_a_run_writes(tmp_path):
+    """A run directory holding everything a run writes (outputs, fields, a checkpoint with fields,
+    temporaries of every kind) is empty after remove_outputs: the list misses nothing."""
+    case = rectangle_case()
+    case["output"]["field_steps"] = "all"
+    case = vpcontact.load_case(case)
+    loop = TimeLoop(build_problem(case))
+    result = loop.run(stop=lambda: "stopped" if loop.state.step >= 5 else None)
+    out = tmp_path / "run"
+    out.mkdir()
+    checkpoint.save(loop, out)
+    writers.write_resolved_case(case, out)
+    writers.write_outputs(result, out)
+    for path in list(out.rglob("*")):
+        if path.is_file():
+            (path.parent / f".{path.stem}.tmp-12345{path.suffix}").write_text("half a file")
+    assert {p.parent.name for p in out.rglob("*.npz")} == {"run", "checkpoint"} and len(list(out.rglob("*"))) > 40
+    writers.remove_outputs(out)
+    assert list(out.iterdir()) == []
+
+
+def test_write_run_with_overwrite_keeps_the_users_files(tmp_path):
+    result = vpcontact.solve(rectangle_case())
+    out = tmp_path / "run"
+    writers.write_run(result, out)
+    mine = put_user_files(out)
+    writers.write_run(result, out, overwrite=True)
+    assert_user_files_intact(out, mine)
+    assert json.loads((out / "summary.json").read_text())["status"] == "complete"
+    with pytest.raises(FileExistsError):
+        writers.write_run(result, out)
+
+
+# --- 4. an unusable --out: exit 2, one line, nothing written, nothing computed ------------------------
+def _file(tmp):
+    (tmp / "file").write_text("a user's file")
+    return tmp / "file"
+
+
+def _loop(tmp):
+    os.symlink("b", tmp / "a")
+    os.symlink("a", tmp / "b")
+    return tmp / "a"
+
+
+def _dangling(tmp):
+    os.symlink("missing", tmp / "link")
+    return tmp / "link"
+
+
+def _fifo(tmp):
+    os.mkfifo(tmp / "fifo")
+    return tmp / "fifo"
+
+
+UNUSABLE = {
+    "a regular file": (lambda tmp: _file(tmp), "exists and is not a directory"),
+    "below a regular file": (lambda tmp: _file(tmp) / "run", "is not a directory"),
+    "deep below a regular file": (lambda tmp: _file(tmp) / "a" / "b", "is not a directory"),
+    "a FIFO": (lambda tmp: _fifo(tmp), "exists and is not a directory"),
+    "/dev/null": (lambda tmp: Path("/dev/null"), "exists and is not a directory"),
+    "a symbolic link loop": (lambda tmp: _loop(tmp), "symbolic link loop"),
+    "below a symbolic link loop": (lambda tmp: _loop(tmp) / "run", "symbolic link loop"),
+    "a dangling symbolic link": (lambda tmp: _dangling(tmp), "which does not exist"),
+    "below a dangling symbolic link": (lambda tmp: _dangling(tmp) / "run", "which does not exist"),
+    "a new folder under /proc": (lambda tmp: Path("/proc/vpcontact-test/run"), "cannot create the directory"),
+    "a folder of /proc": (lambda tmp: Path("/proc/self/fdinfo/run"), "cannot create the directory"),
+    "under /sys": (lambda tmp: Path("/sys/vpcontact-test"), "cannot create the directory"),
+}
+
+
+@pytest.mark.parametrize("kind, flag", [(kind, "") for kind in sorted(UNUSABLE)] + [
+    (kind, flag) for kind in ("a regular file", "a symbolic link loop", "a dangling symbolic link",
+                              "a new folder under /proc") for flag in ("--overwrite", "--resume")])
+def test_an_unusable_out_is_refused_with_one_line(tmp_path, kind, flag):
+    make, words = UNUSABLE[kind]
+    case = write_case(tmp_path)
+    out = make(tmp_path)
+    before = snapshot_tree(tmp_path)
+    status, _, stderr = run_cli("run", case, "--out", out, "--quiet", *([flag] if flag else []))
+    assert_refused(status, stderr, str(out), words, untouched=[(tmp_path, before)])
+
+
+IN_THE_WAY = {
+    "a folder named summary.json": (lambda out: (out / "summary.json").mkdir(), "summary.json' is a folder"),
+    "a folder named case.resolved.toml": (lambda out: (out / "case.resolved.toml").mkdir(), "is a folder"),
+    "a file named fields": (lambda out: (out / "fields").write_text("mine"), "fields' is not a folder"),
+    "a file named checkpoint": (lambda out: (out / "checkpoint").write_text("mine"), "checkpoint' is not a folder"),
+}
+
+
+@pytest.mark.parametrize("flag", ["--overwrite", "--resume"])
+@pytest.mark.parametrize("kind", sorted(IN_THE_WAY))
+def test_a_user_file_where_a_run_writes_is_refused_before_the_run(tmp_path, kind, flag):
+    """What stands where an output goes is the user's: refused at once (not after the computation),
+    and left alone."""
+    make, words = IN_THE_WAY[kind]
+    case = write_case(tmp_path)
+    out = tmp_path / "run"
+    out.mkdir()
+    make(out)
+    before = snapshot_tree(tmp_path)
+    status, _, stderr = run_cli("run", case, "--out", out, "--quiet", flag)
+    assert_refused(status, stderr, words, "move it away", untouched=[(tmp_path, before)])
+
+
+@pytest.mark.parametrize("out, flag", [("/proc/self", "--overwrite"), ("/proc", "--resume")])
+def test_an_existing_directory_on_a_read_only_file_system_is_refused(tmp_path, out, flag):
+    case = write_case(tmp_path)
+    status, _, stderr = run_cli("run", case, "--out", out, "--quiet", flag)
+    assert_refused(status, stderr, out, "cannot write in the directory")
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only directories")
+def test_a_read_only_directory_is_refused(tmp_path):
+    case = write_case(tmp_path)
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    folder.chmod(0o555)
+    try:
+        status, _, stderr = run_cli("run", case, "--out", folder / "run", "--quiet")
+        assert_refused(status, stderr, "cannot create the directory", "Permission denied")
+    finally:
+        folder.chmod(0o755)
+
+
+def test_out_is_checked_before_the_case_is_built(tmp_path):
+    """An unusable --out is refused before any computation: before the mesh and its parts are built."""
+    case = write_case(tmp_path)
+    status, _, stderr = run_cli("run", case, "--out", "/proc/vpcontact-test", "--quiet",
+                                "--set", 'contact.part="nonexistent"')
+    assert_refused(status, stderr, "/proc/vpcontact-test", "cannot create the directory")
+
+
+@pytest.mark.parametrize("depth", [1, 3])
+def test_a_case_refused_after_out_was_created_leaves_nothing(tmp_path, depth):
+    """The directory (and parents) created for the run are removed again when the case is refused."""
+    case = write_case(tmp_path)
+    out = tmp_path.joinpath(*[f"level{i}" for i in range(depth)])
+    before = snapshot_tree(tmp_path)
+    status, _, stderr = run_cli("run", case, "--out", out, "--quiet", "--set", 'contact.part="nonexistent"')
+    assert_refused(status, stderr, "nonexistent", untouched=[(tmp_path, before)])
+
+
+def test_a_case_refused_in_a_used_directory_changes_nothing_in_it(tmp_path):
+    out = tmp_path / "run"
+    case = write_case(tmp_path)
+    assert run_cli("run", case, "--out", out, "--quiet")[0] == 0
+    put_user_files(out)
+    (out / directory.LOCK).write_text("")  # a killed run's lock file stays too
+    before = snapshot_tree(tmp_path)
+    status, _, stderr = run_cli("run", case, "--out", out, "--quiet", "--overwrite", "--set", 'contact.part="nope"')
+    assert_refused(status, stderr, "nope", untouched=[(tmp_path, before)])
+
+
+def test_a_used_directory_is_refused_without_overwrite_or_resume(tmp_path):
+    out = tmp_path / "run"
+    case = write_case(tmp_path)
+    mine = put_user_files(out)
+    before = snapshot_tree(out)
+    status, _, stderr = run_cli("run", case, "--out", out, "--quiet")
+    assert_refused(status, stderr, "is not empty", "--overwrite", untouched=[(out, before)])
+    assert contents(out) == mine
+
+
+# --- 4. --resume from a damaged checkpoint: exit 2, one line naming the file and what to do ----------
+def killed_run(folder, steps_done=5):
+    """A run directory as a run killed after its checkpoint at step ``steps_done`` leaves it (fields
+    saved at steps 2 and 4)."""
+    case = rectangle_case()
+    case["output"] = {"field_steps": [2, 4, 11], "checkpoint_every_steps": 1}
+    path = Path(folder) / "case.toml"
+    path.write_text(tomli_w.dumps(case))
+    loaded = vpcontact.load_case(path)
+    loop = TimeLoop(build_problem(loaded))
+    loop.run(stop=lambda: "killed" if loop.state.step >= steps_done else None)
+    out = Path(folder) / "run"
+    out.mkdir()
+    writers.write_resolved_case(loaded, out)
+    checkpoint.save(loop, out)
+    writers.write_outputs(loop.result, out, history_only=True)
+    return path, out
+
+
+def _truncate(fraction, name="state.npz"):
+    def damage(out):
+        path = out / "checkpoint" / name
+        data = path.read_bytes()
+        path.write_bytes(data[: int(len(data) * fraction)])
+        return path, "empty" if fraction == 0 else "truncated or damaged"
+    return damage
+
+
+def _remove(name):
+    def damage(out):
+        (out / "checkpoint" / name).unlink()
+        return out / "checkpoint" / name, "is missing"
+    return damage
+
+
+def _garbage(out):
+    path = out / "checkpoint" / "state.npz"
+    path.write_bytes(os.urandom(5000))
+    return path, "truncated or damaged"
+
+
+def _folder(out):
+    path = out / "checkpoint" / "fields_00004.npz"
+    path.unlink()
+    path.mkdir()
+    return path, "not a regular file"
+
+
+def _not_ours(out):
+    path = out / "checkpoint" / "state.npz"
+    np.savez(path, something=np.arange(3))
+    return path, "unreadable checkpoint"
+
+
+DAMAGE = {
+    "empty state.npz": _truncate(0.0),
+    "state.npz cut to 1%": _truncate(0.01),
+    "state.npz cut in half": _truncate(0.5),
+    "state.npz without its last byte": _truncate(0.9999),
+    "a fields file cut in half": _truncate(0.5, "fields_00002.npz"),
+    "an empty fields file": _truncate(0.0, "fields_00004.npz"),
+    "a missing fields file": _remove("fields_00002.npz"),
+    "state.npz of random bytes": _garbage,
+    "a fields file that is a folder": _folder,
+    "an .npz that is not a checkpoint": _not_ours,
+}
+
+
+@pytest.mark.parametrize("kind", sorted(DAMAGE))
+def test_resume_from_a_damaged_checkpoint_is_refused(tmp_path, kind):
+    case, out = killed_run(tmp_path)
+    path, words = DAMAGE[kind](out)
+    before = snapshot_tree(tmp_path)
+    status, _, stderr = run_cli("run", case, "--out", out, "--quiet", "--resume")
+    assert_refused(status, stderr, str(path), words, "--overwrite", untouched=[(tmp_path, before)])
+
+
+def test_after_a_damaged_checkpoint_overwrite_starts_again(tmp_path):
+    case, out = killed_run(tmp_path)
+    _truncate(0.5)(out)
+    assert run_cli("run", case, "--out", out, "--quiet", "--resume")[0] == 2
+    status, _, stderr = run_cli("run", case, "--out", out, "--quiet", "--overwrite")
+    assert status == 0, stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "complete" and summary["resumed_at_steps"] == [] and not (out / "checkpoint").exists()
+
+
+def test_resume_from_an_intact_checkpoint_still_works(tmp_path):
+    case, out = killed_run(tmp_path)
+    status, _, stderr = run_cli("run", case, "--out", out, "--quiet", "--resume")
+    assert status == 0, stderr
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["resumed_at_steps"] == [5] and summary["steps"] == 11 and not (out / "checkpoint").exists()
+
+
+# --- 3. a run writes only into the directory it locked ----------------------------------------------
+def slow_case(folder):
+    """The half disc with a creeping body: 400 steps, a checkpoint after each (several seconds)."""
+    case = half_disc_case(h=0.1, stiffness={"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0})
+    case["boundary"]["traction"][0]["value"] = ["0", "-20*min(t, 0.5)"]
+    case["material"]["viscoplastic"] = {"law": "perzyna", "eta": 0.5, "yield_stress": 3.0}
+    case["time"] = {"T": 2.0, "steps": 400}
+    case["output"] = {"field_steps": [100, 200, 400], "checkpoint_every_steps": 1}
+    path = Path(folder) / "slow.toml"
+    path.write_text(tomli_w.dumps(case))
+    return path
+
+
+def start_run(case, out):
+    return subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "run", str(case), "--out", str(out), "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+
+def wait_for(condition, process, timeout=60.0):
+    deadline = time.time() + timeout
+    while not condition():
+        assert process.poll() is None, f"the run ended too early: {process.communicate()}"
+        assert time.time() < deadline, "timed out"
+        time.sleep(0.005)
+
+
+@pytest.mark.parametrize("replace", [True, False], ids=["replaced", "removed"])
+def test_a_run_whose_directory_is_replaced_stops_writing(tmp_path, replace):
+    out = tmp_path / "run"
+    process = start_run(slow_case(tmp_path), out)
+    try:
+        wait_for(lambda: (out / "checkpoint" / "state.npz").exists(), process)
+        out.rename(tmp_path / "moved")
+        if replace:
+            out.mkdir()
+            (out / "notes.txt").write_text("a new directory of the user")
+        before = snapshot_tree(tmp_path / "run")
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 4, stderr
+    assert stderr.count("\n") == 1 and "Traceback" not in stderr, stderr
+    assert f"the directory '{out}' was {'replaced by another directory' if replace else 'removed'}" in stderr
+    time.sleep(0.5)
+    assert snapshot_tree(out) == before  # nothing written into the new directory, nothing recreated
+    # the run's own directory, where it was moved, holds the run so far (and perhaps the temporary file
+    # of the write the swap interrupted, as a killed run does; --resume removes it)
+    moved = tmp_path / "moved"
+    assert not (moved / "summary.json").exists() and (moved / "checkpoint" / "state.npz").exists()
+    assert {p.name for p in moved.iterdir() if not p.match(".history.tmp-*.csv")} <= {
+        "case.resolved.toml", "history.csv", "checkpoint", directory.LOCK}
+
+
+def test_a_run_resumes_in_its_moved_directory(tmp_path):
+    """The run stopped by a replaced directory left a valid checkpoint in the directory it wrote to."""
+    out = tmp_path / "run"
+    case = slow_case(tmp_path)
+    process = start_run(case, out)
+    try:
+        wait_for(lambda: (out / "checkpoint" / "state.npz").exists(), process)
+        out.rename(tmp_path / "moved")
+        out.mkdir()
+        process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 4
+    status, _, stderr = run_cli("run", case, "--out", tmp_path / "moved", "--quiet", "--resume",
+                                "--set", "output.checkpoint_every_steps=0", timeout=300)
+    assert status == 0, stderr
+    summary = json.loads((tmp_path / "moved" / "summary.json").read_text())
+    assert summary["status"] == "complete" and summary["resumed_at_steps"][0] >= 1
+    assert list(out.iterdir()) == []
+
+
+def test_the_held_directory_is_checked_before_each_write(tmp_path):
+    """In-process: once the held directory is replaced, every write raises DirectoryReplaced and the
+    new directory stays as it is (its lock file too); the lock file goes from the directory locked."""
+    out = tmp_path / "run"
+    held = directory.acquire(out)
+    writers.write_text(out / "history.csv", "step\n")
+    out.rename(tmp_path / "moved")
+    out.mkdir()
+    (out / directory.LOCK).write_text("")  # a lock file of another run now there
+    for write in (lambda: writers.write_text(out / "summary.json", "{}"),
+                  lambda: directory.mkdir(out / "fields"),
+                  lambda: writers.write_text(out / "fields" / "body.pvd", ""),
+                  lambda: writers.remove_outputs(out)):
+        with pytest.raises(directory.DirectoryReplaced, match="replaced by another directory"):
+            write()
+    held.release()
+    assert sorted(p.name for p in out.iterdir()) == [directory.LOCK]
+    assert sorted(p.name for p in (tmp_path / "moved").iterdir()) == ["history.csv"]
+
+
+def test_a_swap_between_the_check_and_the_write_still_misses_the_new_directory(tmp_path, monkeypatch):
+    """Files and folders are created, renamed and removed relative to the directory locked: even a
+    swap the check does not see (the check disabled here) leaves the new directory untouched."""
+    out = tmp_path / "run"
+    held = directory.acquire(out)
+    writers.write_text(out / "summary.json", "{}")
+    out.rename(tmp_path / "moved")
+    out.mkdir()
+    (out / "summary.json").write_text("the user's")
+    monkeypatch.setattr(directory.Held, "check", lambda self: None)
+    directory.unlink(out / "summary.json")
+    directory.mkdir(out / "fields")
+    with pytest.raises(FileNotFoundError):  # the temporary went to the new directory, the rename to the old one
+        writers.write_text(out / "history.csv", "step\n")
+    held.release()
+    assert contents(out) == {"summary.json": b"the user's"} and [p.name for p in out.iterdir()] == ["summary.json"]
+    assert sorted(p.name for p in (tmp_path / "moved").iterdir()) == ["fields"]
+
+
+def test_a_write_that_fails_ends_the_run_with_one_line(tmp_path, monkeypatch, capsys):
+    """A full disk (say) during the run: exit 4 and one line naming the file and the reason."""
+    def disk_full(result, path):
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(writers, "write_solution", disk_full)
+    out = tmp_path / "run"
+    assert main(["run", str(write_case(tmp_path)), "--out", str(out), "--quiet"]) == 4
+    stderr = capsys.readouterr().err
+    assert stderr == f"vpcontact: stopped: No space left on device: '{out / 'solution.npz'}'\n"
+    assert not (out / "summary.json").exists() and not (out / directory.LOCK).exists()
+
+
+def test_two_processes_never_hold_one_directory(tmp_path):
+    out = tmp_path / "run"
+    held = directory.acquire(out)
+    try:
+        status, _, stderr = run_cli("run", write_case(tmp_path), "--out", out, "--quiet", "--overwrite")
+        assert_refused(status, stderr, "another vpcontact run is writing to it")
+    finally:
+        held.release()
+    assert list(out.iterdir()) == []
