@@ -360,8 +360,9 @@ def load_case(source: str | Path | dict, overrides: dict | list[str] | None = No
         raise CaseError(one_line(str(error))) from None
 
 
-#: Longest message of a CaseError from load_case.
-LONGEST_MESSAGE = 400
+#: Longest message of a refusal (the command line cuts longer ones): a user's values are shown
+#: shortened (errors.shown), so this cuts only the explanations of the longest mesh diagnoses.
+LONGEST_MESSAGE = 800
 
 
 def one_line(message: str) -> str:

@@ -18,14 +18,22 @@ import sys
 from pathlib import Path
 
 from . import __version__
-from .case import load_case
+from .case import load_case, one_line
 from .errors import CaseError
 
 EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OUTPUT = 2, 3, 4
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the refusal of every other bad input: one line, exit status 2 (not the usage)."""
+
+    def error(self, message: str):
+        print(f"vpcontact: error: {one_line(message)} (see {self.prog} --help)", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="vpcontact", description=(
+    parser = _Parser(prog="vpcontact", description=(
         "Quasistatic contact of viscoplastic bodies with a foundation whose soft layer hardens or "
         "softens with the history of penetration (Barboteu, Han, Sofonea)."))
     parser.add_argument("--version", action="version", version=f"vpcontact {__version__}")
@@ -63,6 +71,12 @@ def main(argv: list[str] | None = None) -> int:
     return _study(args) if args.command == "study" else _run(args)
 
 
+def _refuse(error) -> int:
+    """Bad input: one line on stderr (however long or multi-line the message), exit status 2."""
+    print(f"vpcontact: error: {one_line(str(error))}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
 def _run(args) -> int:
     from .rundir import EXIT_SIGNAL, run
 
@@ -71,8 +85,7 @@ def _run(args) -> int:
         progress = case.output.progress and not args.quiet and sys.stderr.isatty()
         outcome = run(case, args.out, resume=args.resume, overwrite=args.overwrite, progress=progress)
     except CaseError as error:
-        print(f"vpcontact: error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return _refuse(error)
     except OSError as error:  # the run directory was replaced, or a write failed: the run stopped
         print(f"vpcontact: {_describe(error)}", file=sys.stderr)
         return EXIT_OUTPUT
@@ -111,9 +124,9 @@ def _study(args) -> int:
 
     client = None
     try:
-        study = load_study(args.study, args.out)
         if args.workers is not None and args.workers < 1:
             raise CaseError(f"--workers {args.workers}: must be at least 1")
+        study = load_study(args.study, args.out)
         if args.scheduler is not None:
             client = _connect(args.scheduler)
         with StopOnSignals() as stopper:
@@ -121,8 +134,7 @@ def _study(args) -> int:
                                workers=args.workers, progress=not args.quiet and sys.stderr.isatty(),
                                stop=stopper.reason)
     except CaseError as error:
-        print(f"vpcontact: error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return _refuse(error)
     except OSError as error:  # the study directory was replaced, or a write failed: the study stopped
         print(f"vpcontact: {_describe(error)}", file=sys.stderr)
         return EXIT_OUTPUT
@@ -160,14 +172,12 @@ def _reproduce(args) -> int:
     from .reproduce import OutputError, ReproduceError, run
 
     if args.workers is not None and args.workers < 1:
-        print(f"vpcontact: error: --workers {args.workers}: must be at least 1", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return _refuse(f"--workers {args.workers}: must be at least 1")
     log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
     try:
         run(args.out, quick=args.quick, workers=args.workers, overwrite=args.overwrite, log=log)
     except OutputError as error:  # --out unusable: nothing was run
-        print(f"vpcontact: error: {error}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return _refuse(error)
     except ReproduceError as error:
         print(f"vpcontact: {error}", file=sys.stderr)
         return EXIT_FAILED

@@ -91,6 +91,8 @@ def load_study(path: str | os.PathLike, out: str | os.PathLike) -> Study:
         raise CaseError(f"study file '{path}' not found") from None
     except tomllib.TOMLDecodeError as error:
         raise CaseError(f"study file '{path}' is not valid TOML: {error}") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise CaseError(f"study file '{path}' cannot be read: {error}") from None
     unknown = set(data) - STUDY_KEYS
     if unknown:
         raise CaseError(f"unknown key '{sorted(unknown)[0]}' in study file (valid keys: {', '.join(sorted(STUDY_KEYS))})")

@@ -24,7 +24,12 @@ def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float 
                 max_iterations: int, length_scale: float, factorization: str = "auto"):
     """The step solver ``method`` for stiffness A and contact operator N (both on the free dofs);
     ``rigid``: an orthonormal basis of the rigid motions held only by contact, (free dofs, k)."""
-    r = default_augmentation(A, N) if augmentation is None else augmentation
+    r = default_augmentation(A, N)
+    if augmentation is not None:
+        if not 1e-12 <= augmentation / r <= 1e12:
+            raise CaseError(f"solver.augmentation = {augmentation:g} is {augmentation / r:.1e} times the normal "
+                            f"stiffness at the contact nodes ({r:.3g}): use \"auto\" or a value near it")
+        r = augmentation
     if method == "auto":
         try:
             check_condensed_memory(N.shape[0], A.shape[0])

@@ -1,0 +1,39 @@
+"""Command-line usage mistakes get the same refusal as every other bad input: exit 2, one line naming
+the problem and where to look, nothing written."""
+
+import pytest
+
+from conftest import assert_refused, run_cli, snapshot_tree
+
+MISTAKES = [
+    ([], "required: command"),
+    (["run"], "required: case, --out"),
+    (["run", "case.toml"], "required: --out"),
+    (["run", "case.toml", "--out"], "--out: expected one argument"),
+    (["run", "case.toml", "--out", "out", "--resume", "--overwrite"], "not allowed with"),
+    (["run", "case.toml", "--out", "out", "--set"], "--set: expected one argument"),
+    (["run", "case.toml", "--out", "out", "--colour"], "unrecognized arguments: --colour"),
+    (["study", "study.toml"], "required: --out"),
+    (["study", "study.toml", "--out", "out", "--workers", "two"], "invalid int value: 'two'"),
+    (["study", "study.toml", "--out", "out", "--workers", "0"], "--workers 0: must be at least 1"),
+    (["reproduce"], "required: --out"),
+    (["reproduce", "--out", "out", "--workers", "-1"], "--workers -1: must be at least 1"),
+    (["solve", "case.toml"], "invalid choice: 'solve'"),
+]
+
+
+@pytest.mark.parametrize("args, words", MISTAKES, ids=[" ".join(a) or "nothing" for a, _ in MISTAKES])
+def test_usage_mistakes_are_refused_on_one_line(tmp_path, args, words):
+    (tmp_path / "case.toml").write_text("")
+    (tmp_path / "study.toml").write_text("")
+    before = snapshot_tree(tmp_path)
+    status, out, err = run_cli(*args, cwd=tmp_path)
+    assert_refused(status, err, words, untouched=[(tmp_path, before)])
+    assert out == ""
+
+
+def test_help_and_version_still_work():
+    status, out, err = run_cli("--help")
+    assert status == 0 and "run" in out and err == ""
+    status, out, _ = run_cli("--version")
+    assert status == 0 and out.startswith("vpcontact ")
