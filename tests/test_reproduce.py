@@ -182,3 +182,26 @@ def test_along_curve_orders_shuffled_segments():
     pieces = (order[:12], order[12:]) if order[0] < 12 else (order[5:], order[:5])
     assert list(pieces[0]) in (list(path), list(path[::-1]))
     assert all(abs(int(a) - int(b)) in (1, 4) for a, b in zip(pieces[1], pieces[1][1:]))
+
+
+def test_overwrite_removes_the_reproduction_and_nothing_else(quick, tmp_path):
+    """--overwrite deletes what a reproduction wrote, and keeps every file of the user's, also inside
+    the reproduction's folders (cases/, studies/, a run directory, figures/)."""
+    import shutil
+
+    from vpcontact.reproduce import prepare
+
+    source, _ = quick
+    out = tmp_path / "paper"
+    shutil.copytree(source, out)
+    mine = {"notes.txt": "mine", "cases/my_case.toml": "x", "cases/beta+1_k0.1/notes.md": "y",
+            "studies/rho_sweep/runs/rho=1/fields/view.pvsm": "z", "figures/fig02_annotated.png": "w",
+            "figures/drafts/a.txt": "v"}
+    for name, text in mine.items():
+        (out / name).parent.mkdir(parents=True, exist_ok=True)
+        (out / name).write_text(text)
+    prepare(out, overwrite=True)
+    left = {str(p.relative_to(out)) for p in out.rglob("*") if p.is_file()}
+    assert left == set(mine)
+    assert all((out / name).read_text() == text for name, text in mine.items())
+    assert not (out / "studies" / "hk_convergence").exists()  # emptied folders go

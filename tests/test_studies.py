@@ -325,6 +325,32 @@ def test_a_signal_stops_the_study_its_workers_and_writes_the_table(tmp_path, num
         assert {r: (out / "runs" / r / "summary.json").stat().st_mtime_ns for r in complete} == finished
 
 
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc")
+def test_a_worker_killed_by_the_system_stops_the_study_cleanly(tmp_path):
+    """A worker killed from outside (the out-of-memory killer, say) breaks the local pool: the study
+    stops with one line and exit 3, writes the table of what finished, and leaves no process behind."""
+    path = write_study(tmp_path, steps=600, h=0.1)
+    out = tmp_path / "out"
+    process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "study", str(path), "--out", str(out),
+                                "--workers", "2", "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, start_new_session=True)
+    try:
+        deadline = time.time() + 180
+        while len(workers := children(process.pid)) < 2 or not list(out.glob("runs/*/history.csv")):
+            assert process.poll() is None and time.time() < deadline, process.communicate()
+            time.sleep(0.02)
+        os.kill(min(workers), signal.SIGKILL)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    assert process.returncode == 3, stderr
+    assert stderr.count("\n") == 1 and "a worker process died" in stderr and "Traceback" not in stderr, stderr
+    assert not [pid for pid in workers if running(pid)]
+    table = read_table(out / "study.csv")
+    assert len(table) == 4 and "interrupted" in {row["status"] for row in table.values()}
+
+
 def test_a_second_study_into_a_directory_in_use_is_refused(tmp_path):
     path = write_study(tmp_path, steps=600, h=0.1)
     out = tmp_path / "out"

@@ -146,7 +146,7 @@ def _study(args) -> int:
         complete = len(report["skipped"]) + len(report["completed"])
         print(f"vpcontact: study {report['stopped']}: {complete} of {len(study.runs)} runs complete, "
               f"{len(report['interrupted'])} not finished -> {table} (rerun the study to continue)", file=sys.stderr)
-        return EXIT_SIGNAL[stopper.signal]
+        return EXIT_SIGNAL.get(stopper.signal, EXIT_FAILED)
     print(f"study: {len(study.runs)} runs: {len(report['completed'])} run, {len(report['skipped'])} already complete, "
           f"{len(report['retried'])} retried, {len(report['failed'])} failed -> {table}")
     for run_id in report["failed"]:

@@ -26,7 +26,6 @@ import math
 import multiprocessing
 import os
 import platform
-import shutil
 import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -36,7 +35,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import __version__
+from . import __version__, directory, writers
 from .case import load_case
 from .writers import json_safe
 
@@ -295,8 +294,14 @@ class Timer:
         return wall, cpu
 
 
-OUTPUTS = ("cases", "studies", "figures", "report.md", "report.html", "reproduce.json")
-"""What `run` writes in DIR (and removes first with overwrite=True)."""
+RUN_FOLDERS = ("cases/*", "studies/*/runs/*")
+"""Where `run` keeps its runs (each a run directory: writers.OUTPUTS)."""
+OUTPUTS = (*[f"{folder}/{name}" for folder in (*RUN_FOLDERS, "studies/*")
+             for name in (*writers.OUTPUTS, *writers.TEMPORARIES, directory.LOCK)],
+           "cases/paper_ball.toml", "studies/*.toml", "studies/*/study.csv", "studies/*/.study.tmp-[0-9]*.csv",
+           "figures/fig[0-9][0-9].png", "figures/fig[0-9][0-9].pdf", "report.md", "report.html", "reproduce.json")
+"""What `run` writes in DIR, as glob patterns: overwrite=True removes these (and the folders that this
+leaves empty), nothing else."""
 
 
 def prepare(out: Path, overwrite: bool) -> None:
@@ -306,12 +311,7 @@ def prepare(out: Path, overwrite: bool) -> None:
     if out.exists() and any(out.iterdir()):
         if not overwrite:
             raise OutputError(f"--out '{out}' is not empty (use --overwrite to replace its reproduction)")
-        for name in OUTPUTS:
-            target = out / name
-            if target.is_dir():
-                shutil.rmtree(target)
-            elif target.exists():
-                target.unlink()
+        writers.remove_files(out, OUTPUTS)
     out.mkdir(parents=True, exist_ok=True)
 
 

@@ -41,6 +41,7 @@ import unicodedata
 import zipfile
 from collections.abc import Callable, Collection
 from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -290,7 +291,13 @@ def _run_pending(pending: list[RunSpec], report: dict, held: directory.Held, exe
                 held.check()
                 for future in done:
                     spec = futures.pop(future)
-                    summary = future.result()
+                    try:
+                        summary = future.result()
+                    except BrokenProcessPool:  # killed by a signal or the out-of-memory killer: so are its runs
+                        futures[future] = spec
+                        report["stopped"] = (f"stopped: a worker process died (killed, or out of memory) while "
+                                             f"running '{spec.id}' or a run beside it")
+                        break
                     if summary.get("status") == "complete":
                         report["completed"].append(spec.id)
                     elif spec.id not in report["retried"]:
@@ -304,6 +311,8 @@ def _run_pending(pending: list[RunSpec], report: dict, held: directory.Held, exe
                     bar.update()
                     bar.set_postfix(done=len(report["completed"]), failed=len(report["failed"]),
                                     left=len(futures), refresh=False)
+                if report["stopped"]:
+                    break
     finally:
         if futures:  # stopped (or an exception): abandon the runs not finished
             for future in futures:

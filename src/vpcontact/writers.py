@@ -96,16 +96,21 @@ def write_text(path: Path, text: str) -> None:
 
 
 def remove_files(out: Path, patterns: tuple[str, ...]) -> None:
-    """Delete the files in ``out`` that match ``patterns`` (in their order), then the folders of the
-    patterns that this leaves empty. Nothing else is touched: no other file, no folder that holds
-    anything."""
+    """Delete the files in ``out`` that match ``patterns`` (glob patterns, in their order), then the
+    folders of the patterns (and their parents below ``out``) that this leaves empty, deepest first.
+    Nothing else is touched: no other file, no folder that holds anything."""
     out = Path(out)
     directory.check(out)
     for pattern in patterns:
         for path in sorted(out.glob(pattern)):
             if path.is_file() or path.is_symlink():
                 directory.unlink(path)
-    for folder in dict.fromkeys(out / Path(pattern).parent for pattern in patterns if "/" in pattern):
+    folders = set()
+    for pattern in dict.fromkeys(str(Path(p).parent) for p in patterns if "/" in p):
+        for found in out.glob(pattern):
+            relative = found.relative_to(out)
+            folders.update(out / part for part in (relative, *relative.parents) if part != Path("."))
+    for folder in sorted(folders, key=lambda f: len(f.parts), reverse=True):
         if folder.is_dir() and not folder.is_symlink() and not any(folder.iterdir()):
             directory.rmdir(folder)
 
