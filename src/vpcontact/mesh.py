@@ -35,14 +35,15 @@ NormalField = Callable[[np.ndarray], np.ndarray]
 
 @dataclass(frozen=True, eq=False)
 class Mesh:
-    """A triangle mesh with named boundary parts."""
+    """A triangle (2D) or tetrahedral (3D) mesh with named boundary parts."""
 
-    mesh: skfem.MeshTri
-    """The scikit-fem mesh (p: (2, nnodes), t: (3, nelems)); its ``boundaries`` hold the parts too."""
+    mesh: skfem.Mesh
+    """The scikit-fem mesh, MeshTri1 or MeshTet1 (p: (d, nnodes), t: (d + 1, nelems)); its ``boundaries``
+    hold the parts too."""
     parts: dict[str, np.ndarray]
     """Part name -> sorted int64 indices of boundary facets (columns of ``mesh.facets``)."""
     exact_normals: dict[str, NormalField]
-    """Part -> f(points (2, ...)) -> unit outward normals, same shape; only where the geometry is known exactly."""
+    """Part -> f(points (d, ...)) -> unit outward normals, same shape; only where the geometry is known exactly."""
     file: str | None = None
     """The mesh file it was read from (None for a built-in shape)."""
 
@@ -60,6 +61,11 @@ class Mesh:
     def nodes(self, part: str | int) -> np.ndarray:
         """Sorted unique node indices of the facets of `part`."""
         return np.unique(self.mesh.facets[:, self.facets(part)]).astype(np.int64)
+
+    @property
+    def dim(self) -> int:
+        """The dimension d of the body: 2 (triangles) or 3 (tetrahedra)."""
+        return self.mesh.p.shape[0]
 
     @property
     def part_names(self) -> list[str]:
