@@ -2,7 +2,9 @@
 
 - the elastic stiffness A: (ℰε(u), ε(v))_Q, the bulk term of (3.3);
 - the load vector F(t) of (2.24): ∫_Ω f0·v dx + ∫_Γ2 f2·v da;
-- element strains ε(u) (constant on each triangle) and the nodal force Bᵀz of a P0 stress z.
+- element strains ε(u) (constant on each element) and the nodal force Bᵀz of a P0 stress z.
+
+Triangles in 2D, tetrahedra in 3D: the element comes from the mesh, everything else is the same.
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Basis, ElementTriP1, ElementVector, FacetBasis, LinearForm, asm
+from skfem import Basis, ElementTetP1, ElementTriP1, ElementVector, FacetBasis, LinearForm, MeshTet1, asm
 from skfem.helpers import ddot, sym_grad
 from skfem.models.elasticity import linear_elasticity
 
@@ -19,18 +21,23 @@ from .errors import CaseError, quoted
 from .expressions import Expression
 from .material import Elasticity
 from .mesh import Mesh
+from .space import coordinates
 
-#: A load density: f(x, y, t) -> (fx, fy), each an array broadcastable to x's shape.
-Density = Callable[[np.ndarray, np.ndarray, float], tuple]
+#: A load density: f(x, y, t) -> (fx, fy) in 2D, f(x, y, z, t) -> (fx, fy, fz) in 3D, each an array
+#: broadcastable to x's shape.
+Density = Callable[..., tuple]
 
 
-#: The centroid rule: exact for the bulk forms of P1 × P0 (their integrands are constant per element).
-CENTROID = (np.array([[1.0 / 3.0], [1.0 / 3.0]]), np.array([0.5]))
+def _centroid_rule(dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """The centroid rule of the reference simplex: exact for the bulk forms of P1 × P0 (their
+    integrands are constant per element)."""
+    return np.full((dim, 1), 1.0 / (dim + 1)), np.array([1.0 / (2.0 if dim == 2 else 6.0)])
 
 
 def displacement_basis(mesh: Mesh) -> Basis:
     """The P1 vector basis (dofs of node i: ``basis.nodal_dofs[:, i]``) with the centroid rule."""
-    return Basis(mesh.mesh, ElementVector(ElementTriP1()), quadrature=CENTROID)
+    element = ElementTetP1() if isinstance(mesh.mesh, MeshTet1) else ElementTriP1()
+    return Basis(mesh.mesh, ElementVector(element), quadrature=_centroid_rule(mesh.dim))
 
 
 def stiffness(basis: Basis, elasticity: Elasticity) -> sp.csr_matrix:
@@ -40,17 +47,20 @@ def stiffness(basis: Basis, elasticity: Elasticity) -> sp.csr_matrix:
 
 @LinearForm
 def _density_form(v, w):
-    return w["f"][0] * v[0] + w["f"][1] * v[1]
+    return sum(w["f"][i] * v[i] for i in range(v.shape[0]))
 
 
 class ExpressionDensity:
-    """The density (fx, fy) of two expressions in x, y, t of a case (their keys name them in messages)."""
+    """The density (fx, fy[, fz]) of d expressions in the coordinates and t of a case (their keys name
+    them in messages)."""
 
-    def __init__(self, fx: Expression, fy: Expression):
-        self.components = (fx, fy)
+    def __init__(self, *components: Expression):
+        self.components = components
+        self.names = coordinates(len(components))
 
-    def __call__(self, x: np.ndarray, y: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
-        return tuple(f(x=x, y=y, t=t) for f in self.components)
+    def __call__(self, *coordinates_and_time) -> tuple[np.ndarray, ...]:
+        *points, t = coordinates_and_time
+        return tuple(f(**dict(zip(self.names, points)), t=t) for f in self.components)
 
 
 class NonFiniteLoad(CaseError):
@@ -65,34 +75,39 @@ class _Term:
     """One load density and where it is applied: the quadrature points of its facets or elements."""
 
     def __init__(self, name: str, basis: Basis, density: Density):
+        self.points = np.asarray(basis.global_coordinates())  # (d, cells, points of a cell)
+        self.names = coordinates(self.points.shape[0])
+        self.signature = f"f({', '.join(self.names)}, t)"
+        self.returns = f"({', '.join('f' + n for n in self.names)})"
         if not callable(density):
-            raise CaseError(f"{name} = {type(density).__name__}: expected a function f(x, y, t) -> (fx, fy)")
+            raise CaseError(f"{name} = {type(density).__name__}: expected a function {self.signature} -> {self.returns}")
         self.name, self.basis, self.density = name, basis, density
-        self.x, self.y = np.asarray(basis.global_coordinates())  # (cells, points of a cell) each
 
     def values(self, t: float, step: int | None = None) -> np.ndarray:
-        """(fx, fy) at the quadrature points at time t (of time step ``step``, if given), shape
-        (2, cells, points); NonFiniteLoad where a value is not finite."""
+        """The density's components at the quadrature points at time t (of time step ``step``, if
+        given), shape (d, cells, points); NonFiniteLoad where a value is not finite."""
+        d, shape = self.points.shape[0], self.points.shape[1:]
         with np.errstate(all="ignore"):  # a non-finite value is reported below, with where it is
-            values = self.density(self.x, self.y, t)
+            values = self.density(*self.points, t)
             try:
-                fx, fy = values
-                values = np.stack([np.broadcast_to(np.asarray(f, dtype=float), self.x.shape) for f in (fx, fy)])
+                if len(values) != d:
+                    raise ValueError
+                values = np.stack([np.broadcast_to(np.asarray(f, dtype=float), shape) for f in values])
             except (TypeError, ValueError):
-                raise CaseError(f"{self.name}: f(x, y, t) must return (fx, fy), each a number or an array of "
-                                f"x's shape {self.x.shape}; it returned {_kind(values)}") from None
+                raise CaseError(f"{self.name}: {self.signature} must return {self.returns}, each a number or an "
+                                f"array of x's shape {shape}; it returned {_kind(values)}") from None
         bad = ~np.isfinite(values)
         if bad.any():
             component, cell, point = np.unravel_index(np.argmax(bad), bad.shape)
-            point = cell * self.x.shape[1] + point if self._uses_space(component) else None
+            point = cell * shape[1] + point if self._uses_space(component) else None
             when = f"t = {t:.10g}" + ("" if step is None else f" (step {step})")
-            raise NonFiniteLoad(self.message(component, values.reshape(2, -1)[component, point or 0], point, when))
+            raise NonFiniteLoad(self.message(component, values.reshape(d, -1)[component, point or 0], point, when))
         return values
 
     def _uses_space(self, component: int) -> bool:
-        """Does the density's component depend on x or y (a Python function: it may)?"""
+        """Does the density's component depend on the coordinates (a Python function: it may)?"""
         if isinstance(self.density, ExpressionDensity):
-            return bool(self.density.components[component].depends_on & {"x", "y"})
+            return bool(self.density.components[component].depends_on & set(self.names))
         return True
 
     def check(self, times: Sequence[float]) -> None:
@@ -106,21 +121,24 @@ class _Term:
 
     def _check_expression(self, component: int, f: Expression, times: Sequence[float]) -> None:
         """Evaluate f only over the variables it uses: once if constant, over the times if it uses t
-        alone, over the points if it uses x, y alone, over points × times in chunks otherwise."""
-        x, y = self.x.ravel(), self.y.ravel()
+        alone, over the points if it uses the coordinates alone, over points × times in chunks
+        otherwise."""
+        points = dict(zip(self.names, self.points.reshape(len(self.names), -1)))
+        size = self.points[0].size
         space, time = self._uses_space(component), "t" in f.depends_on
-        chunk = max(1, CHECK_CHUNK // x.size) if space else CHECK_CHUNK
+        chunk = max(1, CHECK_CHUNK // size) if space else CHECK_CHUNK
         with np.errstate(all="ignore"):
             if not time:
-                values = f(x=x, y=y) if space else np.array([f()])
+                values = f(**points) if space else np.array([f()])
                 bad = np.flatnonzero(~np.isfinite(values))
                 if bad.size:
                     point = int(bad[0]) if space else None
                     raise NonFiniteLoad(self.message(component, values[bad[0]], point, "every t"))
                 return
+            rows = {name: x[None, :] for name, x in points.items()}
             for start in range(0, len(times), chunk):
                 t = np.asarray(times[start:start + chunk])
-                values = f(x=x[None, :], y=y[None, :], t=t[:, None]) if space else f(t=t)[:, None]
+                values = f(**rows, t=t[:, None]) if space else f(t=t)[:, None]
                 bad = ~np.isfinite(values)
                 if bad.any():
                     step, point = np.unravel_index(np.argmax(bad), bad.shape)
@@ -133,8 +151,12 @@ class _Term:
             f = self.density.components[component]
             what = f"{f.where} = {quoted(f.source)}"
         else:
-            what = f"{self.name} ({'fx' if component == 0 else 'fy'})"
-        where = "every point" if point is None else f"(x, y) = ({self.x.flat[point]:.6g}, {self.y.flat[point]:.6g})"
+            what = f"{self.name} (f{self.names[component]})"
+        if point is None:
+            where = "every point"
+        else:
+            at = self.points.reshape(len(self.names), -1)[:, point]
+            where = f"({', '.join(self.names)}) = ({', '.join(f'{c:.6g}' for c in at)})"
         return f"{what}: not finite ({value}) at {where}, {when}; a load must be finite wherever it is applied"
 
 
@@ -181,7 +203,7 @@ class LoadVector:
 
 
 def element_strain(basis: Basis, u: np.ndarray) -> np.ndarray:
-    """ε(u) on each triangle, shape (2, 2, nelements) (constant for P1)."""
+    """ε(u) on each element, shape (d, d, nelements) (constant for P1)."""
     return sym_grad(basis.interpolate(u))[:, :, :, 0]
 
 
@@ -191,5 +213,5 @@ def _stress_work(v, w):
 
 
 def stress_force(basis: Basis, z: np.ndarray) -> np.ndarray:
-    """The nodal force Bᵀz = ∫_Ω z : ε(v) dx of a P0 stress field z of shape (2, 2, nelements)."""
+    """The nodal force Bᵀz = ∫_Ω z : ε(v) dx of a P0 stress field z of shape (d, d, nelements)."""
     return asm(_stress_work, basis, z=np.repeat(z[..., None], basis.X.shape[-1], axis=-1))

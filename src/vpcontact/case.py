@@ -74,15 +74,22 @@ class _Section(BaseModel):
 
 
 # --- sections ------------------------------------------------------------------------------------
+#: The size keys of each built-in shape (default 1 each) and its dimension.
+SHAPES = {"half_disc": (("radius",), 2), "rectangle": (("width", "height"), 2),
+          "quarter_ball": (("radius",), 3), "block": (("width", "depth", "height"), 3)}
+
+
 class MeshSection(_Section):
     """A built-in shape of element size h, or a mesh file."""
 
-    shape: Optional[Literal["half_disc", "rectangle"]] = None
+    shape: Optional[Literal["half_disc", "rectangle", "quarter_ball", "block"]] = None
     file: Optional[str] = None
     h: Optional[PositiveFloat] = None
-    radius: Optional[PositiveFloat] = None  # half_disc, default 1
-    width: Optional[PositiveFloat] = None  # rectangle, default 1
-    height: Optional[PositiveFloat] = None  # rectangle, default 1
+    h_bottom: Optional[PositiveFloat] = None  # quarter_ball: the element size at the bottom point (graded)
+    radius: Optional[PositiveFloat] = None  # half_disc, quarter_ball: default 1
+    width: Optional[PositiveFloat] = None  # rectangle, block: default 1
+    depth: Optional[PositiveFloat] = None  # block: default 1
+    height: Optional[PositiveFloat] = None  # rectangle, block: default 1
 
     @model_validator(mode="after")
     def _one_source(self):
@@ -90,22 +97,35 @@ class MeshSection(_Section):
             raise ValueError("mesh: give exactly one of mesh.shape and mesh.file")
         if self.shape is not None and self.h is None:
             raise ValueError(f"missing required value 'mesh.h' (the element size of mesh.shape = \"{self.shape}\")")
-        sizes = {"half_disc": ("radius",), "rectangle": ("width", "height"), None: ()}[self.shape]
-        for key in ("h", "radius", "width", "height"):
+        sizes, dim = SHAPES.get(self.shape, ((), None))
+        for key in ("radius", "width", "depth", "height"):
             if key in sizes and getattr(self, key) is None:
                 setattr(self, key, 1.0)
-            elif key != "h" and key not in sizes and getattr(self, key) is not None:
+            elif key not in sizes and getattr(self, key) is not None:
                 where = f"mesh.shape = \"{self.shape}\"" if self.shape else "mesh.file"
                 raise ValueError(f"mesh.{key} is not used with {where}")
+        if self.h_bottom is not None and self.shape != "quarter_ball":
+            where = f"mesh.shape = \"{self.shape}\"" if self.shape else "mesh.file"
+            raise ValueError(f"mesh.h_bottom is only used with mesh.shape = \"quarter_ball\" (not with {where})")
         if self.file is not None and self.h is not None:
             raise ValueError("mesh.h is not used with mesh.file (the file fixes the elements)")
         if self.shape is not None:
-            area = math.pi * self.radius * self.radius / 2 if self.shape == "half_disc" else self.width * self.height
-            triangles = 2.0 * area / self.h / self.h  # (no ** : 1e300**2 raises OverflowError)
-            if not triangles <= MAX_ELEMENTS:
-                raise ValueError(f"mesh.h = {_brief(self.h)}: about {triangles:.1e} triangles for this {self.shape}, "
+            elements = self._elements(dim)
+            if not elements <= MAX_ELEMENTS:
+                kind = "triangles" if dim == 2 else "tetrahedra"
+                raise ValueError(f"mesh.h = {_brief(self.h)}: about {elements:.1e} {kind} for this {self.shape}, "
                                  f"more than {MAX_ELEMENTS:.0e}")
         return self
+
+    def _elements(self, dim: int) -> float:
+        """About how many elements the shape has at size h (no ** : 1e300**2 raises OverflowError)."""
+        r, w, d, h = self.radius, self.width, self.depth, self.height
+        size = {"half_disc": lambda: math.pi * r * r / 2, "quarter_ball": lambda: math.pi * r * r * r / 3,
+                "rectangle": lambda: w * h, "block": lambda: w * d * h}[self.shape]()
+        per_cell = 2.0 if dim == 2 else 6.0  # triangles per square, tetrahedra per cube of side h
+        for _ in range(dim):
+            size /= self.h
+        return per_cell * size
 
 
 class PerzynaSection(_Section):
@@ -128,21 +148,23 @@ class RelaxationSection(_Section):
 Viscoplastic = Annotated[Union[PerzynaSection, RelaxationSection], Field(discriminator="law")]
 
 
-def _check_poisson_ratio(key: str, nu: float, hypothesis: str) -> None:
-    upper_ok = nu < 0.5 if hypothesis == "plane_strain" else nu <= 0.5
+def _check_poisson_ratio(key: str, nu: float, hypothesis: str | None) -> None:
+    upper_ok = nu <= 0.5 if hypothesis == "plane_stress" else nu < 0.5
     if not (-1.0 < nu and upper_ok):
-        bound = "< 0.5" if hypothesis == "plane_strain" else "<= 0.5"
+        bound = "<= 0.5" if hypothesis == "plane_stress" else "< 0.5"
         name = key.rpartition(".")[2]
-        raise ValueError(f"{key} = {_brief(nu)}: must satisfy -1 < {name} {bound} for {hypothesis}")
+        model = hypothesis or "plane_strain and 3D"
+        raise ValueError(f"{key} = {_brief(nu)}: must satisfy -1 < {name} {bound} for {model}")
 
 
 class MaterialSection(_Section):
-    """Isotropic elasticity (4.1); plane strain (the paper's formula) or plane stress; optionally a
-    viscoplastic law 𝒢 of (2.1) (none: 𝒢 = 0, linear elasticity)."""
+    """Isotropic elasticity (4.1); in 2D plane strain (the paper's formula, the default) or plane
+    stress, in 3D the full tensor (no hypothesis); optionally a viscoplastic law 𝒢 of (2.1) (none:
+    𝒢 = 0, linear elasticity)."""
 
     E: PositiveFloat
     nu: float
-    hypothesis: Literal["plane_strain", "plane_stress"] = "plane_strain"
+    hypothesis: Optional[Literal["plane_strain", "plane_stress"]] = None  # 2D only; None: plane strain in 2D
     viscoplastic: Optional[Viscoplastic] = None
 
     @model_validator(mode="after")
@@ -154,44 +176,47 @@ class MaterialSection(_Section):
 
 
 def _stress_tensor(value):
-    """A symmetric 2 × 2 tensor [[sxx, sxy], [sxy, syy]] of finite numbers."""
-    if not (isinstance(value, list) and len(value) == 2
-            and all(isinstance(row, list) and len(row) == 2 for row in value)):
-        raise ValueError(f"initial.stress = {_brief(value)}: expected a 2 x 2 table [[sxx, sxy], [sxy, syy]]")
+    """A symmetric d × d tensor (d = 2 or 3) of finite numbers, e.g. [[sxx, sxy], [sxy, syy]]."""
+    if not (isinstance(value, list) and len(value) in (2, 3)
+            and all(isinstance(row, list) and len(row) == len(value) for row in value)):
+        raise ValueError(f"initial.stress = {_brief(value)}: expected a d x d table, [[sxx, sxy], [sxy, syy]] in 2D "
+                         f"or [[sxx, sxy, sxz], [sxy, syy, syz], [sxz, syz, szz]] in 3D")
     for row in value:
         for entry in row:
             if isinstance(entry, bool) or not isinstance(entry, (int, float)) or not _finite(entry):
                 raise ValueError(f"initial.stress = {_brief(value)}: expected finite numbers, got {_brief(entry)}")
-    if value[0][1] != value[1][0]:
-        raise ValueError(f"initial.stress = {_brief(value)}: must be symmetric (stress[0][1] = {_brief(value[0][1])}, "
-                         f"stress[1][0] = {_brief(value[1][0])})")
+    for i in range(len(value)):
+        for j in range(i + 1, len(value)):
+            if value[i][j] != value[j][i]:
+                raise ValueError(f"initial.stress = {_brief(value)}: must be symmetric (stress[{i}][{j}] = "
+                                 f"{_brief(value[i][j])}, stress[{j}][{i}] = {_brief(value[j][i])})")
     return [[float(entry) for entry in row] for row in value]
 
 
 class InitialSection(_Section):
-    """Initial data (2.7): u_0 = 0 and a uniform initial stress σ_0 (default 0)."""
+    """Initial data (2.7): u_0 = 0 and a uniform initial stress σ_0 (default 0; d × d)."""
 
-    stress: Annotated[Any, AfterValidator(_stress_tensor)] = [[0.0, 0.0], [0.0, 0.0]]
+    stress: Optional[Annotated[Any, AfterValidator(_stress_tensor)]] = None
 
 
 class DirichletSection(_Section):
     """u = 0 on a part, for the listed components (all when omitted)."""
 
     part: Part
-    components: Optional[list[Literal["x", "y"]]] = None
+    components: Optional[list[Literal["x", "y", "z"]]] = None
 
 
 class TractionSection(_Section):
-    """σν = f2 on a part: one expression in x, y, t per component."""
+    """σν = f2 on a part: one expression in x, y, (z,) t per component (one per dimension)."""
 
     part: Part
-    value: Annotated[list[Expression], Field(min_length=2, max_length=2)]
+    value: Annotated[list[Expression], Field(min_length=2, max_length=3)]
 
 
 class BodyForceSection(_Section):
-    """f0 in Ω: one expression in x, y, t per component."""
+    """f0 in Ω: one expression in x, y, (z,) t per component (one per dimension)."""
 
-    value: Annotated[list[Expression], Field(min_length=2, max_length=2)]
+    value: Annotated[list[Expression], Field(min_length=2, max_length=3)]
 
 
 class BoundarySection(_Section):
@@ -238,8 +263,17 @@ class ContactSection(_Section):
     p: Literal["positive_part", "power"] = "positive_part"
     exponent: Optional[Annotated[float, Field(ge=1)]] = None
     rho: NonNegativeFloat = 1.0
-    probe: Optional[Annotated[list[float], Field(min_length=2, max_length=2)]] = None
+    probe: Optional[Annotated[list[float], Field(min_length=2, max_length=3)]] = None
+    normal: Union[Literal["body"], Annotated[list[float], Field(min_length=2, max_length=3)]] = "body"
     stiffness: Stiffness
+
+    @field_validator("normal")
+    @classmethod
+    def _direction(cls, value):
+        if isinstance(value, list) and not math.hypot(*value) > 0:
+            raise ValueError(f"contact.normal = {_brief(value)}: expected \"body\" or a nonzero vector (the "
+                             f"foundation's outward direction seen from the body, e.g. [0, 0, -1])")
+        return value
 
     @field_validator("g", mode="before")
     @classmethod
@@ -516,12 +550,12 @@ def _check_expressions(case: Case) -> None:
     """Parse every expression once, so that a bad one is reported with its key before any work."""
     for i, traction in enumerate(case.boundary.traction):
         for c, value in enumerate(traction.value):
-            parse_expression(value, ("x", "y", "t"), where=f"boundary.traction[{i}].value[{c}]")
+            parse_expression(value, ("x", "y", "z", "t"), where=f"boundary.traction[{i}].value[{c}]")
     for i, force in enumerate(case.boundary.body_force):
         for c, value in enumerate(force.value):
-            parse_expression(value, ("x", "y", "t"), where=f"boundary.body_force[{i}].value[{c}]")
+            parse_expression(value, ("x", "y", "z", "t"), where=f"boundary.body_force[{i}].value[{c}]")
     if case.contact is not None:
-        parse_expression(case.contact.gap, ("x", "y"), where="contact.gap")
+        parse_expression(case.contact.gap, ("x", "y", "z"), where="contact.gap")
 
 
 # --- error messages ------------------------------------------------------------------------------

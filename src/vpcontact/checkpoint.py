@@ -37,7 +37,7 @@ import numpy as np
 from . import directory
 from .case import _brief
 from .errors import CaseError
-from .results import CONTACT_ARRAYS, HISTORY_COLUMNS, INTEGER_COLUMNS, Fields
+from .results import CONTACT_ARRAYS, INTEGER_COLUMNS, Fields
 from .solvers import StepSolution
 from .stepping import LoopState, TimeLoop
 from .writers import OUTPUTS, remove_files, replacing, versions
@@ -93,9 +93,8 @@ def save(loop: TimeLoop, out: Path) -> None:
         path = target / f"fields_{n:05d}.npz"
         if not path.exists():
             fields = result.fields[n]
-            arrays = {name: getattr(fields, name) for name in ("displacement", "stress", "stress33", "von_mises")}
-            if fields.z is not None:
-                arrays["z"] = fields.z
+            arrays = {name: getattr(fields, name) for name in ("displacement", "stress", "stress33", "von_mises", "z")
+                      if getattr(fields, name) is not None}
             with replacing(path) as temporary:
                 np.savez(temporary, **arrays)
     rows = len(result.rows)
@@ -116,7 +115,7 @@ def save(loop: TimeLoop, out: Path) -> None:
             arrays["previous_u"] = previous.u
         arrays.update(previous_lam=previous.lam, previous_d=previous.d, previous_active=previous.active,
                       previous_report=np.array([previous.iterations, previous.residual, previous.complementarity]))
-    for column in HISTORY_COLUMNS:
+    for column in result.columns:
         arrays[f"row_{column}"] = np.array([row[column] for row in result.rows],
                                            dtype=np.int64 if column in INTEGER_COLUMNS else np.float64)
     arrays["row_time"] = np.array(result.times, dtype=np.float64)
@@ -164,7 +163,7 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
                                 float(complementarity), True)
     step = int(arrays["step"])
     loop.state = LoopState(step, arrays["xi"], arrays.get("z"), arrays.get("rate"), previous)
-    columns = {column: arrays[f"row_{column}"] for column in HISTORY_COLUMNS}
+    columns = {column: arrays[f"row_{column}"] for column in result.columns}
     rows = len(arrays["row_time"])
     result.rows = [{column: (int(values[i]) if column in INTEGER_COLUMNS else np.float64(values[i]))
                     for column, values in columns.items()} for i in range(rows)]
@@ -175,7 +174,7 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
     result.resumed_at = [*meta["resumed_at"], step]
     for n in meta["field_steps"]:
         data = _read(folder(out) / f"fields_{n:05d}.npz")
-        result.fields[n] = Fields(data["displacement"], data["stress"], data["stress33"], data["von_mises"],
+        result.fields[n] = Fields(data["displacement"], data["stress"], data.get("stress33"), data["von_mises"],
                                   data.get("z"))
     if result.fields:
         result.final = result.fields[max(result.fields)]

@@ -1,7 +1,8 @@
 """The contact condition (2.5) at the nodes of Γ3: laws p and K(ξ), nodal normals and weights.
 
-Node-to-rigid contact: node i of Γ3 carries a unit outward normal ν_i, a weight w_i (its share of
-the measure of Γ3, lumped boundary quadrature), an initial gap g0_i to the foundation, and the
+Node-to-rigid contact: node i of Γ3 carries a unit normal ν_i (the body's outward normal, the
+paper's u_ν, or the fixed direction of a flat foundation), a weight w_i (its share of the measure of
+Γ3, lumped boundary quadrature), an initial gap g0_i to the foundation along ν_i, and the
 penetration d_i = u(x_i)·ν_i − g0_i. The soft layer pushes back with the nodal force
     w_i ρ K(ξ_i) p(d_i),   ξ_i^n = ξ_i^{n−1} + k (d_i^n)^+   (the implicit rectangle rule for (2.15)),
 and the rigid base adds a multiplier λ_i ≥ 0 once d_i reaches g.
@@ -14,10 +15,12 @@ from typing import Callable
 
 import numpy as np
 import scipy.sparse as sp
+from skfem import FacetBasis
 
 from .errors import CaseError, quoted
 from .expressions import Expression
 from .mesh import Mesh
+from .space import coordinates as coordinates_names
 
 #: Node states reported per contact node and step.
 SEPARATED, IN_COMPLIANCE, AT_LIMIT = 0, 1, 2
@@ -148,17 +151,17 @@ class ContactLaw:
 class ContactSurface:
     """Nodes of Γ3 with normals ν_i, lumped weights w_i and initial gaps g0_i.
 
-    ``operator`` is the sparse m × ndofs matrix N with (N u)_i = u(x_i)·ν_i; ``segments`` (2, nf)
-    are the facets of Γ3 as pairs of contact-node indices.
+    ``operator`` is the sparse m × ndofs matrix N with (N u)_i = u(x_i)·ν_i; ``facets`` (d, nf) are
+    the facets of Γ3 (segments in 2D, triangles in 3D) as tuples of contact-node indices.
     """
 
     nodes: np.ndarray
-    coordinates: np.ndarray  # (2, m)
-    normals: np.ndarray  # (2, m)
+    coordinates: np.ndarray  # (d, m)
+    normals: np.ndarray  # (d, m)
     weights: np.ndarray  # (m,)
     gap0: np.ndarray  # (m,)
     operator: sp.csr_matrix
-    segments: np.ndarray
+    facets: np.ndarray
 
     @property
     def size(self) -> int:
@@ -167,63 +170,61 @@ class ContactSurface:
     def nearest_node(self, point) -> int:
         """Index (into the contact nodes) of the node nearest to ``point`` (any finite point: the offsets are
         scaled so that their squares cannot overflow)."""
-        offsets = self.coordinates - np.reshape(point, (2, 1))
+        offsets = self.coordinates - np.reshape(point, (-1, 1))
         scale = np.abs(offsets).max(initial=0.0)
         return int(np.argmin(np.sum((offsets / scale if scale > 0 else offsets) ** 2, axis=0)))
 
 
-def contact_surface(mesh: Mesh, part, nodal_dofs: np.ndarray, gap: Callable | None = None) -> ContactSurface:
-    """Build the contact nodes of ``part``: weights = half the length of each adjacent facet,
-    normals = the exact ones where the mesh knows the geometry, else the length-weighted average
-    of the adjacent facets' outward normals; ``gap(x, y)`` gives g0 (default 0)."""
-    skmesh = mesh.mesh
+def contact_surface(mesh: Mesh, part, nodal_dofs: np.ndarray, gap: Callable | None = None,
+                    direction=None) -> ContactSurface:
+    """Build the contact nodes of ``part``: weights w_i = ∫_Γ3 φ_i da (a d-th of the measure of each
+    adjacent facet); normals: the fixed unit ``direction`` (a flat foundation, ``contact.normal``) when
+    given, else the exact ones where the mesh knows the geometry, else the measure-weighted average of
+    the adjacent facets' outward normals (facet measures and normals from scikit-fem's FacetBasis);
+    ``gap(x, y[, z])`` gives g0 (default 0), along the normal."""
+    skmesh, d = mesh.mesh, mesh.dim
     facets = mesh.facets(part)
     if facets.size == 0:
         raise CaseError(f"contact part '{part}' has no facets")
-    ends = skmesh.facets[:, facets]  # (2, nf)
-    tangent = skmesh.p[:, ends[1]] - skmesh.p[:, ends[0]]
-    length = np.linalg.norm(tangent, axis=0)
-    normal = np.vstack([tangent[1], -tangent[0]]) / length
-    # orient outward: away from the third vertex of the adjacent triangle
-    element = skmesh.f2t[0, facets]
-    centroid = skmesh.p[:, skmesh.t[:, element]].mean(axis=1)
-    midpoint = 0.5 * (skmesh.p[:, ends[0]] + skmesh.p[:, ends[1]])
-    normal *= np.where(np.sum(normal * (midpoint - centroid), axis=0) < 0.0, -1.0, 1.0)
-
-    nodes, local = np.unique(ends.ravel(), return_inverse=True)
-    local = local.reshape(ends.shape)
+    geometry = FacetBasis(skmesh, skmesh.elem(), facets=facets, intorder=1)
+    measure = geometry.dx.sum(axis=1)  # (nf,)
+    outward = geometry.normals[:, :, 0]  # (d, nf): constant on a flat facet
+    corners = skmesh.facets[:, facets]  # (d, nf)
+    nodes, local = np.unique(corners.ravel(), return_inverse=True)
+    local = local.reshape(corners.shape)
     m = nodes.size
-    weights = np.bincount(local.ravel(), weights=np.tile(0.5 * length, 2), minlength=m)
+    weights = np.bincount(local.ravel(), weights=np.tile(measure / d, d), minlength=m)
     coordinates = skmesh.p[:, nodes]
     exact = mesh.exact_normals.get(str(part))
-    if exact is not None:
+    if direction is not None:
+        normals = np.repeat(np.asarray(direction, dtype=float)[:, None] / np.linalg.norm(direction), m, axis=1)
+    elif exact is not None:
         normals = np.asarray(exact(coordinates), dtype=float)
     else:
-        summed = np.vstack(
-            [np.bincount(local.ravel(), weights=np.tile(normal[c] * length, 2), minlength=m) for c in range(2)]
-        )
+        summed = np.vstack([np.bincount(local.ravel(), weights=np.tile(outward[c] * measure, d), minlength=m)
+                            for c in range(d)])
         normals = summed / np.linalg.norm(summed, axis=0)
     gap0 = np.zeros(m)
     if gap is not None:
         with np.errstate(all="ignore"):  # a gap that is not finite is reported below
-            gap0 = np.broadcast_to(gap(x=coordinates[0], y=coordinates[1]), (m,)).copy()
+            gap0 = np.broadcast_to(gap(**dict(zip(coordinates_names(d), coordinates))), (m,)).copy()
     bad = np.flatnonzero(~np.isfinite(gap0))
     if bad.size:
         name = f"{gap.where} = {quoted(gap.source)}" if isinstance(gap, Expression) else "contact.gap"
-        x, y = coordinates[:, bad[0]]
-        raise CaseError(f"{name}: not finite ({gap0[bad[0]]}) at the contact node (x, y) = ({x:.6g}, {y:.6g}); the "
-                        f"initial gap must be finite at every node of the contact part")
-    rows = np.repeat(np.arange(m), 2)
+        at = ", ".join(f"{c:.6g}" for c in coordinates[:, bad[0]])
+        raise CaseError(f"{name}: not finite ({gap0[bad[0]]}) at the contact node ({', '.join(coordinates_names(d))}) "
+                        f"= ({at}); the initial gap must be finite at every node of the contact part")
+    rows = np.repeat(np.arange(m), d)
     cols = nodal_dofs[:, nodes].T.ravel()
     operator = sp.csr_matrix((normals.T.ravel(), (rows, cols)), shape=(m, nodal_dofs.size))
     return ContactSurface(nodes, coordinates, normals, weights, gap0, operator, local)
 
 
-def empty_surface(ndofs: int) -> ContactSurface:
+def empty_surface(ndofs: int, dim: int) -> ContactSurface:
     """The contact surface of a case without contact: no nodes."""
     none = np.zeros(0)
-    return ContactSurface(np.zeros(0, dtype=np.int64), np.zeros((2, 0)), np.zeros((2, 0)), none, none,
-                          sp.csr_matrix((0, ndofs)), np.zeros((2, 0), dtype=np.int64))
+    return ContactSurface(np.zeros(0, dtype=np.int64), np.zeros((dim, 0)), np.zeros((dim, 0)), none, none,
+                          sp.csr_matrix((0, ndofs)), np.zeros((dim, 0), dtype=np.int64))
 
 
 def node_status(d: np.ndarray, active: np.ndarray) -> np.ndarray:

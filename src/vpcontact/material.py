@@ -1,9 +1,9 @@
-"""Isotropic linear elasticity in 2D: the tensor ℰ of the constitutive law (2.1).
+"""Isotropic linear elasticity: the tensor ℰ of the constitutive law (2.1), for d = 2 or 3.
 
-Plane strain uses the paper's formula (4.1),
-    (ℰτ)_ij = Eν/((1+ν)(1−2ν)) τ_kk δ_ij + E/(1+ν) τ_ij,
-i.e. the Lamé form with λ = Eν/((1+ν)(1−2ν)), μ = E/(2(1+ν)). Plane stress replaces λ by
-λ* = Eν/(1−ν²) (the same μ).
+    (ℰτ)_ij = λ τ_kk δ_ij + 2μ τ_ij,   λ = Eν/((1+ν)(1−2ν)),  μ = E/(2(1+ν)):
+the full isotropic tensor on S³ in 3D and, in 2D, plane strain, which is the paper's formula (4.1).
+Plane stress (2D only) replaces λ by λ* = Eν/(1−ν²) (the same μ). The plane hypotheses are the only
+place the dimension enters: in 3D there is none (``hypothesis=None``).
 """
 
 from __future__ import annotations
@@ -17,56 +17,70 @@ HYPOTHESES = ("plane_strain", "plane_stress")
 
 @dataclass(frozen=True)
 class Elasticity:
-    """Young's modulus E, Poisson's ratio ν and the 2D hypothesis."""
+    """Young's modulus E, Poisson's ratio ν and the 2D hypothesis (None in 3D)."""
 
     E: float
     nu: float
-    hypothesis: str = "plane_strain"
+    hypothesis: str | None = "plane_strain"
 
     @property
     def lame(self) -> tuple[float, float]:
-        """The in-plane Lamé parameters (λ, μ) of the hypothesis."""
+        """The Lamé parameters (λ, μ) (in-plane ones under plane stress)."""
         E, nu = self.E, self.nu
         mu = E / (2.0 * (1.0 + nu))
-        if self.hypothesis == "plane_strain":
-            return E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu
-        return E * nu / (1.0 - nu**2), mu
+        if self.hypothesis == "plane_stress":
+            return E * nu / (1.0 - nu**2), mu
+        return E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu
 
     def stress(self, strain: np.ndarray) -> np.ndarray:
-        """ℰε for strains of shape (2, 2, ...): λ tr(ε) I + 2μ ε."""
+        """ℰε = λ tr(ε) I + 2μ ε for strains of shape (d, d, ...)."""
         lam, mu = self.lame
-        trace = strain[0, 0] + strain[1, 1]
+        trace = np.einsum("ii...->...", strain)
         sigma = 2.0 * mu * strain
-        sigma[0, 0] += lam * trace
-        sigma[1, 1] += lam * trace
+        for i in range(strain.shape[0]):
+            sigma[i, i] += lam * trace
         return sigma
 
-    def out_of_plane_stress(self, strain: np.ndarray) -> np.ndarray:
-        """σ33 of the elastic response: λ tr(ε) in plane strain (ε33 = 0), 0 in plane stress."""
+    def out_of_plane_stress(self, strain: np.ndarray) -> np.ndarray | None:
+        """σ33 of a 2D elastic response: λ tr(ε) in plane strain (ε33 = 0), 0 in plane stress; None in 3D
+        (the stress is the whole tensor)."""
+        if self.hypothesis is None:
+            return None
         if self.hypothesis == "plane_stress":
             return np.zeros_like(strain[0, 0])
         return self.lame[0] * (strain[0, 0] + strain[1, 1])
 
 
-def von_mises(sigma: np.ndarray, sigma33: np.ndarray) -> np.ndarray:
-    """von Mises stress sqrt(3/2 |dev σ|²) of the 3D tensor with in-plane part σ (2, 2, n) and σ33 (n)."""
-    s11, s22, s12 = sigma[0, 0], sigma[1, 1], sigma[0, 1]
-    return np.sqrt(0.5 * ((s11 - s22) ** 2 + (s22 - sigma33) ** 2 + (sigma33 - s11) ** 2) + 3.0 * s12**2)
+def _stress_3d(sigma: np.ndarray, sigma33: np.ndarray | None) -> np.ndarray:
+    """The 3 × 3 stress (3, 3, n): σ itself in 3D; in 2D the in-plane σ (2, 2, n) with σ33 (n) added."""
+    if sigma33 is None:
+        return sigma
+    full = np.zeros((3, 3) + sigma.shape[2:])
+    full[:2, :2] = sigma
+    full[2, 2] = sigma33
+    return full
+
+
+def von_mises(sigma: np.ndarray, sigma33: np.ndarray | None = None) -> np.ndarray:
+    """von Mises stress sqrt(3/2 |dev σ|²) of the 3D tensor (σ in 3D, σ and σ33 in 2D)."""
+    dev = deviator(_stress_3d(sigma, sigma33))
+    return np.sqrt(1.5 * np.einsum("ij...,ij...->...", dev, dev))
 
 
 # --- viscoplastic laws 𝒢(σ, ε) of (2.1) ------------------------------------------------------------
-# Each law is a callable on arrays of shape (2, 2, ...) (one tensor of S² per element), returning an
+# Each law is a callable on arrays of shape (d, d, ...) (one tensor of S^d per element), returning an
 # array of the same shape, and Lipschitz in (σ, ε) as (2.17)(b) asks, with the constant ``lipschitz``.
-# The norm of S² is the paper's ‖τ‖ = (τ_ij τ_ij)^{1/2}; the deviator is the one of S² (d = 2):
-# dev τ = τ − (tr τ / 2) I, with tr τ = τ_11 + τ_22 (σ33 is not part of the model's stress).
+# The norm of S^d is the paper's ‖τ‖ = (τ_ij τ_ij)^{1/2}; the deviator is the one of S^d:
+# dev τ = τ − (tr τ / d) I (in 2D tr τ = τ_11 + τ_22: σ33 is not part of the model's stress).
 
 
 def deviator(tau: np.ndarray) -> np.ndarray:
-    """dev τ = τ − (tr τ / 2) I of tensors of S², shape (2, 2, ...)."""
-    mean = 0.5 * (tau[0, 0] + tau[1, 1])
+    """dev τ = τ − (tr τ / d) I of tensors of S^d, shape (d, d, ...)."""
+    d = tau.shape[0]
+    mean = np.einsum("ii...->...", tau) / d
     dev = np.array(tau, dtype=float, copy=True)
-    dev[0, 0] -= mean
-    dev[1, 1] -= mean
+    for i in range(d):
+        dev[i, i] -= mean
     return dev
 
 
@@ -76,7 +90,7 @@ def tensor_norm(tau: np.ndarray) -> np.ndarray:
 
 
 def von_mises_projection(sigma: np.ndarray, yield_stress: float) -> np.ndarray:
-    """P(σ): the ‖·‖-orthogonal projection onto {τ ∈ S² : ‖dev τ‖ ≤ σ_y}: the spherical part is kept
+    """P(σ): the ‖·‖-orthogonal projection onto {τ ∈ S^d : ‖dev τ‖ ≤ σ_y}: the spherical part is kept
     and the deviator is scaled back onto the sphere of radius σ_y when it lies outside."""
     dev = deviator(sigma)
     size = tensor_norm(dev)
@@ -117,4 +131,4 @@ class Relaxation:
     @property
     def lipschitz(self) -> float:
         lam, mu = self.relaxed.lame
-        return self.mu * max(1.0, 2.0 * abs(mu) + 2.0 * abs(lam))  # ‖𝒞‖ ≤ 2|μ| + 2|λ| on S²
+        return self.mu * max(1.0, 2.0 * abs(mu) + 3.0 * abs(lam))  # ‖𝒞‖ ≤ 2|μ| + d|λ| on S^d

@@ -21,11 +21,12 @@ from .assembly import Density, ExpressionDensity, LoadVector, displacement_basis
 from .case import Case, _brief
 from .contact import (CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness, PositivePart,
                       Power, PowerStiffness, contact_surface, empty_surface)
-from .errors import CaseError
+from .errors import CaseError, quoted
 from .expressions import parse_expression
 from .material import Elasticity, Perzyna, Relaxation
 from .results import check_memory
 from .rigid_modes import RigidModes
+from .space import component, coordinates
 from .time_grid import TimeGrid
 
 
@@ -45,9 +46,9 @@ class Problem:
     surface: ContactSurface  # no nodes when the case has no contact
     law: ContactLaw
     probe: int | None  # index of the reported contact node
-    viscoplastic: Callable | None = None  # 𝒢(σ, ε) over arrays (2, 2, nelements); None: 𝒢 = 0
+    viscoplastic: Callable | None = None  # 𝒢(σ, ε) over arrays (d, d, nelements); None: 𝒢 = 0
     timings: dict = field(default_factory=dict)  # seconds: mesh, assembly, build
-    initial_stress: np.ndarray = field(default_factory=lambda: np.zeros((2, 2)))  # σ_0 (uniform); u_0 = 0
+    initial_stress: np.ndarray | None = None  # σ_0 (uniform, d × d; None: 0); u_0 = 0
     times: TimeGrid = field(init=False)  # t_1, …, t_steps
 
     def __post_init__(self):
@@ -72,10 +73,11 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     - ``p``, ``stiffness_law``: the laws p(r) and K(ξ) of the contact, vectorized over NumPy arrays; an
       object with a ``derivative`` method is used as it is (see :mod:`vpcontact.contact`), a plain
       function is wrapped in :class:`~vpcontact.contact.CallableLaw` (central-difference derivative);
-    - ``tractions``: {part: f(x, y, t) -> (fx, fy)}: f replaces the case's traction on that part (the
-      case's tractions on other parts stay);
-    - ``body_force``: f(x, y, t) -> (fx, fy) replaces the case's body forces;
-    - ``viscoplastic``: 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (2, 2, nelements) (it
+    - ``tractions``: {part: f(x, y, t) -> (fx, fy)} (in 3D f(x, y, z, t) -> (fx, fy, fz)): f replaces the
+      case's traction on that part (the case's tractions on other parts stay);
+    - ``body_force``: f(x, y, t) -> (fx, fy) (in 3D f(x, y, z, t) -> (fx, fy, fz)) replaces the case's
+      body forces;
+    - ``viscoplastic``: 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (d, d, nelements) (it
       replaces ``material.viscoplastic``).
 
     Each is tried before the run (a law at 0 and 10⁻³, a load at every step time, 𝒢 at (σ_0, 0)): one
@@ -87,7 +89,10 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     stiffness_law = None if stiffness_law is None else _api_law(stiffness_law, "stiffness_law")
     mesh = _make_mesh(case)
     meshed = time.perf_counter()
-    elasticity = Elasticity(case.material.E, case.material.nu, case.material.hypothesis)
+    dim = mesh.dim
+    _check_dimension(case, dim)
+    elasticity = Elasticity(case.material.E, case.material.nu,
+                            (case.material.hypothesis or "plane_strain") if dim == 2 else None)
     with np.errstate(all="ignore"):  # a stiffness that is not finite is reported below
         basis = displacement_basis(mesh)
         A = stiffness(basis, elasticity)
@@ -97,7 +102,7 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
 
     fixed = np.zeros(basis.N, dtype=bool)
     for item in case.boundary.dirichlet:
-        components = [{"x": 0, "y": 1}[c] for c in (item.components or ["x", "y"])]
+        components = [component(c) for c in (item.components or coordinates(dim))]
         fixed[basis.nodal_dofs[components][:, mesh.nodes(item.part)]] = True
     free = np.flatnonzero(~fixed)
 
@@ -107,11 +112,12 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         body_terms = [("body_force", body_force)]
     loads = LoadVector(basis, mesh, _traction_terms(case, mesh, tractions), body_terms)
 
-    surface, law, probe = empty_surface(basis.N), ContactLaw(PositivePart(), ConstantStiffness(0.0), np.inf), None
+    surface, probe = empty_surface(basis.N, dim), None
+    law = ContactLaw(PositivePart(), ConstantStiffness(0.0), np.inf)
     if case.contact is not None:
         c = case.contact
-        gap = parse_expression(c.gap, ("x", "y"), where="contact.gap")
-        surface = contact_surface(mesh, c.part, basis.nodal_dofs, gap)
+        gap = parse_expression(c.gap, coordinates(dim), where="contact.gap")
+        surface = contact_surface(mesh, c.part, basis.nodal_dofs, gap, None if c.normal == "body" else c.normal)
         law = ContactLaw(p=p or _p_law(case), stiffness=stiffness_law or _stiffness_law(case), g=c.g, rho=c.rho)
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
@@ -119,15 +125,15 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     _check_rigid_motions(mesh, basis, free, surface)
 
     elements = mesh.mesh.t.shape[1]
-    initial_stress = np.array(case.initial.stress, dtype=float)
+    initial_stress = np.zeros((dim, dim)) if case.initial.stress is None else np.array(case.initial.stress, dtype=float)
     law_name = "material.viscoplastic" if viscoplastic is None else "viscoplastic"
     if viscoplastic is None:
         viscoplastic = _viscoplastic_law(case)
     elif not callable(viscoplastic):
         raise CaseError(f"viscoplastic = {_brief(viscoplastic)}: expected a function G(sigma, strain) of arrays of "
-                        f"shape (2, 2, elements)")
+                        f"shape (d, d, elements)")
     check_memory(case, mesh.mesh.p.shape[1], elements, surface.size,
-                 history=viscoplastic is not None or bool(np.any(initial_stress != 0.0)))
+                 history=viscoplastic is not None or bool(np.any(initial_stress != 0.0)), dim=dim)
     loads.check(TimeGrid(case.time.T, case.time.steps))
     _check_first_history(basis, initial_stress, viscoplastic, law_name, case.time.T / case.time.steps)
     done = time.perf_counter()
@@ -142,13 +148,52 @@ def _make_mesh(case: Case) -> meshes.Mesh:
         return meshes.read_mesh(case.mesh_path)
     if m.shape == "half_disc":
         return meshes.half_disc(m.h, m.radius)
+    if m.shape == "quarter_ball":
+        return meshes.quarter_ball(m.h, m.radius, m.h_bottom)
+    if m.shape == "block":
+        return meshes.block(m.width, m.depth, m.height, m.h)
     return meshes.rectangle(m.width, m.height, m.h)
 
 
+def _check_dimension(case: Case, dim: int) -> None:
+    """Refuse vectors and tensors of the case that do not have the mesh's dimension d, a plane
+    hypothesis in 3D, and the coordinate z in 2D."""
+    names = coordinates(dim)
+    where = f"the mesh is {dim}D"
+    give = f"give {dim} ({', '.join(names)})"
+    loads = [(f"boundary.traction[{i}].value", t.value) for i, t in enumerate(case.boundary.traction)]
+    loads += [(f"boundary.body_force[{i}].value", f.value) for i, f in enumerate(case.boundary.body_force)]
+    vectors = list(loads)
+    if case.contact is not None:
+        vectors += [("contact.probe", case.contact.probe), ("contact.normal", case.contact.normal)]
+    for key, value in vectors:
+        if isinstance(value, list) and len(value) != dim:
+            raise CaseError(f"{key} has {len(value)} components and {where}: {give}")
+    if case.initial.stress is not None and len(case.initial.stress) != dim:
+        raise CaseError(f"initial.stress is {len(case.initial.stress)} x {len(case.initial.stress)} and {where}: "
+                        f"give a {dim} x {dim} table")
+    if dim == 3 and case.material.hypothesis is not None:
+        raise CaseError(f"material.hypothesis = \"{case.material.hypothesis}\" is a 2D reduction and {where} (3D "
+                        f"uses the full isotropic tensor): remove material.hypothesis")
+    for i, item in enumerate(case.boundary.dirichlet):
+        extra = [c for c in item.components or () if c not in names]
+        if extra:
+            raise CaseError(f"boundary.dirichlet[{i}].components names \"{extra[0]}\" and {where}: use "
+                            f"{', '.join(repr(n) for n in names)}")
+    expressions = [(f"{key}[{c}]", source) for key, value in loads for c, source in enumerate(value)]
+    if case.contact is not None:
+        expressions.append(("contact.gap", case.contact.gap))
+    for key, source in expressions:
+        unknown = parse_expression(source, ("x", "y", "z", "t"), where=key).depends_on - {*names, "t"}
+        if unknown:
+            raise CaseError(f"{key} = {quoted(str(source))} uses {sorted(unknown)[0]} and {where}: the coordinates "
+                            f"are {', '.join(names)}")
+
+
 def _density(values, where: str) -> ExpressionDensity:
-    """The density of the two expressions ``values`` of the case key ``where``."""
-    fx, fy = (parse_expression(v, ("x", "y", "t"), where=f"{where}[{i}]") for i, v in enumerate(values))
-    return ExpressionDensity(fx, fy)
+    """The density of the d expressions ``values`` (one per component) of the case key ``where``."""
+    names = coordinates(len(values))
+    return ExpressionDensity(*(parse_expression(v, (*names, "t"), where=f"{where}[{i}]") for i, v in enumerate(values)))
 
 
 def _traction_terms(case: Case, mesh: meshes.Mesh, tractions: Mapping | None) -> list[tuple[str, object, Density]]:
@@ -158,7 +203,7 @@ def _traction_terms(case: Case, mesh: meshes.Mesh, tractions: Mapping | None) ->
     if tractions is None:
         return terms
     if not isinstance(tractions, Mapping):
-        raise CaseError(f"tractions = {_brief(tractions)}: expected a dict {{part: f(x, y, t) -> (fx, fy)}}")
+        raise CaseError(f"tractions = {_brief(tractions)}: expected a dict {{part: f(x, y, (z,) t) -> (fx, fy, (fz))}}")
     for part, density in tractions.items():
         if not (isinstance(part, (str, int)) and str(part) in mesh.parts):
             raise CaseError(f"tractions: unknown part {_brief(part)}; the mesh has parts: {', '.join(mesh.part_names)}")
@@ -276,10 +321,9 @@ def _check_contact_can_move(case: Case, mesh: meshes.Mesh, basis: Basis, free: n
 
 def _check_rigid_motions(mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
     """Refuse a body, or a separate part of the mesh, whose rigid motions are held neither by
-    Dirichlet conditions nor by contact: the motions of each connected part (the two translations
-    and the rotation about its centroid scaled by its size, :mod:`vpcontact.rigid_modes`) must stay
+    Dirichlet conditions nor by contact: the motions of each connected part (the d translations and
+    the rotations about its centroid scaled by its size, :mod:`vpcontact.rigid_modes`) must stay
     independent on the fixed dofs and the contact normals of that part."""
-    x, y = mesh.mesh.p
     modes = RigidModes.of_mesh(mesh.mesh.p, mesh.mesh.t, basis.nodal_dofs)
     fixed = np.ones(basis.N, dtype=bool)
     fixed[free] = False
@@ -287,25 +331,45 @@ def _check_rigid_motions(mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surf
     loose = np.flatnonzero(free_motions)
     if loose.size == 0:
         return
-    b, count = loose[0], modes.count
-    (cx, cy), size = modes.centroid[:, b], modes.size[b]
-    nodes = np.bincount(modes.body, minlength=count)
+    b, count, d = loose[0], modes.count, mesh.dim
     where = "the Dirichlet conditions and the contact part" if surface.size else "the Dirichlet conditions"
-    vector = least_held[b]
-    tx, ty, spin = vector * np.sign(vector[np.argmax(np.abs(vector))])
     if free_motions[b] > 1:
-        motion = "all three" if free_motions[b] == 3 else "two of the three"
-    elif abs(spin) < 1e-9:
-        motion = f"a translation along ({np.round(tx, 9) + 0.0:.3g}, {np.round(ty, 9) + 0.0:.3g})"
+        words = ("", "one", "two", "three", "four", "five", "six")
+        motion = (f"all {words[modes.per_body]}" if free_motions[b] == modes.per_body
+                  else f"{words[free_motions[b]]} of the {words[modes.per_body]}")
     else:
-        center = np.array([cx - ty * size / spin, cy + tx * size / spin])
-        center = np.round(center / size, 9) * size + 0.0  # no round-off digits around 0
-        motion = f"a rotation about ({center[0]:.6g}, {center[1]:.6g})"
+        motion = _rigid_motion(least_held[b], modes.centroid[:, b], modes.size[b])
     if count == 1:
         raise CaseError(f"{where} leave a rigid motion of the body free ({motion}): add boundary.dirichlet entries")
+    p = mesh.mesh.p
     inside = np.flatnonzero(modes.body == b)
-    point = inside[np.argmin((x[inside] - cx) ** 2 + (y[inside] - cy) ** 2)]
+    point = inside[np.argmin(np.sum((p[:, inside] - modes.centroid[:, b:b + 1]) ** 2, axis=0))]
+    nodes = np.bincount(modes.body, minlength=count)
     raise CaseError(f"the mesh has {count} separate parts; {where} leave a rigid motion of the part of {nodes[b]} "
-                    f"nodes through the node at ({x[point]:.6g}, {y[point]:.6g}) free ({motion})"
+                    f"nodes through the node at {_point(p[:, point])} free ({motion})"
                     f"{f' (and of {loose.size - 1} more)' if loose.size > 1 else ''}: add boundary.dirichlet "
                     f"entries on it, or join it to the rest of the mesh")
+
+
+def _rigid_motion(combination: np.ndarray, centroid: np.ndarray, size: float) -> str:
+    """A rigid motion in words, from its coefficients on the modes of :mod:`vpcontact.rigid_modes`:
+    d translations, then the rotations in the planes xy (2D), or xy, yz, zx (3D), about ``centroid``
+    and scaled by ``size``: "a translation along (…)", "a rotation about (…)" (2D) or "a rotation about
+    the axis through (…) along (…)" (3D)."""
+    d = centroid.size
+    combination = combination * np.sign(combination[np.argmax(np.abs(combination))])
+    translation, rotation = combination[:d], combination[d:]
+    if np.linalg.norm(rotation) < 1e-9:
+        return f"a translation along {_point(translation / np.linalg.norm(translation), '.3g')}"
+    if d == 2:  # u = t + ω e_z × (x − c)/size vanishes at x = c + size (−t_y, t_x)/ω
+        center = centroid + size * np.array([-translation[1], translation[0]]) / rotation[0]
+        return f"a rotation about {_point(np.round(center / size, 9) * size)}"
+    axis = rotation[[1, 2, 0]]  # rotations in the planes yz, zx, xy: the axis components x, y, z
+    point = centroid + size * np.cross(axis, translation) / (axis @ axis)
+    return (f"a rotation about the axis through {_point(np.round(point / size, 9) * size)} along "
+            f"{_point(axis / np.linalg.norm(axis), '.3g')}")
+
+
+def _point(x: np.ndarray, style: str = ".6g") -> str:
+    """(x, y[, z]) with the given format, without signed zeros."""
+    return f"({', '.join(format(c + 0.0, style) for c in np.round(x, 12))})"

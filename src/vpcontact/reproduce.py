@@ -479,7 +479,7 @@ def mesh_record(result) -> dict:
         "dofs": int(result.dofs),
         "nodes": int(result.nodes),
         "contact_nodes": int(result.contact_nodes),
-        "contact_edges": int(surface.segments.shape[1]),
+        "contact_edges": int(surface.facets.shape[1]),
     }
 
 

@@ -28,12 +28,17 @@ import numpy as np
 
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from .errors import CaseError, quoted, shown
+from .space import coordinates
 
-HISTORY_COLUMNS = (
-    "step", "t", "newton_iterations", "residual", "complementarity", "max_penetration", "mean_penetration",
-    "K_min", "K_max", "K_probe", "penetration_probe", "normal_stress_probe", "nodes_separated",
-    "nodes_in_compliance", "nodes_at_limit", "contact_force_x", "contact_force_y", "substep", "k",
-)
+def history_columns(dim: int) -> tuple[str, ...]:
+    """The columns of history.csv for a d-dimensional body (one contact force component per coordinate)."""
+    return ("step", "t", "newton_iterations", "residual", "complementarity", "max_penetration", "mean_penetration",
+            "K_min", "K_max", "K_probe", "penetration_probe", "normal_stress_probe", "nodes_separated",
+            "nodes_in_compliance", "nodes_at_limit", *(f"contact_force_{c}" for c in coordinates(dim)), "substep", "k")
+
+
+#: The history columns of a 2D body (the paper's case).
+HISTORY_COLUMNS = history_columns(2)
 #: History columns holding integers (the others are floats).
 INTEGER_COLUMNS = ("step", "newton_iterations", "nodes_separated", "nodes_in_compliance", "nodes_at_limit", "substep")
 CONTACT_ARRAYS = ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid", "status")
@@ -65,14 +70,14 @@ def field_step_numbers(field_steps, steps: int) -> Collection[int]:
 
 @dataclass(repr=False)
 class Fields:
-    """Displacement at the nodes (nnodes, 2); per element: in-plane stress (nelements, 2, 2), the
-    out-of-plane σ33 of the elastic response and the von Mises stress of the 3D tensor; with a
-    viscoplastic law or an initial stress, the history z (nelements, 2, 2) of the step, so that
+    """Displacement at the nodes (nnodes, d); per element: the stress (nelements, d, d), in 2D also the
+    out-of-plane σ33 of the elastic response (None in 3D), and the von Mises stress of the 3D tensor;
+    with a viscoplastic law or an initial stress, the history z (nelements, d, d) of the step, so that
     stress = ℰε(u) + z (None otherwise: z = 0)."""
 
     displacement: np.ndarray
     stress: np.ndarray
-    stress33: np.ndarray
+    stress33: np.ndarray | None
     von_mises: np.ndarray
     z: np.ndarray | None = None
 
@@ -92,6 +97,7 @@ class Result:
     elements: int
     nodes: int
     contact_nodes: int
+    dim: int
     probe: int | None
     field_steps: Collection[int]
     augmentation: float
@@ -115,7 +121,7 @@ class Result:
     def start(cls, problem, solver) -> "Result":
         wanted = field_step_numbers(problem.case.output.field_steps, len(problem.times))
         return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
-                   contact_nodes=problem.surface.size, probe=problem.probe, field_steps=wanted,
+                   contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
                    augmentation=solver.r, method=solver.name, problem=problem)
 
     # --- filling in ------------------------------------------------------------------------------
@@ -144,7 +150,8 @@ class Result:
             "nodes_separated": int(np.sum(status == SEPARATED)),
             "nodes_in_compliance": int(np.sum(status == IN_COMPLIANCE)),
             "nodes_at_limit": int(np.sum(status == AT_LIMIT)),
-            "contact_force_x": force[0], "contact_force_y": force[1], "substep": substep, "k": k,
+            **{f"contact_force_{c}": force[i] for i, c in enumerate(coordinates(self.dim))},
+            "substep": substep, "k": k,
         })
         self._times.append(t)
         if ends_step:
@@ -166,6 +173,11 @@ class Result:
 
     # --- reading ---------------------------------------------------------------------------------
     @property
+    def columns(self) -> tuple[str, ...]:
+        """The history columns (history.csv) of this run's dimension."""
+        return history_columns(self.dim)
+
+    @property
     def steps(self) -> int:
         """Time steps t_n reached (the history has more rows when steps were cut)."""
         return self.completed_steps
@@ -186,10 +198,10 @@ class Result:
         return self.times == self.problem.times.at(self.series("step"))
 
     def series(self, column: str, *, substeps: bool = True) -> np.ndarray:
-        """One column of the history (see HISTORY_COLUMNS) over the rows done; ``substeps=False``:
-        only the rows at the step times t_n. An unknown column is a KeyError naming the valid ones."""
-        if column not in HISTORY_COLUMNS:
-            raise _unknown("history column", column, HISTORY_COLUMNS, (CONTACT_ARRAYS, "contact_history"))
+        """One column of the history (see ``columns``) over the rows done; ``substeps=False``: only the
+        rows at the step times t_n. An unknown column is a KeyError naming the valid ones."""
+        if column not in self.columns:
+            raise _unknown("history column", column, self.columns, (CONTACT_ARRAYS, "contact_history"))
         values = np.array([row[column] for row in self.rows])
         return values if substeps else values[self.ends_step()]
 
@@ -197,7 +209,7 @@ class Result:
         """(rows, m) array of a per-node quantity (see CONTACT_ARRAYS); ``substeps=False``: only the
         rows at the step times t_n. An unknown name is a KeyError naming the valid ones."""
         if name not in CONTACT_ARRAYS:
-            raise _unknown("contact array", name, CONTACT_ARRAYS, (HISTORY_COLUMNS, "series"))
+            raise _unknown("contact array", name, CONTACT_ARRAYS, (self.columns, "series"))
         values = np.array(self.contact[name]).reshape(len(self.rows), self.contact_nodes)
         return values if substeps else values[self.ends_step()]
 
@@ -223,7 +235,7 @@ class Result:
             final = {key: last[key] for key in ("t", "max_penetration", "mean_penetration", "K_min", "K_max", "K_probe",
                                                  "penetration_probe", "normal_stress_probe", "nodes_separated",
                                                  "nodes_in_compliance", "nodes_at_limit")}
-            final["contact_force"] = [last["contact_force_x"], last["contact_force_y"]]
+            final["contact_force"] = [last[f"contact_force_{c}"] for c in coordinates(self.dim)]
         return {
             "status": self.status, "message": self.message, "dofs": self.dofs, "elements": self.elements,
             "nodes": self.nodes, "contact_nodes": self.contact_nodes, "steps": self.steps,
@@ -265,35 +277,36 @@ WRITING_BYTES = 2**24
 
 
 def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, contact_nodes: int,
-                  history: bool) -> dict[str, int]:
+                  history: bool, dim: int = 2) -> dict[str, int]:
     """Bytes a run of ``steps`` steps keeps for its outputs until they are written, by part: the history
     rows, the per-node contact rows and the fields at ``field_steps`` steps (``history``: with the
     viscoplastic history z), each with the copy a checkpoint or solution.npz makes of them, and what
     the writers add. A step cut into sub-steps adds rows: this is the least a run needs."""
-    copies = 8 * len(HISTORY_COLUMNS)
+    copies = 8 * len(history_columns(dim))
     contact = len(CONTACT_ARRAYS) * ARRAY_BYTES + 2 * (8 * (len(CONTACT_ARRAYS) - 1) + 1) * contact_nodes
-    per_field = 5 * ARRAY_BYTES + 8 * (2 * nodes + 6 * elements) + 8 * (2 * nodes + 4 * elements)
+    tensor = dim * dim
+    per_field = 5 * ARRAY_BYTES + 8 * (dim * nodes + (tensor + 2) * elements) + 8 * (dim * nodes + tensor * elements)
     if history:
-        per_field += 2 * 8 * 4 * elements
+        per_field += 2 * 8 * tensor * elements
     return {"history rows": steps * (HISTORY_ROW_BYTES + copies), "contact rows": steps * contact,
             "fields": (field_steps + 1) * per_field, "writing": WRITING_BYTES}
 
 
-def check_memory(case, nodes: int, elements: int, contact_nodes: int, history: bool) -> None:
+def check_memory(case, nodes: int, elements: int, contact_nodes: int, history: bool, dim: int = 2) -> None:
     """Refuse, before anything per step is allocated, a run whose outputs would not fit in the memory
     available now: one line naming time.steps (and output.field_steps when the fields are the most)."""
     from .solvers.factorization import available_memory
 
     steps = case.time.steps
     field_steps = len(field_step_numbers(case.output.field_steps, steps))
-    parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history)
+    parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim)
     needed, available = sum(parts.values()), available_memory()
     if needed <= available:
         return
     gib = 2.0**30
     detail = (f"history rows {parts['history rows'] / gib:.3g} GiB, contact rows of {contact_nodes} nodes "
               f"{parts['contact rows'] / gib:.3g} GiB, fields at {field_steps} steps of {nodes} nodes and {elements} "
-              f"triangles {parts['fields'] / gib:.3g} GiB")
+              f"elements {parts['fields'] / gib:.3g} GiB")
     key = f"time.steps = {steps}"
     fix = "use fewer steps"
     if parts["fields"] > parts["history rows"] + parts["contact rows"]:

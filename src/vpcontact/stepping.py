@@ -42,7 +42,7 @@ class LoopState:
 
     step: int  # time steps t_n done
     xi: np.ndarray  # ξ at the last level
-    z: np.ndarray | None  # z at the last level, σ = ℰε(u) + z there (2, 2, elements); None: z ≡ 0
+    z: np.ndarray | None  # z at the last level, σ = ℰε(u) + z there (d, d, elements); None: z ≡ 0
     rate: np.ndarray | None  # 𝒢(σ, ε) at the last level; None: 𝒢 = 0
     previous: StepSolution | None  # the last level's solution: the next Newton iteration starts from it
 
@@ -244,11 +244,11 @@ def solve_problem(problem: Problem, *, progress: bool = False) -> Result:
 
 
 def viscoplastic_rate(G, sigma: np.ndarray, strain: np.ndarray) -> np.ndarray:
-    """𝒢(σ, ε) per element, checked: an array of the shape of σ, (2, 2, nelements)."""
+    """𝒢(σ, ε) per element, checked: an array of the shape of σ, (d, d, nelements)."""
     rate = G(sigma.copy(), strain.copy())  # a law may not change the stored fields
     try:
         rate = np.broadcast_to(np.asarray(rate, dtype=float), sigma.shape)
     except (TypeError, ValueError):
         raise ValueError(f"the viscoplastic law returned an array of shape {np.shape(rate)}; expected "
-                         f"{sigma.shape} (2, 2, elements), like its arguments") from None
+                         f"{sigma.shape} (d, d, elements), like its arguments") from None
     return rate

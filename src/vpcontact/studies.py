@@ -53,6 +53,7 @@ from .case import _brief, load_case
 from .errors import CaseError
 from .inputs import MAX_TOML_BYTES, check_regular_file
 from .norms import Snapshot, differences
+from .space import CELLS, COORDINATES
 from .writers import check_room, replacing
 
 STUDY_KEYS = {"base", "set", "vary", "runs", "compare"}
@@ -386,7 +387,7 @@ def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = N
         final = dict(summary.get("final") or {})
         force = final.pop("contact_force", [None, None])
         row.update(final)
-        row["contact_force_x"], row["contact_force_y"] = force
+        row.update({f"contact_force_{c}": value for c, value in zip(COORDINATES, force)})
         if reference:
             mine = _snapshots(study, spec.id) if summary.get("status") == "complete" else {}
             for t in study.times:
@@ -425,7 +426,8 @@ def _snapshots(study: Study, run_id: str) -> dict[float, Snapshot]:
     spec = next(s for s in study.runs if s.id == run_id)
     try:
         with np.load(spec.out / "solution.npz") as solution:
-            data = {key: solution[key] for key in ("times", "points", "triangles", "displacement", "stress")}
+            data = {key: solution[key] for key in ("times", "points", "displacement", "stress")}
+            data["elements"] = solution[CELLS[data["points"].shape[0]][2]]
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):  # missing or damaged: no norms
         return {}
     found = {}
@@ -433,5 +435,5 @@ def _snapshots(study: Study, run_id: str) -> dict[float, Snapshot]:
         index = np.flatnonzero(np.isclose(data["times"], t, rtol=1e-9, atol=1e-12))
         if index.size:
             i = index[0]
-            found[t] = Snapshot(data["points"], data["triangles"], data["displacement"][i], data["stress"][i])
+            found[t] = Snapshot(data["points"], data["elements"], data["displacement"][i], data["stress"][i])
     return found

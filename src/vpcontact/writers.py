@@ -4,7 +4,7 @@ place: a reader never sees half a file), ``summary.json`` last: a directory whos
 (``vpcontact run --resume`` continues it from its checkpoint, see :mod:`vpcontact.rundir`).
 
 - ``summary.json``      status, sizes, wall time, the final values, versions;
-- ``history.csv``       one row per time step (``results.HISTORY_COLUMNS``);
+- ``history.csv``       one row per time step (``Result.columns``);
 - ``contact.csv``       one row per contact node and step;
 - ``fields/body.pvd``   displacement, stress, von Mises (and the viscoplastic history z when there is
                         one) at the field steps (VTU files, ParaView);
@@ -31,7 +31,8 @@ import numpy as np
 from . import directory
 from .contact import STATUS_NAMES
 from .errors import CaseError
-from .results import CONTACT_ARRAYS, HISTORY_COLUMNS, Result
+from .results import CONTACT_ARRAYS, Result
+from .space import CELLS, coordinates
 
 PACKAGES = ("vpcontact", "numpy", "scipy", "scikit-fem", "meshio", "pydantic")
 
@@ -194,7 +195,7 @@ def json_safe(value):
 
 def _write_history(result: Result, path: Path) -> None:
     with replacing(path) as temporary, temporary.open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=HISTORY_COLUMNS)
+        writer = csv.DictWriter(handle, fieldnames=result.columns)
         writer.writeheader()
         for row in result.rows:
             writer.writerow({k: (repr(float(v)) if isinstance(v, (float, np.floating)) else v) for k, v in row.items()})
@@ -209,7 +210,8 @@ def _write_contact(result: Result, path: Path) -> None:
     surface = result.problem.surface
     rows, m = len(result.rows), surface.size
     steps, substeps, times = result.series("step").astype(int), result.series("substep").astype(int), result.times
-    names = ["step", "t", "node", "x", "y", "normal_x", "normal_y", "weight", *CONTACT_ARRAYS, "substep"]
+    axes = coordinates(result.dim)
+    names = ["step", "t", "node", *axes, *(f"normal_{c}" for c in axes), "weight", *CONTACT_ARRAYS, "substep"]
     block = max(1, CONTACT_BLOCK // max(m, 1))
     with replacing(path) as temporary, temporary.open("w", newline="") as handle:
         writer = csv.writer(handle)
@@ -231,36 +233,32 @@ def _write_fields(result: Result, folder: Path) -> None:
         return
     directory.mkdir(folder)
     problem = result.problem
-    points = np.column_stack([problem.mesh.mesh.p.T, np.zeros(result.nodes)])
-    triangles = [("triangle", problem.mesh.mesh.t.T)]
+    element_cells, facet_cells, _ = CELLS[result.dim]
+    points = _in_space(problem.mesh.mesh.p.T)
+    elements = [(element_cells, problem.mesh.mesh.t.T)]
     surface = problem.surface
-    contact_points = np.column_stack([surface.coordinates.T, np.zeros(surface.size)])
-    segments = [("line", surface.segments.T)]
+    contact_points = _in_space(surface.coordinates.T)
+    facets = [(facet_cells, surface.facets.T)]
     body, contact = [], []
     for step, fields in sorted(result.fields.items()):
         t = problem.times[step - 1]
-        stress = np.zeros((result.elements, 3, 3))
-        stress[:, :2, :2] = fields.stress
-        stress[:, 2, 2] = fields.stress33
-        displacement = np.column_stack([fields.displacement, np.zeros(result.nodes)])
+        displacement = _in_space(fields.displacement)
         name = f"body_{step:05d}.vtu"
-        cell_data = {"stress": [stress.reshape(-1, 9)], "von_mises": [fields.von_mises]}
+        cell_data = {"stress": [_tensors_in_space(fields.stress, fields.stress33)], "von_mises": [fields.von_mises]}
         if fields.z is not None:
-            z = np.zeros((result.elements, 3, 3))
-            z[:, :2, :2] = fields.z
-            cell_data["z"] = [z.reshape(-1, 9)]
+            cell_data["z"] = [_tensors_in_space(fields.z)]
         with replacing(folder / name) as temporary:
-            meshio.write(temporary, meshio.Mesh(points, triangles, point_data={"displacement": displacement},
+            meshio.write(temporary, meshio.Mesh(points, elements, point_data={"displacement": displacement},
                                                 cell_data=cell_data))
         body.append((t, name))
         if surface.size:
-            normal = np.column_stack([surface.normals.T, np.zeros(surface.size)])
+            normal = _in_space(surface.normals.T)
             name = f"contact_{step:05d}.vtu"
             row = _end_of_step_row(result, step)
             data = {key: result.contact[key][row] for key in CONTACT_ARRAYS}
             pressure = data["pressure_compliance"] + data["pressure_rigid"]
             with replacing(folder / name) as temporary:
-                meshio.write(temporary, meshio.Mesh(contact_points, segments, point_data={
+                meshio.write(temporary, meshio.Mesh(contact_points, facets, point_data={
                     **{key: np.asarray(value, dtype=float) for key, value in data.items()},
                     "pressure": pressure, "normal": normal,
                     "contact_force": -normal * (surface.weights * pressure)[:, None],
@@ -272,19 +270,35 @@ def _write_fields(result: Result, folder: Path) -> None:
     write_solution(result, folder.parent / "solution.npz")
 
 
+def _in_space(vectors: np.ndarray) -> np.ndarray:
+    """Vectors (n, d) as the 3D vectors (n, 3) of a VTU file (z = 0 in 2D)."""
+    return np.column_stack([vectors, np.zeros((vectors.shape[0], 3 - vectors.shape[1]))])
+
+
+def _tensors_in_space(tensors: np.ndarray, t33: np.ndarray | None = None) -> np.ndarray:
+    """Tensors (n, d, d) as the 3 × 3 tensors (n, 9) of a VTU file; in 2D the out-of-plane entry is
+    ``t33`` (σ33 of the plane reduction), or 0."""
+    n, d = tensors.shape[:2]
+    full = np.zeros((n, 3, 3))
+    full[:, :d, :d] = tensors
+    if t33 is not None:
+        full[:, 2, 2] = t33
+    return full.reshape(n, 9)
+
+
 def _end_of_step_row(result: Result, step: int) -> int:
     """The history row at t_n of step n."""
     return int(np.flatnonzero(result.ends_step() & (result.series("step") == step))[0])
 
 
 def write_solution(result: Result, path: Path) -> None:
-    """solution.npz: ``points`` (2, nnodes), ``triangles`` (3, nelements), ``steps`` (s,), ``times`` (s,),
-    ``displacement`` (s, nnodes, 2), ``stress`` (s, nelements, 2, 2) at the s field steps; with a
-    viscoplastic law or an initial stress also ``z`` (s, nelements, 2, 2), the history of (2.28):
-    stress = ℰε(u) + z."""
+    """solution.npz: ``points`` (d, nnodes), the elements by their type, ``triangles`` (3, nelements) in
+    2D or ``tetrahedra`` (4, nelements) in 3D, ``steps`` (s,), ``times`` (s,), ``displacement``
+    (s, nnodes, d), ``stress`` (s, nelements, d, d) at the s field steps; with a viscoplastic law or an
+    initial stress also ``z`` (s, nelements, d, d), the history of (2.28): stress = ℰε(u) + z."""
     steps = sorted(result.fields)
     mesh = result.problem.mesh.mesh
-    arrays = dict(points=mesh.p, triangles=mesh.t, steps=np.array(steps),
+    arrays = dict(points=mesh.p, steps=np.array(steps), **{CELLS[result.dim][2]: mesh.t},
                   times=np.array([result.problem.times[s - 1] for s in steps]),
                   displacement=np.array([result.fields[s].displacement for s in steps]),
                   stress=np.array([result.fields[s].stress for s in steps]))
