@@ -32,7 +32,7 @@ def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float 
         r = augmentation
     if method == "auto":
         try:
-            check_condensed_memory(N.shape[0], A.shape[0])
+            check_condensed_memory(N, A.shape[0])
             method = CondensedNewton.name
         except CaseError:
             method = FullNewton.name

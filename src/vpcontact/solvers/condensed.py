@@ -84,7 +84,7 @@ class CondensedNewton(SemismoothNewton):
                  length_scale, rigid: np.ndarray, factorization: str = "auto"):
         super().__init__(weights, r, tolerance, max_iterations, length_scale)
         m = N.shape[0]
-        check_condensed_memory(m, A.shape[0])
+        check_condensed_memory(N, A.shape[0])
         self.A, self.N, self.gap0, self.Z = A, N.tocsr(), gap0, rigid
         self.reference = np.full(m, r)
         started = time.perf_counter()
@@ -206,11 +206,19 @@ class CondensedNewton(SemismoothNewton):
         return self._recover(solution)
 
 
-def check_condensed_memory(m: int, n: int) -> None:
+def condensed_memory(N: sp.csr_matrix, n: int) -> int:
+    """Bytes of the dense algebra of the condensed method for the contact operator N (m × n): the
+    Schur complement of A0 on the c contact dofs (c = d m) and its Cholesky factor (PARDISO's route to
+    S), S, the Newton matrix and its factor (m × m each), and the block solves (64 columns of n)."""
+    m, c = N.shape[0], np.unique(sp.csr_matrix(N).indices).size
+    return 8 * (2 * c * c + 3 * m * m + 2 * 64 * n)
+
+
+def check_condensed_memory(N: sp.csr_matrix, n: int) -> None:
     """Refuse, before allocating, a condensed operator that would not fit in memory."""
-    needed = 8 * (3 * m * m + 2 * 64 * n)  # S, the Newton matrix and its factor; block solves
-    available = available_memory()
+    needed, available = condensed_memory(N, n), available_memory()
     if needed > 0.5 * available:
+        m, c = N.shape[0], np.unique(sp.csr_matrix(N).indices).size
         raise CaseError(f"solver.method = \"condensed\" needs about {needed / 2**30:.1f} GiB for its dense "
-                        f"{m} x {m} contact operator, more than half the {available / 2**30:.1f} GiB available; "
-                        f"use solver.method = \"full\"")
+                        f"{m} x {m} contact operator (and the {c} x {c} Schur complement on the contact dofs), more "
+                        f"than half the {available / 2**30:.1f} GiB available; use solver.method = \"full\"")
