@@ -31,7 +31,7 @@ KEYS = ["mesh", "shape", "h", "file", "radius", "width", "height", "material", "
         "dirichlet", "part", "components", "traction", "value", "body_force", "contact", "g", "gap", "p",
         "exponent", "rho", "probe", "stiffness", "c_v", "alpha", "beta", "time", "T", "steps", "solver", "method",
         "factorization", "tolerance", "max_iterations", "max_step_cuts", "augmentation", "output", "field_steps",
-        "progress", "checkpoint_every_steps", "checkpoint_every_seconds", "base_dir"]
+        "progress", "checkpoint_every_steps", "checkpoint_every_seconds", "figures", "base_dir"]
 
 
 class Opaque:

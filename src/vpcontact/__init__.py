@@ -25,7 +25,7 @@ from .stepping import solve_problem  # noqa: E402
 
 #: The modules of the package a user may reach as ``vpcontact.<name>`` after ``import vpcontact``.
 SUBMODULES = ("assembly", "case", "checkpoint", "contact", "errors", "expressions", "figures", "material", "mesh",
-              "norms", "problem", "report", "reproduce", "results", "rundir", "solvers", "stepping", "studies",
+              "norms", "plots", "problem", "report", "reproduce", "results", "rundir", "solvers", "stepping", "studies",
               "writers")
 
 

@@ -331,6 +331,7 @@ class OutputSection(_Section):
     progress: bool = True
     checkpoint_every_steps: Annotated[int, Field(ge=0)] = 0  # 0: not by step count
     checkpoint_every_seconds: NonNegativeFloat = 60.0  # 0: not by time
+    figures: bool = False  # figures/*.png at the end of a complete or failed run (vpcontact.plots)
 
     @field_validator("field_steps")
     @classmethod

@@ -48,7 +48,7 @@ FILES = tuple(pattern for pattern in OUTPUTS if pattern.startswith(f"{FOLDER}/")
 """state.npz and fields_NNNNN.npz, as listed among the outputs of a run directory."""
 FORMAT = 1
 #: Output keys that do not change the numbers: they may differ between a run and its resumption.
-FREE_KEYS = ("progress", "checkpoint_every_steps", "checkpoint_every_seconds")
+FREE_KEYS = ("progress", "checkpoint_every_steps", "checkpoint_every_seconds", "figures")
 
 
 class ResumeError(CaseError):

@@ -28,7 +28,8 @@ from matplotlib.patches import Patch
 from matplotlib.tri import Triangulation
 from scipy.sparse.csgraph import connected_components, depth_first_order
 
-from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, STATUS_NAMES
+from .contact import AT_LIMIT, STATUS_NAMES
+from .plots import STATE_COLORS, STATE_LABELS  # Γ3 coloured by the state of its nodes, as in a run's figures
 
 MAGNIFICATION = 1.0
 """Displacements are drawn at true scale."""
@@ -42,9 +43,6 @@ mesh has 127 contact nodes: an arrow at each would merge into a band)."""
 MESH_DRAWN_UP_TO = 2000
 """The mesh is drawn when it has at most this many triangles; a finer one (the figure mesh has
 23,204) would be a grey block, so only the body's outline is drawn."""
-STATE_COLORS = {SEPARATED: "0.6", IN_COMPLIANCE: "#0072B2", AT_LIMIT: "#D55E00"}
-"""Γ3 coloured by the state of its nodes (told apart with red–green colour blindness too)."""
-STATE_LABELS = {SEPARATED: "separated", IN_COMPLIANCE: "in normal compliance", AT_LIMIT: "at the limit g"}
 BODY = "0.86"
 """Fill colour of the deformed body."""
 ARROW_COLOR = "0.15"

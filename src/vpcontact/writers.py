@@ -10,7 +10,9 @@ place: a reader never sees half a file), ``summary.json`` last: a directory whos
                         one) at the field steps (VTU files, ParaView);
 - ``fields/contact.pvd``  Γ3 with penetration, ξ, K, pressures, status, normal and contact force;
 - ``solution.npz``      the fields at the field steps as arrays (see ``write_solution``);
-- ``case.resolved.toml``  every value used, defaults included, with the versions as a header.
+- ``case.resolved.toml``  every value used, defaults included, with the versions as a header;
+- ``figures/*.png``     with ``output.figures``, at the end of a complete or failed run: the contact
+                        pressure, the deformed body and the history (see :mod:`vpcontact.plots`).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import numpy as np
 from . import directory
 from .contact import STATUS_NAMES
 from .errors import CaseError
+from .plots import DPI, FIGURES
 from .results import CONTACT_ARRAYS, Result
 from .space import CELLS, coordinates
 
@@ -64,7 +67,7 @@ def _temporary(path: Path, tag: str) -> Path:
 #: temporaries, and fields/ or checkpoint/ if that leaves them empty; nothing else.
 OUTPUTS = ("summary.json", "history.csv", "contact.csv", "solution.npz", "case.resolved.toml",
            "fields/body.pvd", "fields/contact.pvd", "fields/body_*.vtu", "fields/contact_*.vtu",
-           "checkpoint/state.npz", "checkpoint/fields_*.npz")
+           "checkpoint/state.npz", "checkpoint/fields_*.npz", *(f"figures/{stem}.png" for stem in FIGURES))
 TEMPORARIES = tuple(str(_temporary(Path(pattern), "[0-9]*")) for pattern in OUTPUTS)
 """The temporary files of the OUTPUTS (of any process: a killed writer leaves its own)."""
 
@@ -166,14 +169,17 @@ def write_resolved_case(case, out: Path) -> None:
 
 
 def write_outputs(result: Result, out: Path, *, history_only: bool = False) -> None:
-    """history.csv, contact.csv, fields/ and solution.npz, then summary.json (the last file written).
-    ``history_only``: history.csv alone (refreshed at the checkpoints of a run in progress)."""
+    """history.csv, contact.csv, fields/ and solution.npz, figures/ (``output.figures``, once the run is
+    complete or has failed), then summary.json (the last file written). ``history_only``: history.csv
+    alone (refreshed at the checkpoints of a run in progress)."""
     out = Path(out)
     _write_history(result, out / "history.csv")
     if history_only:
         return
     _write_contact(result, out / "contact.csv")
     _write_fields(result, out / "fields")
+    if result.problem.case.output.figures and result.status in ("complete", "failed"):
+        _write_figures(result, out / "figures")
     summary = {**result.summary(), "versions": versions()}
     write_text(out / "summary.json", json.dumps(json_safe(summary), indent=2) + "\n")
 
@@ -306,6 +312,18 @@ def write_solution(result: Result, path: Path) -> None:
         arrays["z"] = np.array([result.fields[s].z for s in steps])
     with replacing(path) as temporary:
         np.savez_compressed(temporary, **arrays)
+
+
+def _write_figures(result: Result, folder: Path) -> None:
+    """The PNG files of :func:`vpcontact.plots.run_figures` (those the run has data for)."""
+    from .plots import run_figures
+
+    figures = run_figures(result)
+    if figures:
+        directory.mkdir(folder)
+    for stem, figure in figures.items():
+        with replacing(folder / f"{stem}.png") as temporary:
+            figure.savefig(temporary, dpi=DPI)
 
 
 def _write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:
