@@ -227,6 +227,18 @@ def test_meshes_too_large_for_the_memory_are_refused_before_they_are_made():
         block(1.0, 2.0, 3.0, 1e-4)
 
 
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("make", [lambda: quarter_ball(1e-300), lambda: quarter_ball(0.1, 1.0, 1e-300),
+                                  lambda: quarter_ball(1e-200, 1e100), lambda: block(1e300, 1e300, 1e300, 1e-300),
+                                  lambda: vpcontact.mesh.half_disc(1e-300),
+                                  lambda: vpcontact.mesh.rectangle(1e300, 1e300, 1e-300)],
+                         ids=["ball", "ball h_bottom", "large ball", "block", "half disc", "rectangle"])
+def test_counts_beyond_floats_are_refused_without_warnings(make):
+    with pytest.raises(CaseError, match=r": more than 1e\+300 (triangles|tetrahedra), whose mesh, stiffness matrix and "
+                                        r"factorization need more than 1e\+290 GiB"):
+        make()
+
+
 # --- quarter_ball graded towards the bottom point ------------------------------------------------
 def test_graded_quarter_ball_is_fine_near_the_bottom(graded):
     m, h, R, h_bottom = graded, 0.3, 2.0, 0.05

@@ -94,16 +94,19 @@ def target_edge(distance: np.ndarray, h: float, h_bottom: float) -> np.ndarray:
 
 
 def estimated_tetrahedra(h: float, h_bottom: float | None) -> float:
-    """About how many tetrahedra `quarter_ball_tetrahedra(h, h_bottom)` makes (before making them)."""
-    n = np.ceil(CELLS_PER_RADIUS / h)
-    count = 12.0 * n**3
-    if h_bottom is not None and h_bottom < h:
-        # The body within distance d of the bottom point is at most a quarter of a half ball of
-        # radius d: ∫ (π/2) d² / (VOLUME_PER_CUBED_EDGE · target_edge(d)³) dd over the graded zone.
-        d = np.linspace(0.0, FINE_ZONE * h_bottom + (h - h_bottom) / GROWTH, 2001)
-        density = 0.5 * np.pi * d**2 * (1.0 / target_edge(d, h, h_bottom) ** 3 - 1.0 / h**3)
-        count += float(np.sum(0.5 * (density[1:] + density[:-1]) * np.diff(d))) / VOLUME_PER_CUBED_EDGE
-    return count
+    """About how many tetrahedra `structured_tetrahedra` and `graded_towards_bottom` make for sizes h
+    and h_bottom (computed before making them; inf when that is more than a float holds)."""
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        n = np.ceil(CELLS_PER_RADIUS / h)
+        count = 12.0 * n * n * n
+        if h_bottom is not None and h_bottom < h:
+            # The body within distance d of the bottom point is at most a quarter of a half ball of
+            # radius d: ∫ (π/2) d² / (VOLUME_PER_CUBED_EDGE · target_edge(d)³) dd over the graded zone.
+            d = np.linspace(0.0, FINE_ZONE * h_bottom + (h - h_bottom) / GROWTH, 2001)
+            size = target_edge(d, h, h_bottom)
+            density = 0.5 * np.pi * d * d * (1.0 / (size * size * size) - 1.0 / (h * h * h))
+            count += np.sum(0.5 * (density[1:] + density[:-1]) * np.diff(d)) / VOLUME_PER_CUBED_EDGE
+    return float(count) if count == count else np.inf
 
 
 def graded_towards_bottom(p: np.ndarray, t: np.ndarray, h: float, h_bottom: float) -> tuple[np.ndarray, np.ndarray]:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import io
 import itertools
+import math
 import os
 import re
 from collections.abc import Callable
@@ -125,9 +126,10 @@ def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
     needed = per_element * elements
     available = available_memory()
     if not needed <= available:
-        raise CaseError(f"{what}: about {elements:.2g} {kind}, whose mesh, stiffness matrix and factorization "
-                        f"need about {needed / 2**30:.3g} GiB, more than the {available / 2**30:.3g} GiB of memory "
-                        f"available here: {fix}")
+        count, size = (f"about {elements:.2g}", f"about {needed / 2**30:.3g}") if math.isfinite(needed) else \
+            ("more than 1e+300", "more than 1e+290")
+        raise CaseError(f"{what}: {count} {kind}, whose mesh, stiffness matrix and factorization need {size} GiB, "
+                        f"more than the {available / 2**30:.3g} GiB of memory available here: {fix}")
 
 
 def _wrap(p: np.ndarray, t: np.ndarray, classify: Callable[[np.ndarray], dict[str, np.ndarray]],
@@ -192,8 +194,9 @@ def half_disc(h: float, radius: float = 1.0) -> Mesh:
     R = _positive("radius", radius)
     if h > R:
         raise CaseError(f"h = {h} must not exceed the radius {R}")
-    check_memory(0.5 * np.pi * R * R / (0.25 * np.sqrt(3.0) * h * h), f"mesh.h = {h:g} on a half disc of radius {R:g}",
-                 "use a larger mesh.h")
+    with np.errstate(over="ignore", divide="ignore"):
+        triangles = 0.5 * np.pi * R * R / (0.25 * np.sqrt(3.0) * h * h)
+    check_memory(triangles, f"mesh.h = {h:g} on a half disc of radius {R:g}", "use a larger mesh.h")
     n_arc = int(np.ceil(0.5 * np.pi * R / h))
     n_axis = int(np.ceil(2.0 * R / h))
     radius, h, R = R, h / R, 1.0  # built for R = 1, then scaled: the same triangles in any unit of length
@@ -296,7 +299,9 @@ def rectangle(width: float, height: float, h: float) -> Mesh:
     width = _positive("width", width)
     height = _positive("height", height)
     h = _positive("h", h)
-    check_memory(2.0 * np.ceil(width / h) * np.ceil(height / h),
+    with np.errstate(over="ignore"):
+        triangles = 2.0 * np.ceil(width / h) * np.ceil(height / h)
+    check_memory(triangles,
                  f"mesh.h = {h:g} on a {width:g} x {height:g} rectangle", "use a larger mesh.h")
     nx, ny = int(np.ceil(width / h)), int(np.ceil(height / h))
     tensor = skfem.MeshTri.init_tensor(np.linspace(0.0, width, nx + 1), np.linspace(0.0, height, ny + 1))
@@ -394,8 +399,10 @@ def block(width: float, depth: float, height: float, h: float) -> Mesh:
     width, depth, height = _positive("width", width), _positive("depth", depth), _positive("height", height)
     h = _positive("h", h)
     sizes = (width, depth, height)
-    counts = np.ceil(np.array(sizes) / h)
-    check_memory(6.0 * counts.prod(), f"mesh.h = {h:g} on a {width:g} x {depth:g} x {height:g} block",
+    with np.errstate(over="ignore"):
+        counts = np.ceil(np.array(sizes) / h)
+        tetrahedra = 6.0 * counts.prod()
+    check_memory(tetrahedra, f"mesh.h = {h:g} on a {width:g} x {depth:g} x {height:g} block",
                  "use a larger mesh.h", dim=3)
     cells = counts.astype(np.int64)
     tensor = skfem.MeshTet.init_tensor(*(np.linspace(0.0, size, n + 1) for size, n in zip(sizes, cells)))
