@@ -133,7 +133,6 @@ GMSH_REFUSALS = {
     "second_order": ["second-order", "14 triangle6", "Mesh.ElementOrder = 1"],
     "quadrilaterals": ["6 quadrilaterals and 0 triangles", "Mesh.RecombineAll = 0", "Recombine"],
     "mixed_triangles_quads": ["6 quadrilaterals and 14 triangles", "linear triangles only", "Mesh.RecombineAll = 0"],
-    "cube": ["3D mesh", "24 tetra", "gmsh -2"],
     "crack": ["nodes", "are both at (1, ", "cut along a seam", "Coherence"],
     "overlapping_squares": ["boundary edges", "cross", "BooleanFragments"],
     "surface_twice": ["same side of their common edge", "folded", "no surface may be listed twice"],

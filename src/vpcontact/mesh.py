@@ -1,18 +1,22 @@
-"""Triangle meshes (P1) with named boundary parts.
+"""Triangle (2D) and tetrahedral (3D) meshes (P1) with named boundary parts.
 
-`Mesh` wraps a `skfem.MeshTri` and names sets of its boundary facets ("parts").
-Meshes come from `half_disc` (the paper's half ball), `rectangle` or `read_mesh`
-(any 2D triangle file meshio reads, e.g. gmsh .msh 2.2 / 4.1).
+`Mesh` wraps a `skfem.MeshTri` or `skfem.MeshTet` and names sets of its boundary facets
+("parts"): edges in 2D, triangles in 3D. Meshes come from `half_disc` (the paper's half
+ball), `rectangle`, `quarter_ball` (its 3D analogue), `block` or `read_mesh` (any triangle
+or tetrahedron file meshio reads, e.g. gmsh .msh 2.2 / 4.1).
 
 Facet and node indices are those of the wrapped skfem mesh. skfem sorts the node
-indices of every triangle (``MeshTri.sort_t``), so ``mesh.mesh.t`` has no fixed
-orientation; skfem's P1 assembly and facet normals do not depend on it.
+indices of every triangle (``MeshTri.sort_t``), and a file's tetrahedra keep their own
+order, so ``mesh.mesh.t`` has no fixed orientation; skfem's P1 assembly and facet
+normals do not depend on it.
 """
 
 from __future__ import annotations
 
 import contextlib
 import io
+import itertools
+import math
 import os
 import re
 from collections.abc import Callable
@@ -25,12 +29,19 @@ import scipy.sparse as sp
 from scipy.spatial import Delaunay
 import skfem
 
+from vpcontact import ball
 from vpcontact.errors import CaseError, shown
 from vpcontact.inputs import check_regular_file
 from vpcontact.mesh_checks import check_finite, check_triangles
+from vpcontact.mesh_checks_3d import check_tetrahedra
 from vpcontact.solvers.factorization import available_memory
 
 NormalField = Callable[[np.ndarray], np.ndarray]
+
+#: The skfem mesh type of each dimension.
+SKFEM_MESH = {2: skfem.MeshTri, 3: skfem.MeshTet}
+#: The gmsh physical groups of each dimension d: (those of the parts (dimension d − 1), of the body).
+PHYSICAL_GROUPS = {2: ("Curve", "Surface"), 3: ("Surface", "Volume")}
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,9 +62,10 @@ class Mesh:
         """Facet indices of `part` (an int n means the part named str(n))."""
         name = str(part)
         if name not in self.parts and not self.parts:
+            facet, body = PHYSICAL_GROUPS[self.dim]
             raise CaseError(f"unknown part '{name}': mesh file '{self.file}' has no parts; the parts of a mesh file "
-                            f"are its physical curves: in gmsh add Physical Curve(\"{name}\") = {{...}}; for each "
-                            f"part the case names (and a Physical Surface for the body) and mesh again")
+                            f"are its physical {facet.lower()}s: in gmsh add Physical {facet}(\"{name}\") = {{...}}; "
+                            f"for each part the case names (and a Physical {body} for the body) and mesh again")
         if name not in self.parts:
             raise CaseError(f"unknown part '{shown(name)}'; the mesh has parts: {', '.join(self.part_names)}")
         return self.parts[name]
@@ -75,8 +87,9 @@ class Mesh:
     @cached_property
     def h(self) -> float:
         """The longest edge length."""
-        p, f = self.mesh.p, self.mesh.facets
-        return float(np.sqrt(((p[:, f[0]] - p[:, f[1]]) ** 2).sum(axis=0)).max())
+        p, t = self.mesh.p, self.mesh.t
+        return float(max(np.sqrt(((p[:, t[i]] - p[:, t[j]]) ** 2).sum(axis=0)).max()
+                         for i, j in itertools.combinations(range(t.shape[0]), 2)))
 
     @property
     def diameter(self) -> float:
@@ -98,33 +111,41 @@ def _positive(name: str, value: float) -> float:
 #: triangles 0.53 GB, with 580k triangles 1.79 GB, i.e. 3.1 kB per triangle; SuperLU (no MKL) needs
 #: about twice as much. A run is refused when even this estimate exceeds the available memory.
 BYTES_PER_TRIANGLE = 4000
+#: The same per tetrahedron. Measured (peak resident memory of building a quarter ball, assembling its
+#: P1 elasticity matrix with the centroid rule and factoring it): 40k tetrahedra 0.40 GB, 324k
+#: tetrahedra 2.6 GB with PARDISO (8 kB each) and 4.1 GB with SuperLU; the factor's fill grows faster
+#: than the number of tetrahedra in 3D, so larger meshes need more per tetrahedron.
+BYTES_PER_TETRAHEDRON = 8000
 
 
-def check_memory(triangles: float, what: str, fix: str) -> None:
-    """Refuse, before allocating, a mesh of about `triangles` triangles whose run would need more than
-    the available memory; `what` names the mesh (e.g. "mesh.h = 0.001"), `fix` says what to change."""
-    needed = BYTES_PER_TRIANGLE * triangles
+def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
+    """Refuse, before allocating, a mesh of about `elements` triangles (dim 2) or tetrahedra (dim 3) whose
+    run would need more than the available memory; `what` names the mesh (e.g. "mesh.h = 0.001"), `fix`
+    says what to change."""
+    kind, per_element = {2: ("triangles", BYTES_PER_TRIANGLE), 3: ("tetrahedra", BYTES_PER_TETRAHEDRON)}[dim]
+    needed = per_element * elements
     available = available_memory()
     if not needed <= available:
-        raise CaseError(f"{what}: about {triangles:.2g} triangles, whose mesh, stiffness matrix and factorization "
-                        f"need about {needed / 2**30:.3g} GiB, more than the {available / 2**30:.3g} GiB of memory "
-                        f"available here: {fix}")
+        count, size = (f"about {elements:.2g}", f"about {needed / 2**30:.3g}") if math.isfinite(needed) else \
+            ("more than 1e+300", "more than 1e+290")
+        raise CaseError(f"{what}: {count} {kind}, whose mesh, stiffness matrix and factorization need {size} GiB, "
+                        f"more than the {available / 2**30:.3g} GiB of memory available here: {fix}")
 
 
 def _wrap(p: np.ndarray, t: np.ndarray, classify: Callable[[np.ndarray], dict[str, np.ndarray]],
           exact_normals: dict[str, NormalField]) -> Mesh:
-    """Build a `Mesh` from nodes `p` (2, n) and triangles `t` (3, m).
+    """Build a `Mesh` from nodes `p` (d, n) and triangles or tetrahedra `t` (d + 1, m).
 
-    `classify(midpoints (2, k))` returns part name -> boolean mask over the k boundary
+    `classify(centroids (d, k))` returns part name -> boolean mask over the k boundary
     facets; the masks must partition the boundary (checked).
     """
-    tri = skfem.MeshTri(np.ascontiguousarray(p), np.ascontiguousarray(t))
-    boundary = tri.boundary_facets().astype(np.int64)
-    masks = classify(tri.p[:, tri.facets[:, boundary]].mean(axis=1))
+    mesh = SKFEM_MESH[p.shape[0]](np.ascontiguousarray(p), np.ascontiguousarray(t))
+    boundary = mesh.boundary_facets().astype(np.int64)
+    masks = classify(mesh.p[:, mesh.facets[:, boundary]].mean(axis=1))
     if not np.array_equal(np.sum(list(masks.values()), axis=0), np.ones(boundary.size)):
         raise RuntimeError("boundary facets do not split exactly into the parts")
     parts = {name: boundary[mask] for name, mask in masks.items()}
-    return Mesh(tri.with_boundaries(parts), parts, exact_normals)
+    return Mesh(mesh.with_boundaries(parts), parts, exact_normals)
 
 
 def _signed_areas(p: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -173,8 +194,9 @@ def half_disc(h: float, radius: float = 1.0) -> Mesh:
     R = _positive("radius", radius)
     if h > R:
         raise CaseError(f"h = {h} must not exceed the radius {R}")
-    check_memory(0.5 * np.pi * R * R / (0.25 * np.sqrt(3.0) * h * h), f"mesh.h = {h:g} on a half disc of radius {R:g}",
-                 "use a larger mesh.h")
+    with np.errstate(over="ignore", divide="ignore"):
+        triangles = 0.5 * np.pi * R * R / (0.25 * np.sqrt(3.0) * h * h)
+    check_memory(triangles, f"mesh.h = {h:g} on a half disc of radius {R:g}", "use a larger mesh.h")
     n_arc = int(np.ceil(0.5 * np.pi * R / h))
     n_axis = int(np.ceil(2.0 * R / h))
     radius, h, R = R, h / R, 1.0  # built for R = 1, then scaled: the same triangles in any unit of length
@@ -277,7 +299,9 @@ def rectangle(width: float, height: float, h: float) -> Mesh:
     width = _positive("width", width)
     height = _positive("height", height)
     h = _positive("h", h)
-    check_memory(2.0 * np.ceil(width / h) * np.ceil(height / h),
+    with np.errstate(over="ignore"):
+        triangles = 2.0 * np.ceil(width / h) * np.ceil(height / h)
+    check_memory(triangles,
                  f"mesh.h = {h:g} on a {width:g} x {height:g} rectangle", "use a larger mesh.h")
     nx, ny = int(np.ceil(width / h)), int(np.ceil(height / h))
     tensor = skfem.MeshTri.init_tensor(np.linspace(0.0, width, nx + 1), np.linspace(0.0, height, ny + 1))
@@ -291,38 +315,127 @@ def rectangle(width: float, height: float, h: float) -> Mesh:
             "top": mid[1] > height - tol,
         }
 
-    def constant(normal: tuple[float, float]) -> NormalField:
-        def field(x: np.ndarray) -> np.ndarray:
-            out = np.empty_like(x, dtype=float)
-            out[0], out[1] = normal
-            return out
-
-        return field
-
     normals = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "bottom": (0.0, -1.0), "top": (0.0, 1.0)}
-    return _wrap(tensor.p, tensor.t, classify, {name: constant(n) for name, n in normals.items()})
+    return _wrap(tensor.p, tensor.t, classify, {name: _constant(n) for name, n in normals.items()})
 
 
-def _edge_keys(nodes: np.ndarray, n: int) -> np.ndarray:
-    """Integer key min·n + max for each node pair (column) of `nodes` (2, k)."""
-    nodes = np.sort(nodes.astype(np.int64), axis=0)
-    return nodes[0] * n + nodes[1]
+def _constant(normal: tuple[float, ...]) -> NormalField:
+    """The normal field equal to `normal` everywhere."""
+    def field(x: np.ndarray) -> np.ndarray:
+        out = np.empty_like(x, dtype=float)
+        out[...] = np.reshape(normal, (-1,) + (1,) * (x.ndim - 1))
+        return out
+
+    return field
+
+
+def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None) -> Mesh:
+    """Tetrahedral mesh of the quarter ball {x > 0, y > 0, x² + y² + (z − R)² < R²} (center (0, 0, R)).
+
+    Parts: "sym_x" (x = 0), "sym_y" (y = 0), "top" (the sphere above z = R), "bottom" (the
+    sphere below it; the two split by facet centroids), all with exact outward normals.
+    Requires 0 < h ≤ R and, if given, 0 < h_bottom ≤ h.
+
+    Two octants of the ball, each the image of a structured grid of n³ cells on the cube [0, 1]³
+    (n = ceil(1.5 R/h)) under the equiangular cube-to-ball map, each cell cut into 6 tetrahedra
+    (`vpcontact.ball`): 12 n³ tetrahedra, the nodes of the spherical parts on the sphere (to
+    rounding), the plane z = R a plane of nodes, and (0, 0, 0), (0, 0, 2R), (R, 0, R), (0, R, R)
+    nodes. Measured for R/h in [1, 30]: longest edge ≤ h (0.84 h to 0.99 h for R/h ≥ 3), smallest
+    dihedral angle ≥ 29° (the median tetrahedron's smallest 45°), largest ≤ 115°, longest edge over
+    the inscribed sphere's diameter ≤ 2 √6 (√6 for a regular tetrahedron).
+
+    With h_bottom < h, the tetrahedra within 10 h_bottom of the bottom point (0, 0, 0) are bisected
+    until their longest edge is at most h_bottom, those at a distance d farther out until it is at
+    most h_bottom + 0.5 (d − 10 h_bottom) (and h), and after each bisection the new nodes on the
+    sphere are moved onto it (`vpcontact.ball.graded_towards_bottom`): a contact patch of radius a
+    up to 10 h_bottom is meshed with h_bottom throughout. Measured for R/h ≥ 4 and h/h_bottom up to
+    30: smallest dihedral angle ≥ 20°, largest ≤ 149° (16° and 154° for h = R); about 15k to 30k
+    tetrahedra in the fine zone, whatever h_bottom. The mesh is built for R = 1, h/R and
+    h_bottom/R, then scaled by R: the same tetrahedra in any unit of length.
+    """
+    h = _positive("h", h)
+    R = _positive("radius", radius)
+    if h > R:
+        raise CaseError(f"h = {h} must not exceed the radius {R}")
+    if h_bottom is not None:
+        h_bottom = _positive("h_bottom", h_bottom)
+        if h_bottom > h:
+            raise CaseError(f"h_bottom = {h_bottom} must not exceed h = {h}: it is the finer size at the bottom")
+    radius, h, h_bottom = R, h / R, None if h_bottom is None else h_bottom / R  # built for R = 1, then scaled
+    check_memory(ball.estimated_tetrahedra(h, h_bottom), f"mesh.h = {h * radius:g}"
+                 + ("" if h_bottom is None else f" and mesh.h_bottom = {h_bottom * radius:g}")
+                 + f" on a quarter ball of radius {radius:g}", "use a larger mesh.h", dim=3)
+    p, t = ball.structured_tetrahedra(int(np.ceil(ball.CELLS_PER_RADIUS / h)))
+    if h_bottom is not None and h_bottom < h:
+        p, t = ball.graded_towards_bottom(p, t, h, h_bottom)
+    if not np.all(ball.signed_volumes(p, t) > 0.0):
+        raise RuntimeError("quarter_ball: a tetrahedron is flat or inverted")
+    p = radius * p
+    h, R = h * radius, radius
+    center = np.array([0.0, 0.0, R])
+
+    def radial(x: np.ndarray) -> np.ndarray:
+        d = x - center.reshape((3,) + (1,) * (x.ndim - 1))
+        return d / np.sqrt((d**2).sum(axis=0))
+
+    def classify(centroid: np.ndarray) -> dict[str, np.ndarray]:
+        on_x, on_y = centroid[0] < 1e-9 * h, centroid[1] < 1e-9 * h
+        sphere = ~on_x & ~on_y
+        return {"sym_x": on_x, "sym_y": on_y, "top": sphere & (centroid[2] >= R), "bottom": sphere & (centroid[2] < R)}
+
+    normals = {"sym_x": _constant((-1.0, 0.0, 0.0)), "sym_y": _constant((0.0, -1.0, 0.0)), "top": radial,
+               "bottom": radial}
+    return _wrap(p, t, classify, normals)
+
+
+def block(width: float, depth: float, height: float, h: float) -> Mesh:
+    """Structured tetrahedral mesh of [0, width] × [0, depth] × [0, height] (`skfem.MeshTet.init_tensor`)
+    with ceil(width/h) × ceil(depth/h) × ceil(height/h) equal cells, each cut into six tetrahedra
+    around its diagonal from (0, 0, 0) to (1, 1, 1).
+
+    Parts "left" (x = 0), "right" (x = width), "front" (y = 0), "back" (y = depth), "bottom" (z = 0),
+    "top" (z = height), all with exact normals.
+    """
+    width, depth, height = _positive("width", width), _positive("depth", depth), _positive("height", height)
+    h = _positive("h", h)
+    sizes = (width, depth, height)
+    with np.errstate(over="ignore"):
+        counts = np.ceil(np.array(sizes) / h)
+        tetrahedra = 6.0 * counts.prod()
+    check_memory(tetrahedra, f"mesh.h = {h:g} on a {width:g} x {depth:g} x {height:g} block",
+                 "use a larger mesh.h", dim=3)
+    cells = counts.astype(np.int64)
+    tensor = skfem.MeshTet.init_tensor(*(np.linspace(0.0, size, n + 1) for size, n in zip(sizes, cells)))
+    tol = 1e-9 * min(size / n for size, n in zip(sizes, cells))
+
+    def classify(centroid: np.ndarray) -> dict[str, np.ndarray]:
+        x, y, z = centroid
+        return {"left": x < tol, "right": x > width - tol, "front": y < tol, "back": y > depth - tol,
+                "bottom": z < tol, "top": z > height - tol}
+
+    normals = {"left": (-1.0, 0.0, 0.0), "right": (1.0, 0.0, 0.0), "front": (0.0, -1.0, 0.0),
+               "back": (0.0, 1.0, 0.0), "bottom": (0.0, 0.0, -1.0), "top": (0.0, 0.0, 1.0)}
+    return _wrap(tensor.p, tensor.t, classify, {name: _constant(n) for name, n in normals.items()})
 
 
 def read_mesh(path: str | os.PathLike) -> Mesh:
-    """Read a 2D triangle mesh with meshio (gmsh .msh 2.2 / 4.1, or any format meshio reads).
+    """Read a triangle (2D) or tetrahedral (3D) mesh with meshio (gmsh .msh 2.2 / 4.1, or any format
+    meshio reads).
 
-    The file must hold linear "triangle" cells (besides "line" and "vertex" cells): quadrilaterals,
-    second-order and 3D cells are refused, as are meshes that do not cover a plane body once
-    (`vpcontact.mesh_checks`: non-finite coordinates, zero-area triangles, duplicate nodes, folds,
-    overlaps). Nodes that no triangle uses are dropped and the rest renumbered in their file order;
-    a z coordinate must be zero and is dropped. Every "line" cell of a physical group (tag > 0)
-    joins the part named by the tag number (str) and, if the file names that dimension-1 physical
-    group, by its name too (a curve may be in several named groups); each such line must be a
-    boundary edge of the triangle mesh. Two physical curves of one name are refused. Lines without
-    a physical tag (or tag 0, gmsh's "none") are ignored. No exact normals. skfem sorts each
-    triangle's nodes itself, so any orientation in the file is accepted. Any problem raises
-    CaseError naming the file.
+    The dimension comes from the cells: a file with "tetra" cells is 3D, its body the tetrahedra and
+    its parts the "triangle" cells of physical surfaces; a file without cells of dimension 3 is 2D, its
+    body the "triangle" cells and its parts the "line" cells of physical curves (its z coordinates
+    must be zero and are dropped). Lines and vertices (and in 3D triangles of no physical group) may
+    be there too; other cells are refused: quadrilaterals and hexahedra, prisms and pyramids,
+    second-order cells. So are meshes that do not cover a body once (`vpcontact.mesh_checks`,
+    `vpcontact.mesh_checks_3d`: non-finite coordinates, zero areas or volumes, duplicate nodes,
+    folds, overlaps, hinges). Nodes that no triangle (2D) or tetrahedron (3D) uses are dropped and the
+    rest renumbered in their file order. Every facet cell of a physical group (tag > 0) joins the part
+    named by the tag number (str) and, if the file names that physical group, by its name too (a facet
+    may be in several named groups); each such facet must be a boundary facet of the mesh. Two physical
+    groups of the parts' dimension with one name are refused. Facet cells without a physical tag (or
+    tag 0, gmsh's "none") are ignored. No exact normals. The orientation of the cells in the file is
+    not used. Any problem raises CaseError naming the file.
     """
     label = os.fspath(path)
     check_regular_file(path, "mesh file")
@@ -341,87 +454,129 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
         raise CaseError(f"cannot read mesh file '{label}': {reason}") from failure
 
     names = _physical_names(label) or [(int(v[1]), int(v[0]), k) for k, v in data.field_data.items() if np.size(v) == 2]
-    _check_cell_types(label, data.cells)
-    triangles = [block.data for block in data.cells if block.type == "triangle"]
-    if not triangles:
+    dim = 3 if any(block.dim == 3 for block in data.cells) else 2
+    _check_cell_types(label, data.cells, dim)
+    _check_unique_names(label, names, dim - 1)
+    element, facet = CELLS[dim]
+    elements = [block.data for block in data.cells if block.type == element]
+    if not elements:
         raise CaseError(_no_triangles(label, data, names))
-    t = np.vstack(triangles).T.astype(np.int64)
-    check_memory(t.shape[1], f"mesh file '{label}'", "use a coarser mesh")
+    t = np.vstack(elements).T.astype(np.int64)
+    check_memory(t.shape[1], f"mesh file '{label}'", "use a coarser mesh", dim=dim)
     outside = (t < 0) | (t >= len(data.points))
     if outside.any():
         k = np.flatnonzero(outside.any(axis=0))[0]
-        raise CaseError(f"mesh file '{label}': triangle {k + 1} refers to node {t[outside[:, k], k][0] + 1}, but the "
-                        f"file has nodes 1 to {len(data.points)}: the file is damaged")
+        raise CaseError(f"mesh file '{label}': {ELEMENT_NAMES[dim][0]} {k + 1} refers to node "
+                        f"{t[outside[:, k], k][0] + 1}, but the file has nodes 1 to {len(data.points)}: the file is "
+                        f"damaged")
     used, t = np.unique(t, return_inverse=True)
-    t = t.reshape(3, -1)
+    t = t.reshape(dim + 1, -1)
     renumber = np.full(len(data.points), -1, dtype=np.int64)
     renumber[used] = np.arange(used.size)
 
     points = np.asarray(data.points, dtype=float)[used].T
     check_finite(label, points, used + 1)
-    if points.shape[0] == 3:
-        scale = max(float(np.abs(points[:2]).max()), 1.0)
-        if np.abs(points[2]).max() > 1e-12 * scale:
-            raise CaseError(f"mesh file '{label}' is not a 2D mesh (nonzero z coordinates)")
-        points = points[:2]
-    check_triangles(label, points, t, used + 1)
+    if dim == 2:
+        points = _plane(label, data, names, points)
+        check_triangles(label, points, t, used + 1)
+    else:
+        check_tetrahedra(label, points, t, used + 1)
 
-    tri = skfem.MeshTri(np.ascontiguousarray(points), np.ascontiguousarray(t))
-    boundary = tri.boundary_facets().astype(np.int64)
-    keys = _edge_keys(tri.facets[:, boundary], used.size)
-    order = np.argsort(keys)
-    keys, boundary = keys[order], boundary[order]
-
-    line_nodes, line_tags = _physical_lines(data, names)
+    mesh = SKFEM_MESH[dim](np.ascontiguousarray(points), np.ascontiguousarray(t))
+    facet_nodes, facet_tags = _physical_facets(data, names, facet, dim - 1)
     parts: dict[str, np.ndarray] = {}
-    if line_nodes.size:
-        known = (line_nodes >= 0) & (line_nodes < renumber.size)  # a damaged file may name other nodes
-        nodes = np.where(known, renumber[np.where(known, line_nodes, 0)], -1)
-        line_keys = _edge_keys(nodes, used.size)
-        where = np.minimum(np.searchsorted(keys, line_keys), keys.size - 1)
-        bad = np.flatnonzero((nodes < 0).any(axis=0) | (keys[where] != line_keys))
+    if facet_tags.size:
+        known = (facet_nodes >= 0) & (facet_nodes < renumber.size)  # a damaged file may name other nodes
+        nodes = np.where(known, renumber[np.where(known, facet_nodes, 0)], -1)
+        boundary = mesh.boundary_facets().astype(np.int64)
+        found = _find_columns(mesh.facets[:, boundary], nodes)
+        bad = np.flatnonzero((nodes < 0).any(axis=0) | (found < 0))
         if bad.size:
-            raise CaseError(
-                f"mesh file '{label}': line of physical group {line_tags[bad[0]]} is not a boundary edge "
-                f"of the triangles ({bad.size} such lines)"
-            )
-        facets = boundary[where]
-        for tag in np.unique(line_tags):
-            parts[str(tag)] = np.unique(facets[line_tags == tag])
-        for dim, tag, name in names:
-            if dim != 1 or str(tag) not in parts:
+            what, kind = {2: ("line", "edge"), 3: ("triangle", "face")}[dim]
+            facet_group, body_group = PHYSICAL_GROUPS[dim]
+            raise CaseError(f"mesh file '{label}': {what} of physical group {facet_tags[bad[0]]} is not a boundary "
+                            f"{kind} of the {ELEMENT_NAMES[dim][1]} ({bad.size} such {what}s): a part must lie on "
+                            f"the boundary of the body; remove inner {facet_group.lower()}s from that physical group, "
+                            f"or add the {body_group.lower()} they bound to the Physical {body_group}")
+        facets = boundary[found]
+        for tag in np.unique(facet_tags):
+            parts[str(tag)] = np.unique(facets[facet_tags == tag])
+        for group_dim, tag, name in names:
+            if group_dim != dim - 1 or str(tag) not in parts:
                 continue
             if name in parts and not np.array_equal(parts[name], parts[str(tag)]):
                 raise CaseError(
                     f"mesh file '{label}': physical name '{name}' (group {tag}) clashes with physical group {name}"
                 )
             parts[name] = parts[str(tag)]
-    return Mesh(tri.with_boundaries(parts), parts, {}, label)
+    return Mesh(mesh.with_boundaries(parts), parts, {}, label)
 
 
-def _check_cell_types(label: str, cells: list) -> None:
-    """Refuse cells other than linear triangles, lines and vertices, with the gmsh setting to change."""
+#: The meshio cell types of each dimension: (the body's, the parts').
+CELLS = {2: ("triangle", "line"), 3: ("tetra", "triangle")}
+#: How messages name the body's cells: (one, several).
+ELEMENT_NAMES = {2: ("triangle", "triangles"), 3: ("tetrahedron", "tetrahedra")}
+
+
+def _find_columns(table: np.ndarray, query: np.ndarray) -> np.ndarray:
+    """For each column of `query` (k, q), the index of the column of `table` (k, r) with the same
+    numbers in any order, or -1 (the columns of `table` are distinct sets)."""
+    both = np.sort(np.hstack((table, query)), axis=0)
+    _, group = np.unique(both, axis=1, return_inverse=True)
+    group = group.ravel()
+    column = np.full(group.max() + 1 if group.size else 0, -1, dtype=np.int64)
+    column[group[:table.shape[1]]] = np.arange(table.shape[1])
+    return column[group[table.shape[1]:]]
+
+
+def _plane(label: str, data: meshio.Mesh, names: list[tuple[int, int, str]], points: np.ndarray) -> np.ndarray:
+    """The x, y rows of the nodes `points` of a 2D mesh; CaseError if a z coordinate is not zero."""
+    if points.shape[0] == 3:
+        scale = max(float(np.abs(points[:2]).max()), 1.0)
+        if np.abs(points[2]).max() > 1e-12 * scale:
+            surfaces = any(dim == 2 for dim, _, _ in names) or any(
+                tags is not None and np.any(np.asarray(tags) > 0)
+                for block, tags in zip(data.cells, data.cell_data.get("gmsh:physical", [None] * len(data.cells)))
+                if block.type == "triangle")
+            if surfaces:
+                raise CaseError(f"mesh file '{label}' is not a 2D mesh (nonzero z coordinates) and has no tetrahedra, "
+                                f"only triangles of physical surfaces: when a model has physical groups, gmsh saves "
+                                f"only their elements; add a Physical Volume for the body (e.g. Physical "
+                                f"Volume(\"body\") = {{1}};) and mesh again")
+            raise CaseError(f"mesh file '{label}' is not a 2D mesh (nonzero z coordinates) and has no tetrahedra: "
+                            f"mesh the volume in 3D (gmsh -3), or put a plane body's nodes in the plane z = 0")
+        points = points[:2]
+    return points
+
+
+def _check_cell_types(label: str, cells: list, dim: int) -> None:
+    """Refuse cells other than the linear cells of a `dim`-dimensional mesh (triangles or tetrahedra, and
+    cells of lower dimension), with the gmsh setting to change."""
     counts: dict[str, int] = {}
     for block in cells:
         counts[block.type] = counts.get(block.type, 0) + len(block.data)
-    others = {kind: count for kind, count in counts.items() if kind not in ("vertex", "line", "triangle")}
+    allowed = ("vertex", "line", "triangle", "tetra")[:dim + 1]
+    others = {kind: count for kind, count in counts.items() if kind not in allowed}
     if not others:
         return
     listed = ", ".join(f"{count} {kind}" for kind, count in others.items())
-    dims = {block.type: block.dim for block in cells}
-    if any(dims[kind] == 3 for kind in others):
-        raise CaseError(f"mesh file '{label}' is a 3D mesh ({listed}): vpcontact needs a plane mesh of triangles; "
-                        f"mesh the surface in 2D (gmsh -2, or Mesh.Dimension 2)")
+    element, elements = ELEMENT_NAMES[dim]
+    solids = {kind: count for kind, count in others.items() if kind.startswith(("hexahedron", "wedge", "pyramid"))}
+    if solids:
+        raise CaseError(f"mesh file '{label}' has {', '.join(f'{c} {k}' for k, c in solids.items())} cells and "
+                        f"{counts.get('tetra', 0)} tetrahedra: vpcontact uses linear tetrahedra only; mesh without "
+                        f"recombination: Mesh.RecombineAll = 0, Mesh.Recombine3DAll = 0, no Recombine Surface or "
+                        f"Volume and no Recombine in Extrude")
     quadrilaterals = sum(count for kind, count in others.items() if kind.startswith("quad"))
     if quadrilaterals:
-        raise CaseError(f"mesh file '{label}' has {quadrilaterals} quadrilaterals and {counts.get('triangle', 0)} "
-                        f"triangles: vpcontact uses linear triangles only; mesh without recombination: "
-                        f"Mesh.RecombineAll = 0 and no Recombine Surface")
-    if any(kind.startswith(("triangle", "line")) for kind in others):
+        raise CaseError(f"mesh file '{label}' has {quadrilaterals} quadrilaterals and "
+                        f"{counts.get(CELLS[dim][0], 0)} {elements}: vpcontact uses linear {elements} only; mesh "
+                        f"without recombination: Mesh.RecombineAll = 0 and no Recombine Surface")
+    if any(kind.startswith(("tetra", "triangle", "line")) for kind in others):
         raise CaseError(f"mesh file '{label}' has second-order or higher-order elements ({listed}): use first-order "
                         f"elements: Mesh.ElementOrder = 1 (gmsh -order 1)")
-    raise CaseError(f"mesh file '{label}' has cells that are not linear triangles ({listed}): vpcontact uses linear "
-                    f"triangles only")
+    raise CaseError(f"mesh file '{label}' has cells that are not linear {elements} ({listed}): vpcontact uses linear "
+                    f"{elements} only")
 
 
 def _no_triangles(label: str, data: meshio.Mesh, names: list[tuple[int, int, str]]) -> str:
@@ -442,8 +597,7 @@ _PHYSICAL_NAME = re.compile(rb'\s*(\d+)\s+(\d+)\s+"(.*)"\s*')
 
 
 def _physical_names(path: str) -> list[tuple[int, int, str]]:
-    """(dimension, tag, name) of every physical group a gmsh file names (none for other files);
-    CaseError if two physical curves have one name (meshio would keep only one of them).
+    """(dimension, tag, name) of every physical group a gmsh file names (none for other files).
 
     The $PhysicalNames section is text, also in binary files, and comes before the nodes: only the
     head of the file is read."""
@@ -463,34 +617,43 @@ def _physical_names(path: str) -> list[tuple[int, int, str]]:
                 handle.readline(64)  # the number of names
             elif section == b"$PhysicalNames" and (match := _PHYSICAL_NAME.fullmatch(line)):
                 found.append((int(match[1]), int(match[2]), match[3].decode("utf-8", "replace")))
-    tags: dict[str, int] = {}
-    for dim, tag, name in found:
-        if dim == 1 and tags.setdefault(name, tag) != tag:
-            raise CaseError(f"mesh file '{path}': two physical curves are named '{name}' (groups {tags[name]} and "
-                            f"{tag}); a part of that name would hold only one of them: give each group its own name, "
-                            f"or put all its curves in one Physical Curve(\"{name}\") = {{...}};")
     return found
 
 
-def _physical_lines(data: meshio.Mesh, names: list[tuple[int, int, str]]) -> tuple[np.ndarray, np.ndarray]:
-    """Node pairs (2, k) (file numbering) and physical tags (k,) of the lines of physical groups; a
-    line in several groups appears once for each.
+def _check_unique_names(label: str, names: list[tuple[int, int, str]], part_dim: int) -> None:
+    """CaseError if two physical groups of the parts' dimension have one name (meshio would keep only
+    one of them)."""
+    group = PHYSICAL_GROUPS[part_dim + 1][0]
+    tags: dict[str, int] = {}
+    for dim, tag, name in names:
+        if dim == part_dim and tags.setdefault(name, tag) != tag:
+            raise CaseError(f"mesh file '{label}': two physical {group.lower()}s are named '{name}' (groups "
+                            f"{tags[name]} and {tag}); a part of that name would hold only one of them: give each "
+                            f"group its own name, or put all its {group.lower()}s in one Physical {group}(\"{name}\") "
+                            f"= {{...}};")
 
-    In a gmsh 2.2 file a line is written once per group; in a 4.1 file once, with its curve's groups
+
+def _physical_facets(data: meshio.Mesh, names: list[tuple[int, int, str]], kind: str,
+                     part_dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes (d, k) (file numbering) and physical tags (k,) of the `kind` cells ("line" or "triangle")
+    of physical groups of dimension `part_dim`; a cell in several groups appears once for each.
+
+    In a gmsh 2.2 file a cell is written once per group; in a 4.1 file once, with its entity's groups
     listed in the file's entities, of which meshio's cell_data keeps only the first while its
-    cell_sets list each named group's lines."""
+    cell_sets list each named group's cells."""
     physical = data.cell_data.get("gmsh:physical", [None] * len(data.cells))
-    nodes, tags = [np.zeros((2, 0), dtype=np.int64)], [np.zeros(0, dtype=np.int64)]
+    nodes = [np.zeros((part_dim + 1, 0), dtype=np.int64)]
+    tags = [np.zeros(0, dtype=np.int64)]
     for block, block_tags in zip(data.cells, physical):
-        if block.type == "line" and block_tags is not None:
+        if block.type == kind and block_tags is not None:
             block_tags = np.asarray(block_tags, dtype=np.int64)
             nodes.append(block.data[block_tags > 0].T)
             tags.append(block_tags[block_tags > 0])
     for dim, tag, name in names:
-        if dim != 1:
+        if dim != part_dim:
             continue
         for block, members in zip(data.cells, data.cell_sets.get(name, [])):
-            if block.type == "line" and members is not None and len(members):
+            if block.type == kind and members is not None and len(members):
                 nodes.append(block.data[np.asarray(members, dtype=np.int64)].T)
                 tags.append(np.full(len(members), tag, dtype=np.int64))
     return np.hstack(nodes).astype(np.int64), np.concatenate(tags)
