@@ -7,7 +7,6 @@ import sys
 
 import numpy as np
 import pytest
-import skfem
 import tomli_w
 from matplotlib.collections import PathCollection, PolyCollection, TriMesh
 from matplotlib.colors import to_hex
@@ -15,7 +14,6 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 import vpcontact
-import vpcontact.mesh as meshes
 from vpcontact import checkpoint, plots
 from vpcontact.cli import main
 from vpcontact.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
@@ -25,33 +23,6 @@ from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree
 
 PNG = b"\x89PNG\r\n\x1a\n"
 FIGURE_FILES = ["contact_pressure.png", "deformed.png", "time_series.png"]
-
-
-def _block(width, depth, height, h):
-    """A box of tetrahedra with its parts by face (a stand-in for the built-in block where it is missing)."""
-    sizes = (width, depth, height)
-    mesh = skfem.MeshTet1.init_tensor(*(np.linspace(0, s, int(np.ceil(s / h)) + 1) for s in sizes))
-    boundary = mesh.boundary_facets()
-    middle = mesh.p[:, mesh.facets[:, boundary]].mean(axis=1)
-    faces = {"left": (0, 0), "right": (0, 1), "front": (1, 0), "back": (1, 1), "bottom": (2, 0), "top": (2, 1)}
-    parts = {name: np.sort(boundary[np.isclose(middle[axis], side * sizes[axis])]).astype(np.int64)
-             for name, (axis, side) in faces.items()}
-
-    def constant(axis, side):
-        normal = np.zeros(3)
-        normal[axis] = 2 * side - 1
-        return lambda x: np.broadcast_to(normal.reshape((3,) + (1,) * (x.ndim - 1)), x.shape).copy()
-
-    return meshes.Mesh(mesh.with_boundaries(parts), parts, {name: constant(*face) for name, face in faces.items()})
-
-
-@pytest.fixture(scope="module", autouse=True)
-def built_in_block():
-    """mesh.shape = "block" (the stand-in until the built-in one is there)."""
-    with pytest.MonkeyPatch.context() as patch:
-        if not hasattr(meshes, "block"):
-            patch.setattr(meshes, "block", _block, raising=False)
-        yield
 
 
 def flat_2d_case():

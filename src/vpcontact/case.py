@@ -119,13 +119,17 @@ class MeshSection(_Section):
 
     def _elements(self, dim: int) -> float:
         """About how many elements the shape has at size h (no ** : 1e300**2 raises OverflowError)."""
+        if self.shape == "quarter_ball":
+            from .ball import estimated_tetrahedra
+
+            return estimated_tetrahedra(self.h / self.radius,
+                                        None if self.h_bottom is None else self.h_bottom / self.radius)
         r, w, d, h = self.radius, self.width, self.depth, self.height
-        size = {"half_disc": lambda: math.pi * r * r / 2, "quarter_ball": lambda: math.pi * r * r * r / 3,
-                "rectangle": lambda: w * h, "block": lambda: w * d * h}[self.shape]()
-        per_cell = 2.0 if dim == 2 else 6.0  # triangles per square, tetrahedra per cube of side h
+        size = {"half_disc": lambda: math.pi * r * r / 2, "rectangle": lambda: w * h, "block": lambda: w * d * h}
+        count = size[self.shape]()
         for _ in range(dim):
-            size /= self.h
-        return per_cell * size
+            count /= self.h
+        return (2.0 if dim == 2 else 6.0) * count  # triangles per square, tetrahedra per cube of side h
 
 
 class PerzynaSection(_Section):

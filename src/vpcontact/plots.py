@@ -73,8 +73,8 @@ def _step_rows(result, steps) -> dict[int, int]:
 def contact_pressure(result, steps=None):
     """The contact pressure (compliance + rigid part) and the state of each contact node at the end of
     each of ``steps`` (step numbers; default :func:`default_steps`), one panel per time. 3D: the facets
-    of Γ3 seen along the coordinate axis closest to its mean normal (z for a body pressed down: the
-    (x, y) plane), coloured by the pressure interpolated between the nodes, with one colour bar from
+    of Γ3 seen along the coordinate axis closest to its normal weighted by the contact force at the
+    last time shown (z for a body pressed down: the (x, y) plane, the patch seen from below), coloured by the pressure interpolated between the nodes, with one colour bar from
     the least to the largest pressure shown, zoomed to where the pressure or the penetration is
     positive at the last time shown. 2D: the pressure along Γ3 against the arc length s (from the end
     of Γ3 with the least x). The node states are markers (legend)."""
@@ -90,7 +90,8 @@ def contact_pressure(result, steps=None):
     penetration = result.contact_history("penetration")[rows]
     times = result.times[rows]
     if result.dim == 3:
-        along = int(np.argmax(np.abs(surface.normals @ surface.weights)))
+        load = surface.weights * pressure[-1]  # where the foundation pushes at the last time (else all of Γ3)
+        along = int(np.argmax(np.abs(surface.normals @ (load if load.any() else surface.weights))))
         plane = [c for c in range(3) if c != along]
         figure = _patch_panels(surface, plane, times, pressure, status, penetration)
         names = coordinates(3)
