@@ -66,3 +66,21 @@ def test_every_backend_solves_and_condenses_exactly(backend, monkeypatch):
     for _ in range(4):
         b = rng.standard_normal(free.size)
         np.testing.assert_allclose(solver.solve(b), dense @ b, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("backend", __import__("vpcontact.solvers.factorization", fromlist=["x"]).installed_backends())
+def test_the_factor_size_is_counted(backend):
+    """factor_nonzeros (reported by the scaling benchmarks) for a diagonal and a dense matrix: SuperLU
+    counts L and U exactly (n and n(n + 1) each); PARDISO reports the entries of its supernodal storage
+    (iparm[17]), at least the Cholesky factor's n and n(n + 1)/2 and at most a full square."""
+    from vpcontact.solvers import factorization
+
+    n, no_contact = 30, sp.csr_matrix((0, 30))
+    diagonal = sp.diags(np.arange(1.0, n + 1)).tocsc()
+    B = np.random.default_rng(2).standard_normal((n, n))
+    dense = sp.csc_matrix(B @ B.T + n * np.eye(n))
+    counts = [factorization.factorize(A, no_contact, backend).factor_nonzeros for A in (diagonal, dense)]
+    if backend == "superlu":
+        assert counts == [2 * n, n * (n + 1)]
+    else:
+        assert n <= counts[0] <= n + 1 and n * (n + 1) // 2 <= counts[1] <= n * n + 1

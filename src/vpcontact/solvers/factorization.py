@@ -54,6 +54,7 @@ class PardisoFactorization:
         self._dofs = np.unique(N.indices)
         self._N_contact = N[:, self._dofs].toarray()
         self._pardiso = Pardiso(A, self._dofs)
+        self.factor_nonzeros = self._pardiso.factor_nonzeros  # of the factor made here, in Schur mode
         self._schur_mode = self._dofs.size > 0
         self.solves = 0
 
@@ -80,7 +81,8 @@ class PardisoFactorization:
 
 
 class SuperLUFactorization:
-    """SciPy's SuperLU with the symmetric mode (minimum degree on A + Aᵀ, diagonal pivots)."""
+    """SciPy's SuperLU with the symmetric mode (minimum degree on A + Aᵀ, diagonal pivots);
+    ``factor_nonzeros`` counts L and U."""
 
     name = "superlu"
 
@@ -92,6 +94,7 @@ class SuperLUFactorization:
         self._N = N
         self._lu = splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                         options={"SymmetricMode": True})
+        self.factor_nonzeros = self._lu.L.nnz + self._lu.U.nnz
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self._lu.solve(b)

@@ -60,7 +60,8 @@ def library() -> ctypes.CDLL:
 
 class Pardiso:
     """One PARDISO handle: ``factor(A, schur_dofs)`` then ``solve(b)``; ``schur`` holds the dense
-    Schur complement of A on ``schur_dofs`` (in ascending dof order) when they were given."""
+    Schur complement of A on ``schur_dofs`` (in ascending dof order) when they were given, and
+    ``factor_nonzeros`` the number of nonzeros of the sparse factor (iparm[17])."""
 
     def __init__(self, A: sp.spmatrix, schur_dofs: np.ndarray | None = None):
         upper = sp.triu(A, format="csr")
@@ -72,7 +73,7 @@ class Pardiso:
         self._ja = np.ascontiguousarray(upper.indices, dtype=np.int32)
         self._pt = np.zeros(64, dtype=np.int64)
         self._iparm = np.zeros(64, dtype=np.int32)
-        self._iparm[[0, 1, 34]] = 1, 2, 1  # own iparm; METIS; zero-based indices
+        self._iparm[[0, 1, 17, 34]] = 1, 2, -1, 1  # own iparm; METIS; count the factor's nonzeros; zero-based
         self._perm = np.zeros(self.n, dtype=np.int32)
         self.schur = None
         if schur_dofs is not None and len(schur_dofs):
@@ -84,6 +85,7 @@ class Pardiso:
             self.schur = out.reshape(size, size)
         else:
             self._call(12)
+        self.factor_nonzeros = int(self._iparm[17])
 
     def _call(self, phase: int, b: np.ndarray | None = None, x: np.ndarray | None = None, nrhs: int = 1) -> None:
         error = ctypes.c_int32(0)

@@ -1,0 +1,209 @@
+"""Sizes and speed in 3D: the quarter ball (examples/quarter_ball.toml) on a ladder of meshes, timed: prints JSON.
+
+A sibling of scaling.py rather than a ``--dim 3`` of it: the 2D script runs the paper's h = k
+sequence (steps grow with the level, mesh edge √2·h), this one keeps the example's load and its 11
+steps and varies the mesh only, and records what decides how far 3D goes (contact dofs, the memory
+guard's estimate against the measured peak, PARDISO's fill) and why a level stopped.
+
+Each level and method runs in a fresh process (its peak memory is its own) watched by this one: a
+run is stopped when its resident memory passes --memory-limit (default 80 % of the memory available
+when it starts) or its wall time passes --time-limit (default 900 s); a method is not tried on finer
+levels once a level of it did not complete. One record per level and method: DOFs, tetrahedra,
+contact nodes and dofs, the setup stages (mesh, assembly, factorization, condensation), the time
+loop, the solver's total and the whole process's wall time, Newton iterations, the peak RSS (after
+building the problem, after the solver's setup, at the end), the condensed method's memory estimate
+(``condensed_memory``), the size of the sparse factor (``factor_size``), status and message. With
+--repeat R each completed run is repeated R times and the times and peak RSS are medians.
+
+    python benchmarks/scaling_3d.py                        # every level; condensed, and full while it completes
+    python benchmarks/scaling_3d.py --h 0.035 --method condensed --profile level.prof
+    python benchmarks/scaling_3d.py --quick                # h = 0.3, both methods (seconds)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
+#: Element edges of the ladder: 12 n³ tetrahedra with n = ceil(1.5 / h) (7.6k DOFs at 0.15, 1.5M at 0.025).
+LEVELS = (0.15, 0.1, 0.07, 0.05, 0.035, 0.025)
+QUICK = 0.3
+METHODS = ("condensed", "full")
+STAGES = ("mesh", "assembly", "factorization", "condensation")
+
+
+def peak_rss_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def run_level(h: float, method: str) -> dict:
+    """Solve the example on the mesh of edge h with ``method`` in this process and return its record."""
+    import vpcontact
+    from vpcontact.problem import build_problem
+    from vpcontact.solvers.condensed import condensed_memory
+    from vpcontact.stepping import TimeLoop
+
+    case = vpcontact.load_case(EXAMPLE, {"mesh.h": h, "solver.method": method, "output.field_steps": "none",
+                                         "output.figures": False})
+    problem = build_problem(case)
+    rss_problem = peak_rss_mb()
+    free = problem.free
+    A, N = problem.A[free][:, free].tocsr(), problem.surface.operator[:, free].tocsr()
+    record = {"h": h, "method": method, "dofs": int(problem.basis.N), "free_dofs": int(free.size),
+              "tetrahedra": int(problem.mesh.mesh.t.shape[1]), "contact_nodes": int(N.shape[0]),
+              "contact_dofs": len(set(N.indices)), "steps": case.time.steps,
+              "condensed_memory_mb": condensed_memory(N, A.shape[0]) / 2**20}
+    try:
+        loop = TimeLoop(problem)
+    except vpcontact.CaseError as error:  # the memory guard, or a factorization that fails
+        return {**record, "status": "refused", "message": str(error), "peak_rss_mb": peak_rss_mb()}
+    rss_setup = peak_rss_mb()
+    result = loop.run()
+    timings = result.timings
+    record.update({
+        "status": result.status, "message": result.message,
+        "setup_s": {k: timings.get(k, 0.0) for k in STAGES},
+        "setup_total_s": timings["total"] - timings["time_loop"], "time_loop_s": timings["time_loop"],
+        "total_s": timings["total"], "newton_iterations": int(result.series("newton_iterations").sum()),
+        "peak_rss_mb": peak_rss_mb(), "rss_after_problem_mb": rss_problem, "rss_after_setup_mb": rss_setup,
+    })
+    record["factor"] = factor_size(loop.solver, A, N, method)
+    return record
+
+
+def factor_size(solver, A, N, method: str) -> dict:
+    """Entries of the sparse factor the method makes: the condensed method's factor of A0 = A + Nᵀ r N
+    in Schur mode on the contact dofs (PARDISO's supernodal storage, or SuperLU's L + U), or SuperLU's
+    L + U of A + NᵀN for the full method (the pattern of its Newton matrix with every contact node in
+    compliance; with nodes on the base it factors a larger saddle-point matrix, each Newton iteration)."""
+    from vpcontact.solvers.factorization import splu
+
+    if method == "condensed":
+        factorization = solver.factorization
+        nonzeros, backend = factorization.factor_nonzeros, factorization.name
+    else:
+        import scipy.sparse as sp
+
+        lu = splu(sp.csc_matrix(A + N.T @ N), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                  options={"SymmetricMode": True})
+        nonzeros, backend = lu.L.nnz + lu.U.nnz, "superlu"
+    return {"backend": backend, "matrix_nonzeros": int(A.nnz), "factor_nonzeros": int(nonzeros),
+            "fill": nonzeros / A.nnz, "factor_mb": 8 * nonzeros / 2**20}
+
+
+def resident_mb(pid: int) -> float:
+    """Resident memory of process ``pid`` in MB (Linux: /proc/PID/statm), 0 where it cannot be read."""
+    try:
+        with open(f"/proc/{pid}/statm") as statm:
+            return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+    except (OSError, ValueError, IndexError):
+        return 0.0
+
+
+def watched(command: list[str], memory_limit_mb: float, time_limit_s: float) -> tuple[int, str, str, str, float]:
+    """Run ``command``; stop it when its resident memory or wall time passes the limits. Returns
+    (exit status, stdout, stderr, why it was stopped or "", wall time in seconds)."""
+    started = time.perf_counter()
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    stopped, largest = "", 0.0
+    while process.poll() is None:
+        largest = max(largest, resident_mb(process.pid))
+        elapsed = time.perf_counter() - started
+        if largest > memory_limit_mb:
+            stopped = f"stopped at {largest:,.0f} MB resident, over the limit of {memory_limit_mb:,.0f} MB"
+        elif elapsed > time_limit_s:
+            stopped = f"stopped after {elapsed:.0f} s, over the limit of {time_limit_s:.0f} s"
+        if stopped:
+            process.kill()
+            break
+        time.sleep(0.2)
+    stdout, stderr = process.communicate()
+    return process.returncode, stdout, stderr, stopped, time.perf_counter() - started
+
+
+def in_subprocess(h: float, method: str, memory_limit_mb: float, time_limit_s: float, profile: str | None) -> dict:
+    """One run of a level in a fresh process, with the whole process's wall time."""
+    command = [sys.executable, __file__, "--h", str(h), "--method", method, "--inline"]
+    command += ["--profile", profile] if profile else []
+    status, stdout, stderr, stopped, wall = watched(command, memory_limit_mb, time_limit_s)
+    if stopped:
+        return {"h": h, "method": method, "status": "stopped", "message": stopped, "process_s": wall}
+    if status != 0:
+        return {"h": h, "method": method, "status": "error", "message": stderr[-2000:], "process_s": wall}
+    return {**json.loads(stdout), "process_s": wall}
+
+
+def median_of(runs: list[dict]) -> dict:
+    """The first run's record with its times and peak RSS replaced by the medians over ``runs``."""
+    record = dict(runs[0])
+    for key in ("setup_total_s", "time_loop_s", "total_s", "process_s", "peak_rss_mb"):
+        record[key] = statistics.median(r[key] for r in runs)
+    record["setup_s"] = {k: statistics.median(r["setup_s"][k] for r in runs) for k in STAGES}
+    record["process_s_runs"] = [r["process_s"] for r in runs]
+    record["repeats"] = len(runs)
+    return record
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--h", type=float, help="one level: the element edge h (default: the ladder)")
+    parser.add_argument("--quick", action="store_true", help=f"the level h = {QUICK} only (about 1,000 DOFs)")
+    parser.add_argument("--method", choices=(*METHODS, "both"), default="both")
+    parser.add_argument("--full-up-to", type=float, default=0.0, help="coarsest h not run with the full method "
+                        "(default 0: run it until a level does not complete)")
+    parser.add_argument("--repeat", type=int, default=1, help="runs of each completed level (medians reported)")
+    parser.add_argument("--time-limit", type=float, default=900.0, help="seconds before a run is stopped")
+    parser.add_argument("--memory-limit", type=float, help="MB of resident memory before a run is stopped "
+                        "(default: 80 %% of the memory available at its start)")
+    parser.add_argument("--profile", help="write the run's cProfile statistics to this file (one level)")
+    parser.add_argument("--inline", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.inline:
+        if args.profile:
+            import cProfile
+
+            profiler = cProfile.Profile()
+            record = profiler.runcall(run_level, args.h, args.method)
+            profiler.dump_stats(args.profile)
+        else:
+            record = run_level(args.h, args.method)
+        print(json.dumps(record))
+        return
+    from vpcontact.solvers.factorization import available_memory
+
+    levels = [QUICK] if args.quick else [args.h] if args.h else list(LEVELS)
+    methods = list(METHODS) if args.method == "both" else [args.method]
+    given_up: dict[str, str] = {}
+    records = []
+    for h in levels:
+        for method in methods:
+            if method == "full" and h < args.full_up_to:
+                continue
+            if method in given_up:
+                records.append({"h": h, "method": method, "status": "skipped", "message": given_up[method]})
+                continue
+            limit = args.memory_limit or 0.8 * available_memory() / 2**20
+            runs = [in_subprocess(h, method, limit, args.time_limit, args.profile)]
+            if runs[0]["status"] == "complete":
+                runs += [in_subprocess(h, method, limit, args.time_limit, None) for _ in range(args.repeat - 1)]
+                runs = [r for r in runs if r["status"] == "complete"]
+                record = median_of(runs)
+            else:
+                record = runs[0]
+                given_up[method] = f"not run: h = {h} did not complete ({record['status']})"
+            record["load_average"] = os.getloadavg()
+            records.append(record)
+            print(json.dumps(record), file=sys.stderr, flush=True)
+    print(json.dumps(records, indent=1))
+
+
+if __name__ == "__main__":
+    main()

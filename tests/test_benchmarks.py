@@ -1,0 +1,28 @@
+"""The benchmark scripts run and their JSON holds what docs/performance.md reads from it."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+def test_the_3d_scaling_ladder_reports_each_method_on_its_quickest_level():
+    done = subprocess.run([sys.executable, str(BENCHMARKS / "scaling_3d.py"), "--quick"], capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    records = json.loads(done.stdout)
+    assert [r["method"] for r in records] == ["condensed", "full"]
+    for record in records:
+        assert record["status"] == "complete", record
+        # the quarter ball at h = 0.3: 12 n³ tetrahedra with n = ceil(1.5 / 0.3) = 5
+        assert record["tetrahedra"] == 12 * 5**3 and record["dofs"] % 3 == 0
+        assert 0 < record["contact_dofs"] <= 3 * record["contact_nodes"] < record["dofs"]
+        assert record["factor"]["factor_nonzeros"] >= record["factor"]["matrix_nonzeros"] / 2  # a triangle at least
+        assert 0 < record["rss_after_problem_mb"] <= record["rss_after_setup_mb"] <= record["peak_rss_mb"]
+        assert record["condensed_memory_mb"] > 8 * record["contact_nodes"] ** 2 / 2**20  # holds S (m × m) at least
+        assert 0 < record["time_loop_s"] < record["total_s"] < record["process_s"]
+    condensed, full = records
+    assert condensed["dofs"] == full["dofs"] and condensed["contact_nodes"] == full["contact_nodes"]
+    assert full["setup_s"]["factorization"] == 0.0 < condensed["setup_s"]["factorization"]
