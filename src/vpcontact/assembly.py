@@ -9,6 +9,7 @@ Triangles in 2D, tetrahedra in 3D: the element comes from the mesh, everything e
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -30,8 +31,8 @@ Density = Callable[..., tuple]
 
 def _centroid_rule(dim: int) -> tuple[np.ndarray, np.ndarray]:
     """The centroid rule of the reference simplex: exact for the bulk forms of P1 × P0 (their
-    integrands are constant per element)."""
-    return np.full((dim, 1), 1.0 / (dim + 1)), np.array([1.0 / (2.0 if dim == 2 else 6.0)])
+    integrands are constant per element); its weight is the simplex's volume 1/d!."""
+    return np.full((dim, 1), 1.0 / (dim + 1)), np.array([1.0 / math.factorial(dim)])
 
 
 def displacement_basis(mesh: Mesh) -> Basis:

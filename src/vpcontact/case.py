@@ -24,6 +24,7 @@ from .errors import CaseError, quoted, shown
 from .expressions import parse_expression
 from .inputs import MAX_TOML_BYTES, check_regular_file
 from .solvers.factorization import BACKENDS, installed_backends
+from .space import CELLS
 
 # --- value types ---------------------------------------------------------------------------------
 #: Most time steps and (estimated) triangles of a built-in shape a case may ask for: beyond, the run
@@ -112,8 +113,7 @@ class MeshSection(_Section):
         if self.shape is not None:
             elements = self._elements(dim)
             if not elements <= MAX_ELEMENTS:
-                kind = "triangles" if dim == 2 else "tetrahedra"
-                raise ValueError(f"mesh.h = {_brief(self.h)}: about {elements:.1e} {kind} for this {self.shape}, "
+                raise ValueError(f"mesh.h = {_brief(self.h)}: about {elements:.1e} {CELLS[dim][2]} for this {self.shape}, "
                                  f"more than {MAX_ELEMENTS:.0e}")
         return self
 
