@@ -5,13 +5,12 @@
 - the quarter ball against generic SciPy solvers on the same P1 stiffness and loads (contact nodes,
   normals and weights rebuilt here): Signorini as a quadratic program, normal compliance with the
   rigid limit as a complementarity system, each checked on its own KKT conditions;
-- the condensed and the full step solvers on cases with separated nodes, nodes in compliance and
-  nodes at the limit;
 - the viscoplastic laws in S³ on a homogeneous block: the scalar recursion of the explicit scheme,
   the closed forms of the continuous problem, first order in k.
 
 Hertz contact, the prism of the half disc against 2D, and the studies and norms between 3D meshes
-are in test_3d_hertz.py, test_3d_prism.py and test_3d_studies.py.
+are in test_3d_hertz.py, test_3d_prism.py and test_3d_studies.py; the condensed and full step
+solvers on 3D cases with nodes in all three states in test_solvers_agree.py.
 """
 
 import math
@@ -21,7 +20,6 @@ import pytest
 from scipy.optimize import minimize, root
 
 import vpcontact
-from vpcontact.solvers.factorization import installed_backends
 from test_uniform_block import C_V, Q_RATE, scalar_recursion
 
 ALPHA = 20.0
@@ -229,41 +227,7 @@ def test_compliance_with_the_rigid_limit_matches_a_generic_root_finder(beta, loa
     assert compliance >= 10 and limit >= 4, (compliance, limit)
 
 
-# --- 3. the step solvers agree -----------------------------------------------------------------------
-AGREE = {
-    "ball on a flat foundation": ball_case(h=0.35, g=0.05, normal=[0, 0, -1], gap="z"),
-    "block with a curved gap": block_case(g=0.02, gap="0.1*(x*x + y*y)"),
-}
-#: the full method, and the condensed one with every factorization installed here
-METHODS = [("full", "auto")] + [("condensed", backend) for backend in installed_backends()]
-
-
-def relative(a, b):
-    scale = max(np.abs(a).max(), np.abs(b).max(), 1e-300)
-    return np.abs(a - b).max() / scale
-
-
-@pytest.mark.parametrize("name", AGREE)
-def test_condensed_and_full_methods_agree_with_nodes_in_all_three_states(name):
-    results = {}
-    for method, backend in METHODS:
-        solver = {**AGREE[name]["solver"], "method": method, "factorization": backend}
-        results[method, backend] = vpcontact.solve({**AGREE[name], "solver": solver, "output": {"field_steps": "all"}})
-        assert results[method, backend].status == "complete", results[method, backend].message
-        assert results[method, backend].method == method
-    reference = results.pop(("full", "auto"))
-    assert np.all(states(reference) > 0, axis=1).any(), states(reference)  # one step has all three states
-    for method, result in results.items():
-        for step, fields in reference.fields.items():
-            assert relative(result.fields[step].displacement, fields.displacement) < 1e-8, (method, step)
-            assert relative(result.fields[step].stress, fields.stress) < 1e-8, (method, step)
-        for quantity in ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid"):
-            assert relative(result.contact_history(quantity), reference.contact_history(quantity)) < 1e-8, quantity
-        np.testing.assert_array_equal(result.contact_history("status"), reference.contact_history("status"))
-        np.testing.assert_allclose(result.series("contact_force_z"), reference.series("contact_force_z"), rtol=1e-8)
-
-
-# --- 4. viscoplastic laws in S³ on a homogeneous block --------------------------------------------
+# --- 3. viscoplastic laws in S³ on a homogeneous block --------------------------------------------
 E, NU = 1000.0, 0.3
 LAM, MU = E * NU / ((1 + NU) * (1 - 2 * NU)), E / (2 * (1 + NU))  # the isotropic tensor (4.1)
 M = LAM + 2 * MU  # the oedometric modulus: σ_zz = M ε_zz when ε_xx = ε_yy = 0
