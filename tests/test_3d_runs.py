@@ -181,3 +181,15 @@ def test_vectors_of_the_wrong_dimension_are_refused(tmp_path, override, words):
     args = [a for key, value in override.items() for a in ("--set", f"{key}={json.dumps(value)}")]
     status, _, err = run_cli("run", path, "--out", tmp_path / "out", *args)
     assert_refused(status, err, *words, untouched=[(tmp_path, before)])
+
+
+def test_a_clamped_3d_contact_part_is_refused(tmp_path):
+    """Every component of every contact node fixed (components omitted: all three) leaves the contact force
+    independent of the load: refused, naming the entry with its three components."""
+    case = ball_case()
+    case["boundary"]["dirichlet"].append({"part": "bottom"})
+    path = write(tmp_path, case)
+    before = snapshot_tree(tmp_path)
+    status, _, err = run_cli("run", path, "--out", tmp_path / "out")
+    assert_refused(status, err, "contact part 'bottom' is clamped", "boundary.dirichlet[2] (part 'bottom', "
+                   "components x, y, z)", untouched=[(tmp_path, before)])

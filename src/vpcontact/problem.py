@@ -310,8 +310,8 @@ def _check_contact_can_move(case: Case, mesh: meshes.Mesh, basis: Basis, free: n
     contact_dofs = basis.nodal_dofs[:, surface.nodes].ravel()
     entries = []
     for i, item in enumerate(case.boundary.dirichlet):
-        names = item.components or ["x", "y"]
-        components = [{"x": 0, "y": 1}[c] for c in names]
+        names = item.components or coordinates(mesh.dim)
+        components = [component(c) for c in names]
         if np.intersect1d(basis.nodal_dofs[components][:, mesh.nodes(item.part)], contact_dofs).size:
             entries.append(f"boundary.dirichlet[{i}] (part '{item.part}', components {', '.join(names)})")
     raise CaseError(f"contact part '{case.contact.part}' is clamped: {' and '.join(entries)} fix every contact node "
