@@ -35,7 +35,7 @@ import vpcontact
 from vpcontact.mesh import block, quarter_ball, rectangle
 from vpcontact.norms import Snapshot, differences, displacement_norm, strain_norm, stress_norm, transfer
 from conftest import run_cli
-from test_3d import ball_case, block_case
+from test_3d import block_case
 
 ROOT = Path(__file__).resolve().parents[1]
 COARSE, MIDDLE, FINE = 0.5, 0.35, 0.25
