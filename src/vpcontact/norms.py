@@ -6,10 +6,12 @@ A `Snapshot` is a discrete solution at one time: P1 displacement (nodal values) 
 convergence study):
 
     V = ‖ε(I_ref u_h − u_ref)‖_{L²(Ω_ref)},   Q = ‖Π_ref σ_h − σ_ref‖_{L²(Ω_ref)},
+    U = ‖I_ref u_h − u_ref‖_{L²(Ω_ref)},
 
 where I_ref interpolates u_h at the reference nodes and Π_ref evaluates σ_h at the reference
 element centroids (`transfer`). The norms are exact for these fields: ε(v) of a P1 field and a
-P0 stress are constant on each element, so ‖·‖² is Σ_T |T| · (the tensor's Frobenius norm)².
+P0 stress are constant on each element, so ‖·‖² is Σ_T |T| · (the tensor's Frobenius norm)²; a
+P1 field's square is integrated exactly by its element mass matrix.
 
 Point location in `transfer` is vectorized: a k-d tree of the source element centroids gives
 candidate elements, barycentric coordinates decide which contains a point. A point in no
@@ -221,10 +223,24 @@ def stress_norm(points, elements, stress) -> float:
     return float(np.sqrt(np.sum(measure * (stress**2).sum(axis=(1, 2)))))
 
 
+def displacement_norm(points, elements, displacement) -> float:
+    """‖u‖_{L²(Ω_h)} for the P1 displacement u with nodal values `displacement` (nnodes, d) on the mesh
+    (points (d, nnodes), elements (d + 1, nelements)); exact: on a simplex T with vertex values u_0, …,
+    u_d, ∫_T λ_i λ_j = |T| (1 + δ_ij) / ((d + 1)(d + 2)), so ∫_T |u|² = |T| (Σ_i |u_i|² + |Σ_i u_i|²)
+    / ((d + 1)(d + 2))."""
+    points = np.asarray(points, dtype=float)
+    elements = np.asarray(elements, dtype=np.int64)
+    d = points.shape[0]
+    u = np.asarray(displacement, dtype=float)[elements]  # (d + 1, m, d)
+    square = ((u**2).sum(axis=(0, 2)) + (u.sum(axis=0) ** 2).sum(axis=1)) / ((d + 1) * (d + 2))
+    return float(np.sqrt(np.sum(_measures(points, elements) * square)))
+
+
 def differences(solution: Snapshot, reference: Snapshot) -> dict[str, float]:
-    """{"V": ‖ε(u − u_ref)‖_{L²}, "Q": ‖σ − σ_ref‖_{L²}, "V_reference": ‖ε(u_ref)‖,
-    "Q_reference": ‖σ_ref‖} computed on the reference mesh after transferring `solution` to it
-    (`transfer`); no transfer when the meshes are identical (equal points and elements arrays)."""
+    """{"V": ‖ε(u − u_ref)‖_{L²}, "Q": ‖σ − σ_ref‖_{L²}, "U": ‖u − u_ref‖_{L²}, "V_reference": ‖ε(u_ref)‖,
+    "Q_reference": ‖σ_ref‖, "U_reference": ‖u_ref‖} computed on the reference mesh after transferring
+    `solution` to it (`transfer`); no transfer when the meshes are identical (equal points and
+    elements arrays)."""
     same_mesh = (np.array_equal(solution.points, reference.points)
                  and np.array_equal(solution.elements, reference.elements))
     if not same_mesh:
@@ -233,6 +249,8 @@ def differences(solution: Snapshot, reference: Snapshot) -> dict[str, float]:
     return {
         "V": strain_norm(p, t, np.asarray(solution.displacement) - np.asarray(reference.displacement)),
         "Q": stress_norm(p, t, np.asarray(solution.stress) - np.asarray(reference.stress)),
+        "U": displacement_norm(p, t, np.asarray(solution.displacement) - np.asarray(reference.displacement)),
         "V_reference": strain_norm(p, t, reference.displacement),
         "Q_reference": stress_norm(p, t, reference.stress),
+        "U_reference": displacement_norm(p, t, reference.displacement),
     }

@@ -394,6 +394,7 @@ def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = N
                 norms = differences(mine[t], reference[t]) if t in mine and t in reference else {}
                 row[f"norm_V_t{t:g}"] = norms.get("V", math.nan)
                 row[f"norm_Q_t{t:g}"] = norms.get("Q", math.nan)
+                row[f"norm_U_t{t:g}"] = norms.get("U", math.nan)
         rows.append(row)
     columns = list(dict.fromkeys(key for row in rows for key in row))
     with replacing(out / "study.csv") as temporary, temporary.open("w", newline="") as handle:
