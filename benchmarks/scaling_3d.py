@@ -177,7 +177,7 @@ def main() -> None:
             record = run_level(args.h, args.method)
         print(json.dumps(record))
         return
-    from vpcontact.solvers.factorization import available_memory
+    from vpcontact.memory import available_memory
 
     levels = [QUICK] if args.quick else [args.h] if args.h else list(LEVELS)
     methods = list(METHODS) if args.method == "both" else [args.method]

@@ -84,3 +84,22 @@ def test_the_factor_size_is_counted(backend):
         assert counts == [2 * n, n * (n + 1)]
     else:
         assert n <= counts[0] <= n + 1 and n * (n + 1) // 2 <= counts[1] <= n * n + 1
+
+
+@pytest.mark.skipif("pardiso" not in __import__("vpcontact.solvers.factorization", fromlist=["x"]).installed_backends(),
+                    reason="MKL PARDISO is not installed")
+def test_a_factor_that_would_not_fit_is_refused_before_it_is_made(tmp_path, capsys, monkeypatch):
+    """PARDISO's symbolic analysis estimates the factor's memory; over what is available the run is
+    refused (one line, exit 2, nothing written) instead of being killed for lack of memory."""
+    from vpcontact.solvers import pardiso
+
+    monkeypatch.setattr(pardiso, "available_memory", lambda: 2**20)
+    case = half_disc_case(h=0.2)
+    case["solver"].update(method="condensed", factorization="pardiso")
+    path = tmp_path / "case.toml"
+    path.write_text(tomli_w.dumps(case))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "not enough memory to factor the stiffness matrix" in err and "MKL PARDISO needs about" in err
+    assert "0.0 GiB are available" in err and err.count("\n") == 1
+    assert not (tmp_path / "out").exists()

@@ -12,7 +12,7 @@ import tomli_w
 import vpcontact
 from vpcontact.time_grid import TimeGrid
 from vpcontact.results import memory_needed
-from vpcontact.solvers.factorization import available_memory
+from vpcontact.memory import available_memory
 from conftest import assert_refused, rectangle_case, run_cli, snapshot_tree
 
 TOP = "boundary.traction[0].value[1]"

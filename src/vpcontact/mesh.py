@@ -34,7 +34,7 @@ from vpcontact.errors import CaseError, shown
 from vpcontact.inputs import check_regular_file
 from vpcontact.mesh_checks import check_finite, check_triangles
 from vpcontact.mesh_checks_3d import check_tetrahedra
-from vpcontact.solvers.factorization import available_memory
+from vpcontact.memory import available_memory
 
 NormalField = Callable[[np.ndarray], np.ndarray]
 

@@ -28,6 +28,7 @@ import numpy as np
 
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from .errors import CaseError, quoted, shown
+from .memory import available_memory
 from .space import coordinates
 
 def history_columns(dim: int) -> tuple[str, ...]:
@@ -295,8 +296,6 @@ def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, conta
 def check_memory(case, nodes: int, elements: int, contact_nodes: int, history: bool, dim: int = 2) -> None:
     """Refuse, before anything per step is allocated, a run whose outputs would not fit in the memory
     available now: one line naming time.steps (and output.field_steps when the fields are the most)."""
-    from .solvers.factorization import available_memory
-
     steps = case.time.steps
     field_steps = len(field_step_numbers(case.output.field_steps, steps))
     parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim)

@@ -15,6 +15,7 @@ from .condensed import CondensedNewton, check_condensed_memory
 from .full import FullNewton
 from ..errors import CaseError
 from .errors import SingularMatrixError, SolverMemoryError
+from .factorization import installed_backends
 
 SOLVERS = {FullNewton.name: FullNewton, CondensedNewton.name: CondensedNewton}
 METHODS = ("auto", *SOLVERS)
@@ -44,9 +45,11 @@ def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float 
     except SingularMatrixError as error:
         raise CaseError(f"the stiffness matrix cannot be factored ({error}): the mesh has degenerate elements, or "
                         f"a part of the body is held by nothing") from None
-    except SolverMemoryError:
-        raise CaseError(f"not enough memory to factor the stiffness matrix ({A.shape[0]} dofs): use a coarser mesh, "
-                        f"or solver.factorization = \"pardiso\" if it is installed") from None
+    except SolverMemoryError as error:
+        used = installed_backends()[0] if factorization == "auto" else factorization
+        other = "" if used == "pardiso" else ", or solver.factorization = \"pardiso\" (MKL: smaller factors)"
+        raise CaseError(f"not enough memory to factor the stiffness matrix ({A.shape[0]} dofs): {error}; use a "
+                        f"coarser mesh{other}") from None
 
 
 __all__ = ["METHODS", "SOLVERS", "StepData", "StepSolution", "make_solver"]

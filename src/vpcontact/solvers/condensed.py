@@ -34,7 +34,8 @@ from threadpoolctl import ThreadpoolController
 from ..errors import CaseError
 from .base import ContactState, StepData, StepSolution
 from .errors import SingularMatrixError
-from .factorization import available_memory, factorize
+from ..memory import available_memory
+from .factorization import factorize
 from .newton import ROUNDOFF, STAGNATION, Evaluation, SemismoothNewton
 
 

@@ -11,8 +11,6 @@ Cholesky with METIS; S from its Schur complement on the contact dofs; needs the 
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -132,15 +130,3 @@ def factorize(A: sp.spmatrix, N: sp.csr_matrix, backend: str = "auto"):
     """Factor the SPD matrix A with ``backend`` ("auto": the fastest one installed)."""
     name = installed_backends()[0] if backend == "auto" else backend
     return BACKENDS[name](A, N)
-
-
-def available_memory() -> int:
-    """Bytes of memory available to this process now (MemAvailable, else physical memory)."""
-    try:
-        with open("/proc/meminfo") as handle:
-            for line in handle:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")

@@ -26,6 +26,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import SingularMatrixError, SolverError, SolverMemoryError
+from ..memory import available_memory
 
 _INT_P = ctypes.POINTER(ctypes.c_int32)
 #: PARDISO's error codes (the MKL reference) as typed errors.
@@ -59,7 +60,8 @@ def library() -> ctypes.CDLL:
 
 
 class Pardiso:
-    """One PARDISO handle: ``factor(A, schur_dofs)`` then ``solve(b)``; ``schur`` holds the dense
+    """One PARDISO handle: ``factor(A, schur_dofs)`` (symbolic analysis, a memory check, numerical
+    factorization) then ``solve(b)``; ``schur`` holds the dense
     Schur complement of A on ``schur_dofs`` (in ascending dof order) when they were given, and
     ``factor_nonzeros`` the number of nonzeros of the sparse factor (iparm[17])."""
 
@@ -76,16 +78,29 @@ class Pardiso:
         self._iparm[[0, 1, 17, 34]] = 1, 2, -1, 1  # own iparm; METIS; count the factor's nonzeros; zero-based
         self._perm = np.zeros(self.n, dtype=np.int32)
         self.schur = None
-        if schur_dofs is not None and len(schur_dofs):
+        size = 0 if schur_dofs is None else len(schur_dofs)
+        if size:
             self._iparm[35] = 2
             self._perm[np.asarray(schur_dofs)] = 1
-            size = len(schur_dofs)
+        self._call(11)
+        self._check_memory(8 * size * size)
+        if size:
             out = np.zeros(size * size)
-            self._call(12, np.zeros(self.n), out)
+            self._call(22, np.zeros(self.n), out)
             self.schur = out.reshape(size, size)
         else:
-            self._call(12)
+            self._call(22)
         self.factor_nonzeros = int(self._iparm[17])
+
+    def _check_memory(self, schur_bytes: int) -> None:
+        """After the symbolic analysis (phase 11): refuse, before allocating it, a factorization whose
+        memory (PARDISO's estimate, max(iparm[14], iparm[15] + iparm[16]) kB, and the dense Schur
+        complement it returns) is more than the memory available."""
+        needed = 1024 * max(int(self._iparm[14]), int(self._iparm[15]) + int(self._iparm[16])) + schur_bytes
+        available = available_memory()
+        if needed > available:
+            raise SolverMemoryError(f"MKL PARDISO needs about {needed / 2**30:.1f} GiB to factor this {self.n} x "
+                                    f"{self.n} matrix, {available / 2**30:.1f} GiB are available")
 
     def _call(self, phase: int, b: np.ndarray | None = None, x: np.ndarray | None = None, nrhs: int = 1) -> None:
         error = ctypes.c_int32(0)
