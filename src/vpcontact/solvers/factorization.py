@@ -68,9 +68,9 @@ class PardisoFactorization:
     def condensed_operator(self) -> np.ndarray:
         if self._dofs.size == 0:
             return np.zeros((self._N_contact.shape[0],) * 2)
-        schur = self._pardiso.schur
-        try:
-            factor = sla.cho_factor(0.5 * (schur + schur.T))
+        schur, self._pardiso.schur = self._pardiso.schur, None
+        try:  # in place, from one triangle (Fortran order: the transpose's lower one), no copy of the c × c matrix
+            factor = sla.cho_factor(schur.T, lower=True, overwrite_a=True, check_finite=False)
         except np.linalg.LinAlgError as error:
             raise SingularMatrixError(f"the Schur complement on the contact dofs is not positive definite ({error})") \
                 from None
