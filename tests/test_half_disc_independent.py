@@ -59,6 +59,27 @@ def test_classical_normal_compliance_with_history_matches_a_generic_root_finder(
 REFERENCE_ACCURACY = 1e-7
 
 
+def signorini_by_its_dual(A, N, b, g, e):
+    """(u, λ) of min ½uᵀAu − bᵀu subject to N u ≤ g, for A symmetric positive semi-definite with the
+    null space e (a translation the constraints hold): SLSQP on the dual
+        max_{λ ≥ 0}  −½ (b − Nᵀλ)ᵀ A⁺ (b − Nᵀλ) − gᵀλ   subject to  eᵀ(b − Nᵀλ) = 0,
+    then u = A⁺(b − Nᵀλ) + c e with c from the most loaded constraint, taken active."""
+    pinv = np.linalg.pinv(A, rcond=1e-10, hermitian=True)
+
+    def objective(lam):
+        r = b - N.T @ lam
+        return 0.5 * r @ pinv @ r + g * lam.sum(), -N @ (pinv @ r) + g
+
+    found = minimize(objective, np.full(N.shape[0], 1.0), jac=True, method="SLSQP", bounds=[(0, None)] * N.shape[0],
+                     constraints=[{"type": "eq", "fun": lambda lam: e @ (b - N.T @ lam), "jac": lambda lam: -(N @ e)}],
+                     options={"ftol": 1e-15, "maxiter": 500})
+    assert found.success, found.message
+    lam = found.x
+    base = pinv @ (b - N.T @ lam)
+    top = np.argmax(lam)
+    return base + (g - N[top] @ base) / (N[top] @ e) * e, lam
+
+
 def test_signorini_matches_the_dual_quadratic_program():
     """K ≡ 0: at each time the Signorini problem with gap g is the QP min ½uᵀAu − bᵀu, N u ≤ g.
     With the roller on the axis A is singular (free vertical translation e); its dual is
@@ -66,28 +87,14 @@ def test_signorini_matches_the_dual_quadratic_program():
     solved here by SLSQP; u = A⁺(b − Nᵀλ) + c e with c from an active constraint."""
     result = vpcontact.solve(half_disc_case(g=0.2, load=60.0, stiffness={"law": "constant", "value": 0.0}))
     problem = result.problem
-    nodes, w, N = independent_contact_data(problem)
+    _, w, N = independent_contact_data(problem)
     A = problem.A[problem.free][:, problem.free].toarray()
-    pinv = np.linalg.pinv(A, rcond=1e-10, hermitian=True)
     e = np.zeros(problem.basis.N)
     e[problem.basis.nodal_dofs[1]] = 1.0
     e = e[problem.free]
     b = problem.loads(problem.times[-1])[problem.free]
     g = 0.2
-
-    def objective(lam):
-        r = b - N.T @ lam
-        return 0.5 * r @ pinv @ r + g * lam.sum(), -N @ (pinv @ r) + g
-
-    found = minimize(objective, np.full(nodes.size, 1.0), jac=True, method="SLSQP",
-                     bounds=[(0, None)] * nodes.size,
-                     constraints=[{"type": "eq", "fun": lambda lam: e @ (b - N.T @ lam), "jac": lambda lam: -(N @ e)}],
-                     options={"ftol": 1e-15, "maxiter": 500})
-    assert found.success, found.message
-    lam = found.x
-    base = pinv @ (b - N.T @ lam)
-    top = np.argmax(lam)
-    u = base + (g - N[top] @ base) / (N[top] @ e) * e
+    u, lam = signorini_by_its_dual(A, N, b, g, e)
     d = N @ u
     # SLSQP is accurate to about 1e-9 here (its feasibility error varies between SciPy versions: 2.4e-9
     # with 1.16 and 1.17); the reference is used within REFERENCE_ACCURACY, checked on its own KKT
