@@ -113,8 +113,8 @@ class MeshSection(_Section):
         if self.shape is not None:
             elements = self._elements(dim)
             if not elements <= MAX_ELEMENTS:
-                raise ValueError(f"mesh.h = {_brief(self.h)}: about {elements:.1e} {CELLS[dim][2]} for this {self.shape}, "
-                                 f"more than {MAX_ELEMENTS:.0e}")
+                raise ValueError(f"mesh.h = {_brief(self.h)}: about {elements:.1e} {CELLS[dim][2]} for this "
+                                 f"{self.shape}, more than {MAX_ELEMENTS:.0e}")
         return self
 
     def _elements(self, dim: int) -> float:

@@ -60,10 +60,10 @@ def library() -> ctypes.CDLL:
 
 
 class Pardiso:
-    """One PARDISO handle: ``factor(A, schur_dofs)`` (symbolic analysis, a memory check, numerical
-    factorization) then ``solve(b)``; ``schur`` holds the dense
-    Schur complement of A on ``schur_dofs`` (in ascending dof order) when they were given, and
-    ``factor_nonzeros`` the number of nonzeros of the sparse factor (iparm[17])."""
+    """One PARDISO handle: ``Pardiso(A, schur_dofs)`` factors (symbolic analysis, a memory check,
+    numerical factorization), then ``solve(b)``; ``schur`` holds the dense Schur complement of A on
+    ``schur_dofs`` (in ascending dof order) when they were given, and ``factor_nonzeros`` the entries
+    PARDISO stores for its supernodal factor (iparm[17]; more than the factor's nonzeros)."""
 
     def __init__(self, A: sp.spmatrix, schur_dofs: np.ndarray | None = None):
         upper = sp.triu(A, format="csr")
