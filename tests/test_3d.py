@@ -108,7 +108,7 @@ def independent_contact_data(problem, radius=1.0):
 def full_vector(problem, free_values):
     full = np.zeros(problem.basis.N)
     full[problem.free] = free_values
-    return full[problem.basis.nodal_dofs].T  # (nodes, 3)
+    return full[problem.basis.nodal_dofs].T  # (nodes, d)
 
 
 #: How far the SLSQP reference of the Signorini test is trusted (a length; the ball's size is 2).
@@ -165,51 +165,67 @@ def fischer_burmeister(a, b):
     return a + b - np.hypot(a, b)
 
 
-@pytest.mark.parametrize("beta, load", [(-1.0, 11.4443), (1.0, 40.0)])
-def test_compliance_with_the_rigid_limit_matches_a_generic_root_finder(beta, load):
-    """K = 100 (1 + 20 ξ)^β, g = 0.2, nodes in compliance and at the limit: each step is the system
+def compliance_with_the_limit(problem, N, w, c_v, alpha, beta, g):
+    """The steps of K = c_v (1 + α ξ)^β (each parameter a number or one value per contact node) with the
+    rigid limit g, on the problem's P1 matrices and the contact data N, w given: each step is the system
         A u + Nᵀ (w K(ξ_{n−1} + k d⁺) d⁺ + λ) = b,   φ(λ, c_v w (g − d)) = 0,   d = N u,
     with φ the Fischer–Burmeister function, solved by MINPACK's hybrid method (with its Jacobian) from
-    the previous step; the reference is trusted where its residuals and KKT conditions hold to rounding."""
-    stiffness = {"law": "power", "c_v": C_V, "alpha": ALPHA, "beta": beta}
-    result = vpcontact.solve(ball_case(load=load, stiffness=stiffness))
-    problem = result.problem
-    nodes, w, N = independent_contact_data(problem)
+    the previous step, then Newton steps where it stalls, and checked on its residual and KKT
+    conditions (to rounding). Returns the
+    penetrations and the rigid forces λ of every step (steps, m), and the last u (free dofs) and ξ."""
     A = problem.A[problem.free][:, problem.free].toarray()
-    n, m, k, g = A.shape[0], nodes.size, problem.k, 0.2
-    scale = C_V * w  # a gap times this is a force
-    xi, x = np.zeros(m), np.zeros(n + m)
-    for step, t in enumerate(problem.times, start=1):
+    n, m, k = A.shape[0], N.shape[0], problem.k
+    scale = c_v * w  # a gap times this is a force
+    force = np.max(scale) * g  # the largest force the layer gives a node
+    xi, x, penetrations, rigid = np.zeros(m), np.zeros(n + m), [], []
+    for t in problem.times:
         b = problem.loads(t)[problem.free]
 
-        def residual(x):
+        def residual(x, xi=xi, b=b):
             u, lam = x[:n], x[n:]
             d = N @ u
-            K = C_V * (1.0 + ALPHA * (xi + k * np.maximum(d, 0.0))) ** beta
+            K = c_v * (1.0 + alpha * (xi + k * np.maximum(d, 0.0))) ** beta
             return np.concatenate([A @ u + N.T @ (w * K * np.maximum(d, 0.0) + lam) - b,
                                    fischer_burmeister(lam, scale * (g - d))])
 
-        def jacobian(x):
+        def jacobian(x, xi=xi):
             u, lam = x[:n], x[n:]
             d = N @ u
             positive, on = np.maximum(d, 0.0), (d > 0.0).astype(float)
-            base = 1.0 + ALPHA * (xi + k * positive)
-            K, dK = C_V * base**beta, C_V * ALPHA * beta * base ** (beta - 1.0)
+            base = 1.0 + alpha * (xi + k * positive)
+            K, dK = c_v * base**beta, c_v * alpha * beta * base ** (beta - 1.0)
             a, c = lam, scale * (g - d)
             r = np.where(np.hypot(a, c) > 0, np.hypot(a, c), 1.0)
             return np.block([[A + N.T @ ((w * on * (K + dK * k * positive))[:, None] * N), N.T],
                              [-((1.0 - c / r) * scale)[:, None] * N, np.diag(1.0 - a / r)]])
 
         x = root(residual, x, jac=jacobian, method="hybr", tol=1e-15).x
+        for _ in range(20):  # where MINPACK stalls at a kink of φ: Newton steps on the same system
+            if np.abs(residual(x)).max() < 1e-14 * np.abs(b).max():  # equilibrium and φ, both forces
+                break
+            x = x - np.linalg.solve(jacobian(x), residual(x))
         u, lam = x[:n], x[n:]
         d = N @ u
-        force = C_V * g * w.max()  # the largest force the layer gives a node
-        assert np.abs(residual(x)[:n]).max() < 1e-12 * np.abs(b).max(), step
-        assert lam.min() > -1e-12 * force and d.max() < g + 1e-12 and np.max(lam * (g - d)) < 1e-12 * force * g, step
-        np.testing.assert_allclose(result.contact_history("penetration")[step - 1], d, rtol=0, atol=CERTIFIED_ACCURACY)
-        np.testing.assert_allclose(result.contact_history("pressure_rigid")[step - 1] * w, lam,
-                                   rtol=0, atol=CERTIFIED_ACCURACY * force)
+        assert np.abs(residual(x)[:n]).max() < 1e-12 * np.abs(b).max(), t
+        assert lam.min() > -1e-12 * force and d.max() < g + 1e-12 and np.max(lam * (g - d)) < 1e-12 * force * g, t
+        penetrations.append(d), rigid.append(lam)
         xi = xi + k * np.maximum(d, 0.0)
+    return np.array(penetrations), np.array(rigid), u, xi
+
+
+@pytest.mark.parametrize("beta, load", [(-1.0, 11.4443), (1.0, 40.0)])
+def test_compliance_with_the_rigid_limit_matches_a_generic_root_finder(beta, load):
+    """K = 100 (1 + 20 ξ)^β, g = 0.2, nodes in compliance and at the limit, against
+    `compliance_with_the_limit` with contact nodes, normals and weights rebuilt here."""
+    stiffness = {"law": "power", "c_v": C_V, "alpha": ALPHA, "beta": beta}
+    result = vpcontact.solve(ball_case(load=load, stiffness=stiffness))
+    problem = result.problem
+    _, w, N = independent_contact_data(problem)
+    g = 0.2
+    d, lam, u, xi = compliance_with_the_limit(problem, N, w, C_V, ALPHA, beta, g)
+    np.testing.assert_allclose(result.contact_history("penetration"), d, rtol=0, atol=CERTIFIED_ACCURACY)
+    np.testing.assert_allclose(result.contact_history("pressure_rigid") * w, lam, rtol=0,
+                               atol=CERTIFIED_ACCURACY * C_V * g * w.max())
     np.testing.assert_allclose(result.final.displacement, full_vector(problem, u), rtol=0, atol=CERTIFIED_ACCURACY)
     np.testing.assert_allclose(result.contact_history("xi")[-1], xi, rtol=0, atol=CERTIFIED_ACCURACY)
     _, compliance, limit = states(result)[-1]

@@ -70,6 +70,26 @@ Expression = Annotated[Any, AfterValidator(_expression_value)]
 Part = Union[str, int]
 
 
+def _layer_value(minimum: float | None):
+    """A layer parameter: a number (at least ``minimum`` when given) or an expression in the coordinates,
+    evaluated at the contact nodes (its values there are checked against ``minimum`` when the problem is
+    built)."""
+
+    def check(value):
+        value = _expression_value(value)
+        if isinstance(value, (int, float)) and minimum is not None and not value >= minimum:
+            raise ValueError(f"expected a number >= {minimum:g} or an expression in the coordinates, got "
+                             f"{_brief(value)}")
+        return value
+
+    return Annotated[Any, AfterValidator(check)]
+
+
+#: Layer parameters that may vary along Γ3 (the paper's K(x, ξ), (2.18)).
+NonNegativeLayerValue = _layer_value(0.0)
+LayerValue = _layer_value(None)
+
+
 class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
@@ -233,24 +253,24 @@ class PowerStiffnessSection(_Section):
     """K(ξ) = c_v (1 + α ξ)^β (the paper's law)."""
 
     law: Literal["power"]
-    c_v: NonNegativeFloat
-    alpha: NonNegativeFloat
-    beta: float
+    c_v: NonNegativeLayerValue
+    alpha: NonNegativeLayerValue
+    beta: LayerValue
 
 
 class ConstantStiffnessSection(_Section):
     """K(ξ) = value; 0 gives the Signorini condition with gap g."""
 
     law: Literal["constant"]
-    value: NonNegativeFloat
+    value: NonNegativeLayerValue
 
 
 class ExponentialStiffnessSection(_Section):
     """K(ξ) = c_v exp(α ξ)."""
 
     law: Literal["exponential"]
-    c_v: NonNegativeFloat
-    alpha: float
+    c_v: NonNegativeLayerValue
+    alpha: LayerValue
 
 
 Stiffness = Annotated[

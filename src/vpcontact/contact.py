@@ -55,13 +55,15 @@ class Power:
 
 
 # --- stiffness coefficients K(ξ) (2.18) --------------------------------------------------------
+# Their parameters are numbers, or arrays with one value per contact node: the layer varies along Γ3,
+# K(x, ξ) (the laws are evaluated on arrays of all the contact nodes).
 @dataclass(frozen=True)
 class PowerStiffness:
     """K(ξ) = c_v (1 + α ξ)^β: the paper's law; β > 0 hardens, β < 0 softens, α = 0 is constant."""
 
-    c_v: float
-    alpha: float
-    beta: float
+    c_v: float | np.ndarray
+    alpha: float | np.ndarray
+    beta: float | np.ndarray
 
     def __call__(self, xi: np.ndarray) -> np.ndarray:
         return self.c_v * (1.0 + self.alpha * xi) ** self.beta
@@ -74,10 +76,10 @@ class PowerStiffness:
 class ConstantStiffness:
     """K(ξ) = value (value = 0: the Signorini condition with gap g)."""
 
-    value: float
+    value: float | np.ndarray
 
     def __call__(self, xi: np.ndarray) -> np.ndarray:
-        return np.full_like(xi, self.value, dtype=float)
+        return np.zeros_like(xi, dtype=float) + self.value
 
     def derivative(self, xi: np.ndarray) -> np.ndarray:
         return np.zeros_like(xi, dtype=float)
@@ -87,8 +89,8 @@ class ConstantStiffness:
 class ExponentialStiffness:
     """K(ξ) = c_v exp(α ξ): α > 0 hardens, α < 0 softens."""
 
-    c_v: float
-    alpha: float
+    c_v: float | np.ndarray
+    alpha: float | np.ndarray
 
     def __call__(self, xi: np.ndarray) -> np.ndarray:
         return self.c_v * np.exp(self.alpha * xi)

@@ -8,6 +8,7 @@ are not laws) fails here, before any computation and before anything is written.
 from __future__ import annotations
 
 import time
+from functools import partial
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Callable
@@ -118,7 +119,7 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         c = case.contact
         gap = parse_expression(c.gap, coordinates(dim), where="contact.gap")
         surface = contact_surface(mesh, c.part, basis.nodal_dofs, gap, None if c.normal == "body" else c.normal)
-        law = ContactLaw(p=p or _p_law(case), stiffness=stiffness_law or _stiffness_law(case), g=c.g, rho=c.rho)
+        law = ContactLaw(p=p or _p_law(case), stiffness=stiffness_law or _stiffness_law(case, surface), g=c.g, rho=c.rho)
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
     _check_contact_can_move(case, mesh, basis, free, surface)
@@ -277,13 +278,37 @@ def _p_law(case: Case):
     return PositivePart() if c.p == "positive_part" else Power(c.exponent)
 
 
-def _stiffness_law(case: Case):
+def _stiffness_law(case: Case, surface: ContactSurface):
+    """K(x, ξ) of ``contact.stiffness`` (2.18): each parameter a number, or an expression in the
+    coordinates evaluated at the contact nodes (an array with one value per node)."""
     s = case.contact.stiffness
+    at = partial(_layer_parameter, surface=surface)
     if s.law == "power":
-        return PowerStiffness(s.c_v, s.alpha, s.beta)
+        return PowerStiffness(at("c_v", s.c_v, 0.0), at("alpha", s.alpha, 0.0), at("beta", s.beta))
     if s.law == "constant":
-        return ConstantStiffness(s.value)
-    return ExponentialStiffness(s.c_v, s.alpha)
+        return ConstantStiffness(at("value", s.value, 0.0))
+    return ExponentialStiffness(at("c_v", s.c_v, 0.0), at("alpha", s.alpha))
+
+
+def _layer_parameter(name: str, value, minimum: float | None = None, *, surface: ContactSurface):
+    """A number as it is; an expression's values at the contact nodes, refused (naming the node) where
+    they are not finite or below ``minimum``."""
+    if not isinstance(value, str):
+        return float(value)
+    where = f"contact.stiffness.{name}"
+    names = coordinates(surface.coordinates.shape[0])
+    expression = parse_expression(value, names, where=where)
+    with np.errstate(all="ignore"):  # values that are not finite are reported below
+        values = np.broadcast_to(expression(**dict(zip(names, surface.coordinates))), (surface.size,)).astype(float)
+    wrong = ~np.isfinite(values) if minimum is None else ~(values >= minimum)
+    if wrong.any():
+        node = np.flatnonzero(wrong)[0]
+        at = ", ".join(f"{c:.6g}" for c in surface.coordinates[:, node])
+        expected = "finite" if minimum is None else f"a finite number >= {minimum:g}"
+        raise CaseError(f"{where} = {quoted(value)} is {values[node]:g} at the contact node ({', '.join(names)}) = "
+                        f"({at}) ({wrong.sum()} of {surface.size} nodes): expected {expected} at every node of the "
+                        f"contact part")
+    return values.copy()
 
 
 def _viscoplastic_law(case: Case) -> Callable | None:

@@ -1,0 +1,83 @@
+"""A layer that varies along Γ3 (the paper's K(x, ξ), (2.18)): the stiffness parameters as expressions
+in the coordinates, evaluated at the contact nodes, in 2D and 3D."""
+
+import numpy as np
+import pytest
+import tomli_w
+
+import vpcontact
+from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree
+from test_3d import ball_case, compliance_with_the_limit, full_vector, states
+
+#: a strip of Γ3 (|x| < 0.3) four times as stiff, a hardening that grows away from the axis, and a
+#: softening exponent that changes sign along Γ3: (c_v, α, β) as expressions, and as functions here
+LAYER = ("100 + 300*heaviside(0.3 - abs(x))", "10 + 20*x*x", "1 - 2*heaviside(x - 0.5)")
+
+
+def layer_values(x):
+    return 100 + 300 * (np.abs(x) < 0.3), 10 + 20 * x * x, np.where(x > 0.5, -1.0, 1.0)
+
+
+CASES = {
+    "2D": half_disc_case(h=0.1, load=60.0),
+    "3D": ball_case(h=0.4, load=40.0),
+}
+
+
+@pytest.mark.parametrize("dim", CASES)
+def test_a_layer_varying_along_the_surface_matches_a_generic_root_finder(dim):
+    """Nodes in compliance and at the limit with different (c_v, α, β) along Γ3, against MINPACK on
+    the same P1 matrices with the parameters computed here at each node."""
+    case = CASES[dim]
+    case["contact"]["stiffness"] = dict(zip(("c_v", "alpha", "beta"), LAYER), law="power")
+    result = vpcontact.solve(case)
+    assert result.status == "complete", result.message
+    problem, surface = result.problem, result.problem.surface
+    c_v, alpha, beta = layer_values(surface.coordinates[0])
+    assert len(set(c_v)) == 2 and len(set(beta)) == 2  # both stiffnesses and both exponents are on Γ3
+    N = surface.operator[:, problem.free].toarray()
+    g = case["contact"]["g"]
+    d, lam, u, xi = compliance_with_the_limit(problem, N, surface.weights, c_v, alpha, beta, g)
+    np.testing.assert_allclose(result.contact_history("penetration"), d, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(result.contact_history("xi")[-1], xi, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(result.final.displacement, full_vector(problem, u), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(result.contact_history("pressure_rigid") * surface.weights, lam, rtol=0,
+                               atol=1e-10 * c_v.max() * g * surface.weights.max())
+    K = c_v * (1 + alpha * xi) ** beta
+    np.testing.assert_allclose(result.contact_history("K")[-1], K, rtol=1e-10)
+    _, compliance, limit = states(result)[-1]
+    assert compliance > 0 and limit > 0, (compliance, limit)
+
+
+@pytest.mark.parametrize("law, parameters", [("power", {"c_v": 100.0, "alpha": 20.0, "beta": -1.0}),
+                                             ("exponential", {"c_v": 100.0, "alpha": -5.0}),
+                                             ("constant", {"value": 150.0})])
+def test_a_constant_written_as_an_expression_is_the_same_layer(law, parameters):
+    """Bitwise: an expression with a constant value gives the same run as the number."""
+    numbers, expressions = half_disc_case(h=0.2, load=25.0), half_disc_case(h=0.2, load=25.0)
+    numbers["contact"]["stiffness"] = {"law": law, **parameters}
+    expressions["contact"]["stiffness"] = {"law": law, **{k: f"{v!r} + 0*x" for k, v in parameters.items()}}
+    a, b = vpcontact.solve(numbers), vpcontact.solve(expressions)
+    np.testing.assert_array_equal(a.final.displacement, b.final.displacement)
+    np.testing.assert_array_equal(a.contact_history("K"), b.contact_history("K"))
+
+
+BAD_LAYERS = [
+    ({"c_v": "100 - 300*x"}, ["contact.stiffness.c_v = \"100 - 300*x\" is -", "at the contact node (x, y) = (",
+                              "expected a finite number >= 0"]),
+    ({"alpha": "-1 + x"}, ["contact.stiffness.alpha", "expected a finite number >= 0"]),
+    ({"beta": "log(x)"}, ["contact.stiffness.beta = \"log(x)\" is -inf", "expected finite"]),
+    ({"c_v": "100*t"}, ["contact.stiffness.c_v", "t"]),
+    ({"c_v": "100*z"}, ["contact.stiffness.c_v", "z"]),
+]
+
+
+@pytest.mark.parametrize("stiffness, words", BAD_LAYERS, ids=[str(s) for s, _ in BAD_LAYERS])
+def test_a_layer_parameter_that_is_wrong_somewhere_on_the_surface_is_refused(tmp_path, stiffness, words):
+    case = half_disc_case(h=0.2)
+    case["contact"]["stiffness"].update(stiffness)
+    path = tmp_path / "case.toml"
+    path.write_text(tomli_w.dumps(case))
+    before = snapshot_tree(tmp_path)
+    status, _, err = run_cli("run", path, "--out", tmp_path / "out")
+    assert_refused(status, err, *words, untouched=[(tmp_path, before)])
