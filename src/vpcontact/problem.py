@@ -8,9 +8,9 @@ are not laws) fails here, before any computation and before anything is written.
 from __future__ import annotations
 
 import time
-from functools import partial
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Callable
 
 import numpy as np
@@ -119,7 +119,8 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         c = case.contact
         gap = parse_expression(c.gap, coordinates(dim), where="contact.gap")
         surface = contact_surface(mesh, c.part, basis.nodal_dofs, gap, None if c.normal == "body" else c.normal)
-        law = ContactLaw(p=p or _p_law(case), stiffness=stiffness_law or _stiffness_law(case, surface), g=c.g, rho=c.rho)
+        law = ContactLaw(p=p or _p_law(case), stiffness=stiffness_law or _stiffness_law(case, surface), g=c.g,
+                         rho=c.rho)
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
     _check_contact_can_move(case, mesh, basis, free, surface)
