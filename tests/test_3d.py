@@ -166,8 +166,8 @@ def fischer_burmeister(a, b):
 
 
 def compliance_with_the_limit(problem, N, w, c_v, alpha, beta, g):
-    """The steps of K = c_v (1 + α ξ)^β (each parameter a number or one value per contact node) with the
-    rigid limit g, on the problem's P1 matrices and the contact data N, w given: each step is the system
+    """The steps of K = c_v (1 + α ξ)^β with the rigid limit g (each a number or one value per contact
+    node), on the problem's P1 matrices and the contact data N, w given: each step is the system
         A u + Nᵀ (w K(ξ_{n−1} + k d⁺) d⁺ + λ) = b,   φ(λ, c_v w (g − d)) = 0,   d = N u,
     with φ the Fischer–Burmeister function, solved by MINPACK's hybrid method (with its Jacobian) from
     the previous step, then Newton steps where it stalls, and checked on its residual and KKT
@@ -176,7 +176,7 @@ def compliance_with_the_limit(problem, N, w, c_v, alpha, beta, g):
     A = problem.A[problem.free][:, problem.free].toarray()
     n, m, k = A.shape[0], N.shape[0], problem.k
     scale = c_v * w  # a gap times this is a force
-    force = np.max(scale) * g  # the largest force the layer gives a node
+    force = np.max(scale * g)  # the largest force the layer gives a node
     xi, x, penetrations, rigid = np.zeros(m), np.zeros(n + m), [], []
     for t in problem.times:
         b = problem.loads(t)[problem.free]
@@ -207,7 +207,8 @@ def compliance_with_the_limit(problem, N, w, c_v, alpha, beta, g):
         u, lam = x[:n], x[n:]
         d = N @ u
         assert np.abs(residual(x)[:n]).max() < 1e-12 * np.abs(b).max(), t
-        assert lam.min() > -1e-12 * force and d.max() < g + 1e-12 and np.max(lam * (g - d)) < 1e-12 * force * g, t
+        assert lam.min() > -1e-12 * force and np.all(d < g + 1e-12), t
+        assert np.max(lam * (g - d)) < 1e-12 * force * np.max(g), t
         penetrations.append(d), rigid.append(lam)
         xi = xi + k * np.maximum(d, 0.0)
     return np.array(penetrations), np.array(rigid), u, xi

@@ -1,5 +1,6 @@
-"""A layer that varies along Γ3 (the paper's K(x, ξ), (2.18)): the stiffness parameters as expressions
-in the coordinates, evaluated at the contact nodes, in 2D and 3D."""
+"""A layer that varies along Γ3 (the paper's K(x, ξ), (2.18), and a thickness g(x), beyond the paper):
+the stiffness parameters and g as expressions in the coordinates, evaluated at the contact nodes, in
+2D and 3D."""
 
 import numpy as np
 import pytest
@@ -49,6 +50,33 @@ def test_a_layer_varying_along_the_surface_matches_a_generic_root_finder(dim):
     assert compliance > 0 and limit > 0, (compliance, limit)
 
 
+#: a layer thinner away from the bottom point (the paper's g = 0.2 there)
+THICKNESS = "0.2 - 0.15*x*x"
+
+
+@pytest.mark.parametrize("dim", CASES)
+def test_a_layer_of_varying_thickness_matches_a_generic_root_finder(dim):
+    """g(x) along Γ3 with the paper's K = 100 (1 + 20 ξ)^−1: the nodes reach the rigid base at different
+    penetrations; against MINPACK with g computed here at each node."""
+    case = CASES[dim]
+    case["contact"]["g"] = THICKNESS
+    case["contact"]["stiffness"] = {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0}
+    result = vpcontact.solve(case)
+    assert result.status == "complete", result.message
+    problem, surface = result.problem, result.problem.surface
+    g = 0.2 - 0.15 * surface.coordinates[0] ** 2
+    N = surface.operator[:, problem.free].toarray()
+    d, lam, u, xi = compliance_with_the_limit(problem, N, surface.weights, 100.0, 20.0, -1.0, g)
+    np.testing.assert_allclose(result.contact_history("penetration"), d, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(result.contact_history("xi")[-1], xi, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(result.final.displacement, full_vector(problem, u), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(result.contact_history("pressure_rigid") * surface.weights, lam, rtol=0,
+                               atol=1e-10 * 100.0 * 0.2 * surface.weights.max())
+    at_limit = result.contact_history("status")[-1] == 2
+    np.testing.assert_allclose(d[-1][at_limit], g[at_limit], rtol=0, atol=1e-10)  # each on its own base
+    assert at_limit.sum() > 1 and len(set(np.round(g[at_limit], 12))) > 1  # several thicknesses reached
+
+
 @pytest.mark.parametrize("law, parameters", [("power", {"c_v": 100.0, "alpha": 20.0, "beta": -1.0}),
                                              ("exponential", {"c_v": 100.0, "alpha": -5.0}),
                                              ("constant", {"value": 150.0})])
@@ -63,6 +91,8 @@ def test_a_constant_written_as_an_expression_is_the_same_layer(law, parameters):
 
 
 BAD_LAYERS = [
+    ({"g": "0.2 - x"}, ["contact.g = \"0.2 - x\" is -", "expected a finite number > 0"]),
+    ({"g": "1/x"}, ["contact.g = \"1/x\" is inf", "expected a finite number > 0"]),
     ({"c_v": "100 - 300*x"}, ["contact.stiffness.c_v = \"100 - 300*x\" is -", "at the contact node (x, y) = (",
                               "expected a finite number >= 0"]),
     ({"alpha": "-1 + x"}, ["contact.stiffness.alpha", "expected a finite number >= 0"]),
@@ -75,7 +105,8 @@ BAD_LAYERS = [
 @pytest.mark.parametrize("stiffness, words", BAD_LAYERS, ids=[str(s) for s, _ in BAD_LAYERS])
 def test_a_layer_parameter_that_is_wrong_somewhere_on_the_surface_is_refused(tmp_path, stiffness, words):
     case = half_disc_case(h=0.2)
-    case["contact"]["stiffness"].update(stiffness)
+    case["contact"].update({k: v for k, v in stiffness.items() if k == "g"})
+    case["contact"]["stiffness"].update({k: v for k, v in stiffness.items() if k != "g"})
     path = tmp_path / "case.toml"
     path.write_text(tomli_w.dumps(case))
     before = snapshot_tree(tmp_path)

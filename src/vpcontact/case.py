@@ -85,6 +85,17 @@ def _layer_value(minimum: float | None):
     return Annotated[Any, AfterValidator(check)]
 
 
+def _thickness(value):
+    """contact.g: a number > 0, inf (no rigid base: classical normal compliance), or an expression in the
+    coordinates (a thickness that varies along Γ3, checked > 0 at the contact nodes)."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+        raise ValueError(f"contact.g = {_brief(value)}: must be > 0 (a number, \"inf\" or an expression in the "
+                         f"coordinates)")
+    return value
+
+
 #: Layer parameters that may vary along Γ3 (the paper's K(x, ξ), (2.18)).
 NonNegativeLayerValue = _layer_value(0.0)
 LayerValue = _layer_value(None)
@@ -282,7 +293,7 @@ class ContactSection(_Section):
     """The contact condition (2.5) on a part: soft layer of thickness g on a rigid base."""
 
     part: Part
-    g: Annotated[float, Field(gt=0, allow_inf_nan=True)]
+    g: Annotated[Any, AfterValidator(_thickness)]
     gap: Expression = 0.0
     p: Literal["positive_part", "power"] = "positive_part"
     exponent: Optional[Annotated[float, Field(ge=1)]] = None

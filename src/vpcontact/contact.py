@@ -124,12 +124,17 @@ class CallableLaw:
 
 @dataclass(frozen=True)
 class ContactLaw:
-    """The soft layer of thickness g on the rigid base: ρ K(ξ) p(d) while d < g, d ≤ g always."""
+    """The soft layer of thickness g on the rigid base: ρ K(ξ) p(d) while d < g, d ≤ g always. g is a
+    number (inf: no rigid base) or one thickness per contact node (a layer that varies along Γ3)."""
 
     p: Callable
     stiffness: Callable
-    g: float
+    g: float | np.ndarray
     rho: float = 1.0
+
+    def limit(self, nodes: np.ndarray) -> float | np.ndarray:
+        """g at the contact nodes ``nodes`` (an index or a mask)."""
+        return self.g if np.ndim(self.g) == 0 else self.g[nodes]
 
     def K(self, xi: np.ndarray) -> np.ndarray:
         """ρ K(ξ): the stiffness coefficient in force (the paper's K_ρ)."""

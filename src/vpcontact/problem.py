@@ -119,8 +119,8 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         c = case.contact
         gap = parse_expression(c.gap, coordinates(dim), where="contact.gap")
         surface = contact_surface(mesh, c.part, basis.nodal_dofs, gap, None if c.normal == "body" else c.normal)
-        law = ContactLaw(p=p or _p_law(case), stiffness=stiffness_law or _stiffness_law(case, surface), g=c.g,
-                         rho=c.rho)
+        law = ContactLaw(p=p or _p_law(case), stiffness=stiffness_law or _stiffness_law(case, surface),
+                         g=_layer_parameter("g", c.g, 0.0, surface=surface, strict=True), rho=c.rho)
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
     _check_contact_can_move(case, mesh, basis, free, surface)
@@ -285,27 +285,32 @@ def _stiffness_law(case: Case, surface: ContactSurface):
     s = case.contact.stiffness
     at = partial(_layer_parameter, surface=surface)
     if s.law == "power":
-        return PowerStiffness(at("c_v", s.c_v, 0.0), at("alpha", s.alpha, 0.0), at("beta", s.beta))
+        return PowerStiffness(at("stiffness.c_v", s.c_v, 0.0), at("stiffness.alpha", s.alpha, 0.0),
+                              at("stiffness.beta", s.beta))
     if s.law == "constant":
-        return ConstantStiffness(at("value", s.value, 0.0))
-    return ExponentialStiffness(at("c_v", s.c_v, 0.0), at("alpha", s.alpha))
+        return ConstantStiffness(at("stiffness.value", s.value, 0.0))
+    return ExponentialStiffness(at("stiffness.c_v", s.c_v, 0.0), at("stiffness.alpha", s.alpha))
 
 
-def _layer_parameter(name: str, value, minimum: float | None = None, *, surface: ContactSurface):
-    """A number as it is; an expression's values at the contact nodes, refused (naming the node) where
-    they are not finite or below ``minimum``."""
+def _layer_parameter(name: str, value, minimum: float | None = None, *, surface: ContactSurface,
+                     strict: bool = False):
+    """``contact.<name>``: a number as it is; an expression's values at the contact nodes, refused
+    (naming the node) where they are not finite or below ``minimum`` (or equal to it, when ``strict``)."""
     if not isinstance(value, str):
         return float(value)
-    where = f"contact.stiffness.{name}"
+    where = f"contact.{name}"
     names = coordinates(surface.coordinates.shape[0])
     expression = parse_expression(value, names, where=where)
     with np.errstate(all="ignore"):  # values that are not finite are reported below
         values = np.broadcast_to(expression(**dict(zip(names, surface.coordinates))), (surface.size,)).astype(float)
-    wrong = ~np.isfinite(values) if minimum is None else ~(values >= minimum)
+    if minimum is None:
+        wrong = ~np.isfinite(values)
+    else:
+        wrong = ~np.isfinite(values) | ~(values > minimum if strict else values >= minimum)
     if wrong.any():
         node = np.flatnonzero(wrong)[0]
         at = ", ".join(f"{c:.6g}" for c in surface.coordinates[:, node])
-        expected = "finite" if minimum is None else f"a finite number >= {minimum:g}"
+        expected = "finite" if minimum is None else f"a finite number {'>' if strict else '>='} {minimum:g}"
         raise CaseError(f"{where} = {quoted(value)} is {values[node]:g} at the contact node ({', '.join(names)}) = "
                         f"({at}) ({wrong.sum()} of {surface.size} nodes): expected {expected} at every node of the "
                         f"contact part")

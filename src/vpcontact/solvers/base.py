@@ -53,8 +53,7 @@ class ContactState:
     @classmethod
     def evaluate(cls, step: StepData, weights: np.ndarray, d: np.ndarray, lam: np.ndarray, r: float):
         pressure, dpressure = step.law.pressure(d, step.xi_prev, step.k)
-        g = step.law.g
-        trial = lam + r * (d - g) if np.isfinite(g) else np.full_like(d, -np.inf)
+        trial = lam + r * (d - step.law.g)  # −∞ where g = ∞: never active
         C = lam - np.maximum(trial, 0.0)
         return cls(weights * pressure, weights * dpressure, trial > 0.0, C)
 

@@ -183,7 +183,7 @@ class CondensedNewton(SemismoothNewton):
         d, lam = x
         active = ev.state.active
         M = np.eye(d.size) + self.S * (self.jacobian_tangent(ev.state) - self.reference)[None, :]
-        step_active = step.law.g - d[active]
+        step_active = step.law.limit(active) - d[active]
         rhs = -(d - ev.d_solution) - M[:, active] @ step_active + self.S[:, ~active] @ lam[~active]
         try:
             unknowns = np.linalg.solve(np.hstack([M[:, ~active], self.S[:, active]]), rhs)

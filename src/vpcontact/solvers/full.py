@@ -62,7 +62,7 @@ class FullNewton(SemismoothNewton):
         rhs_u = -ev.merit_vector[: u.size] + self.N[~active].T @ lam[~active]
         if active.any():
             kkt = sp.bmat([[J, N_active.T], [N_active, None]], format="csc")
-            solution = splu(kkt).solve(np.concatenate([rhs_u, step.law.g - ev.d[active]]))
+            solution = splu(kkt).solve(np.concatenate([rhs_u, step.law.limit(active) - ev.d[active]]))
         else:
             solution = splu(J.tocsc()).solve(rhs_u)
         dlam = -lam.copy()
