@@ -2,7 +2,6 @@
 step cuts, a viscoplastic body, a user's tetrahedral gmsh mesh; and the case's vectors must have the
 mesh's dimension (exit 2, one line)."""
 
-import csv
 import json
 import os
 import signal
@@ -14,10 +13,10 @@ from pathlib import Path
 import meshio
 import numpy as np
 import pytest
-import tomli_w
 
 import vpcontact
 from conftest import assert_refused, run_cli, snapshot_tree
+from test_robustness import read_csv, write
 
 MESHES = Path(__file__).parent / "meshes" / "3d"
 
@@ -35,18 +34,6 @@ def ball_case(h=0.4, beta=-1.0, steps=11, **solver) -> dict:
         "solver": {"tolerance": 1e-11, **solver},
         "output": {"field_steps": "all"},
     }
-
-
-def write(folder, case, name="case.toml") -> Path:
-    path = Path(folder) / name
-    path.write_text(tomli_w.dumps(case))
-    return path
-
-
-def read_csv(path):
-    with open(path, newline="") as handle:
-        rows = list(csv.reader(handle))
-    return rows[0], rows[1:]
 
 
 def test_the_outputs_of_a_3d_run(tmp_path):
