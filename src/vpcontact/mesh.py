@@ -20,7 +20,7 @@ import math
 import os
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import meshio
@@ -57,6 +57,9 @@ class Mesh:
     """Part -> f(points (d, ...)) -> unit outward normals, same shape; only where the geometry is known exactly."""
     file: str | None = None
     """The mesh file it was read from (None for a built-in shape)."""
+    regions: dict[str, np.ndarray] = field(default_factory=dict)
+    """Region name -> sorted int64 indices of elements (columns of ``mesh.t``): the groups of elements
+    materials are assigned to; empty when the mesh does not group its elements (one region, the body)."""
 
     def facets(self, part: str | int) -> np.ndarray:
         """Facet indices of `part` (an int n means the part named str(n))."""
