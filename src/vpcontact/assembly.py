@@ -14,8 +14,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Basis, ElementTetP1, ElementTriP1, ElementVector, FacetBasis, LinearForm, MeshTet1, asm
-from skfem.helpers import ddot, sym_grad
+from skfem import (Basis, BilinearForm, ElementTetP1, ElementTriP1, ElementVector, FacetBasis, LinearForm, MeshTet1,
+                   asm)
+from skfem.helpers import ddot, eye, sym_grad, trace
 from skfem.models.elasticity import linear_elasticity
 
 from .errors import CaseError, quoted
@@ -41,9 +42,22 @@ def displacement_basis(mesh: Mesh) -> Basis:
     return Basis(mesh.mesh, ElementVector(element), quadrature=_centroid_rule(mesh.dim))
 
 
+@BilinearForm
+def _elastic_form(u, v, w):
+    strain = sym_grad(u)
+    return ddot(2.0 * w["mu"] * strain + w["lam"] * eye(trace(strain), strain.shape[0]), sym_grad(v))
+
+
 def stiffness(basis: Basis, elasticity: Elasticity) -> sp.csr_matrix:
-    """The elastic stiffness matrix A_ij = (ℰε(φ_j), ε(φ_i))_Q."""
-    return asm(linear_elasticity(*elasticity.lame), basis).tocsr()
+    """The elastic stiffness matrix A_ij = (ℰε(φ_j), ε(φ_i))_Q; the Lamé parameters are numbers (one
+    material) or arrays with one value per element (ℰ(x) of (2.16), constant on each element)."""
+    lam, mu = elasticity.lame
+    if np.ndim(lam) == 0 and np.ndim(mu) == 0:
+        return asm(linear_elasticity(lam, mu), basis).tocsr()
+    points = basis.X.shape[-1]
+    per_element = {name: np.repeat(np.broadcast_to(value, (basis.nelems,))[:, None], points, axis=1)
+                   for name, value in (("lam", lam), ("mu", mu))}
+    return asm(_elastic_form, basis, **per_element).tocsr()
 
 
 @LinearForm

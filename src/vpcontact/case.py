@@ -18,7 +18,8 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
 import tomli_w
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (AfterValidator, BaseModel, ConfigDict, Discriminator, Field, Tag, ValidationError, field_validator,
+                      model_validator)
 
 from .errors import CaseError, quoted, shown
 from .expressions import parse_expression
@@ -192,22 +193,64 @@ def _check_poisson_ratio(key: str, nu: float, hypothesis: str | None) -> None:
         raise ValueError(f"{key} = {_brief(nu)}: must satisfy -1 < {name} {bound} for {model}")
 
 
+def _modulus(value):
+    """material.E: a number > 0 or an expression in the coordinates (checked > 0 at the element centroids)."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not _finite(value) or not value > 0:
+        raise ValueError(f"= {_brief(value)}: expected a finite number > 0 or an expression in the coordinates")
+    return value
+
+
+Modulus = Annotated[Any, AfterValidator(_modulus)]
+
+
+def _region_names(value):
+    """material.region: a region name (a string, or a physical group's number) or a non-empty list of them."""
+    names = value if isinstance(value, list) else [value]
+    if not names or any(isinstance(name, bool) or not isinstance(name, (str, int)) for name in names):
+        raise ValueError(f"expected a region name (a string or a physical group number) or a non-empty list of them, "
+                         f"got {_brief(value)}")
+    return value
+
+
 class MaterialSection(_Section):
     """Isotropic elasticity (4.1); in 2D plane strain (the paper's formula, the default) or plane
     stress, in 3D the full tensor (no hypothesis); optionally a viscoplastic law 𝒢 of (2.1) (none:
-    𝒢 = 0, linear elasticity)."""
+    𝒢 = 0, linear elasticity). E and ν are numbers or expressions in the coordinates (ℰ(x) of (2.16),
+    evaluated at the element centroids). ``region``: the mesh regions (``Mesh.regions``) the entry is
+    the material of; None: the whole body (then it is the only entry)."""
 
-    E: PositiveFloat
-    nu: float
+    E: Modulus
+    nu: Expression
     hypothesis: Optional[Literal["plane_strain", "plane_stress"]] = None  # 2D only; None: plane strain in 2D
     viscoplastic: Optional[Viscoplastic] = None
+    region: Optional[Annotated[Any, AfterValidator(_region_names)]] = None
 
-    @model_validator(mode="after")
-    def _admissible_poisson_ratio(self):
-        _check_poisson_ratio("material.nu", self.nu, self.hypothesis)
+    def check_poisson_ratios(self, key: str) -> None:
+        """ValueError unless ν (a number) and the relaxed ν_inf are admissible for the hypothesis; ``key``
+        names the entry in the message ("material" or "material[i]")."""
+        if not isinstance(self.nu, str):
+            _check_poisson_ratio(f"{key}.nu", self.nu, self.hypothesis)
         if isinstance(self.viscoplastic, RelaxationSection):
-            _check_poisson_ratio("material.viscoplastic.nu_inf", self.viscoplastic.nu_inf, self.hypothesis)
-        return self
+            _check_poisson_ratio(f"{key}.viscoplastic.nu_inf", self.viscoplastic.nu_inf, self.hypothesis)
+
+    @property
+    def regions(self) -> list[str]:
+        """The names of the regions of the entry (empty: the whole body)."""
+        if self.region is None:
+            return []
+        return [str(name) for name in (self.region if isinstance(self.region, list) else [self.region])]
+
+
+def _material_kind(value) -> str:
+    return "list" if isinstance(value, list) else "table"
+
+
+#: ``[material]`` (one material, the whole body) or ``[[material]]`` (a list of entries by region).
+Materials = Annotated[Union[Annotated[MaterialSection, Tag("table")],
+                            Annotated[list[MaterialSection], Field(min_length=1), Tag("list")]],
+                      Discriminator(_material_kind)]
 
 
 def _stress_tensor(value):
@@ -384,7 +427,7 @@ class Case(_Section):
     """A whole case; ``base_dir`` resolves relative file names (the case file's folder)."""
 
     mesh: MeshSection
-    material: MaterialSection
+    material: Materials
     boundary: BoundarySection = BoundarySection()
     contact: Optional[ContactSection] = None
     initial: InitialSection = InitialSection()
@@ -392,6 +435,28 @@ class Case(_Section):
     solver: SolverSection = SolverSection()
     output: OutputSection = OutputSection()
     base_dir: Annotated[str, Field(exclude=True)] = "."
+
+    @model_validator(mode="after")
+    def _materials_by_region(self):
+        """Admissible Poisson ratios; a list of materials: each entry names its regions, and all give one
+        2D hypothesis."""
+        for key, entry in _material_keys(self):
+            entry.check_poisson_ratios(key)
+        if isinstance(self.material, list):
+            for i, entry in enumerate(self.material):
+                if entry.region is None and len(self.material) > 1:
+                    raise ValueError(f"material[{i}] has no region and there are {len(self.material)} materials: give "
+                                     f"each its material[{i}].region (a region of the mesh, or a list of them)")
+            hypotheses = {entry.hypothesis or "plane_strain" for entry in self.material}
+            if len(hypotheses) > 1:
+                raise ValueError(f"material: the entries give different hypotheses ({', '.join(sorted(hypotheses))}); "
+                                 f"plane strain or plane stress is one assumption for the whole 2D body")
+        return self
+
+    @property
+    def materials(self) -> list[MaterialSection]:
+        """The material entries: the single ``[material]`` as a list of one."""
+        return self.material if isinstance(self.material, list) else [self.material]
 
     @model_validator(mode="after")
     def _field_steps_in_range(self):
@@ -592,6 +657,16 @@ def _check_expressions(case: Case) -> None:
             parse_expression(value, ("x", "y", "z", "t"), where=f"boundary.body_force[{i}].value[{c}]")
     if case.contact is not None:
         parse_expression(case.contact.gap, ("x", "y", "z"), where="contact.gap")
+    for key, material in _material_keys(case):
+        parse_expression(material.E, ("x", "y", "z"), where=f"{key}.E")
+        parse_expression(material.nu, ("x", "y", "z"), where=f"{key}.nu")
+
+
+def _material_keys(case: Case) -> list[tuple[str, MaterialSection]]:
+    """(key, entry) of each material: "material" for the single table, "material[i]" in a list."""
+    if isinstance(case.material, list):
+        return [(f"material[{i}]", entry) for i, entry in enumerate(case.material)]
+    return [("material", case.material)]
 
 
 # --- error messages ------------------------------------------------------------------------------
@@ -609,6 +684,7 @@ _TYPE_WORDS = {
 _STIFFNESS_TAGS = ("power", "constant", "exponential")
 _VISCOPLASTIC_TAGS = ("perzyna", "relaxation")
 _LAW_TAGS = {"stiffness": _STIFFNESS_TAGS, "viscoplastic": _VISCOPLASTIC_TAGS}  # tagged unions by section name
+_FORM_TAGS = {"material": ("table", "list")}  # a section given as one table or a list of them
 
 
 def _dotted(loc) -> str:
@@ -619,11 +695,13 @@ def _dotted(loc) -> str:
 
 
 def _clean_loc(loc) -> tuple:
-    """Drop the discriminator tags pydantic inserts (contact.stiffness.power.beta -> contact.stiffness.beta)."""
+    """Drop the discriminator tags pydantic inserts (contact.stiffness.power.beta -> contact.stiffness.beta,
+    material.list.0.E -> material[0].E)."""
     cleaned = []
     for item in loc:
-        if cleaned and (item in _LAW_TAGS.get(cleaned[-1], ()) or (cleaned[-1] == "part" and item in ("str", "int"))):
-            continue  # a law's tag, or the member of the union str | int of a part name
+        tags = (*_LAW_TAGS.get(cleaned[-1], ()), *_FORM_TAGS.get(cleaned[-1], ())) if cleaned else ()
+        if item in tags or (cleaned and cleaned[-1] in ("part", "region") and item in ("str", "int")):
+            continue  # a law's or a form's tag, or the member of the union str | int of a part or region name
         cleaned.append(item)
     return tuple(cleaned)
 
@@ -638,6 +716,8 @@ def _describe(error: dict) -> str:
         return f"missing required value '{key}'"
     if kind == "value_error":
         message = str(ctx.get("error", error["msg"]))
+        if message.startswith("= "):  # "= <value>: ..." of a validator that does not know its key
+            return f"{key} {message}"
         return message if key in ("", "mesh", "material", "contact", "output") or message.startswith(key) else f"{key}: {message}"
     if kind in ("union_tag_invalid", "union_tag_not_found"):
         laws = ", ".join(f'"{t}"' for t in _LAW_TAGS.get(loc[-1] if loc else "", _STIFFNESS_TAGS))
@@ -667,11 +747,9 @@ def _show(value) -> str:
 
 
 def _law_tag(raw_loc) -> str | None:
-    """The law a tagged union was validated as (the tag pydantic inserts after "stiffness" etc.)."""
-    for before, item in zip(raw_loc, raw_loc[1:]):
-        if item in _LAW_TAGS.get(before, ()):
-            return item
-    return None
+    """The law a tagged union was validated as (the last tag pydantic inserts after "stiffness" etc.)."""
+    tags = [item for before, item in zip(raw_loc, raw_loc[1:]) if item in _LAW_TAGS.get(before, ())]
+    return tags[-1] if tags else None
 
 
 def _unknown_key(loc, law: str | None = None) -> str:
@@ -693,6 +771,7 @@ def _valid_keys(loc, law: str | None = None) -> list[str]:
                   for inner in _models_in(model.model_fields[item].annotation)]
     if law is not None and len(models) > 1:
         models = [model for model in models if law in typing.get_args(model.model_fields.get("law").annotation)] or models
+    models = list(dict.fromkeys(models))  # a section given as a table or a list of them: one model
     keys = {k for model in models for k, f in model.model_fields.items() if not f.exclude}
     return sorted(keys)
 

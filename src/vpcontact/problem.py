@@ -19,15 +19,16 @@ from skfem import Basis
 
 from . import mesh as meshes
 from .assembly import Density, ExpressionDensity, LoadVector, displacement_basis, stiffness, stress_force
-from .case import Case, _brief
+from .case import Case, _brief, _material_keys
 from .contact import (CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness, PositivePart,
                       Power, PowerStiffness, contact_surface, empty_surface)
 from .errors import CaseError, quoted
 from .expressions import parse_expression
-from .material import Elasticity, Perzyna, Relaxation
+from .material import Elasticity
+from .materials import Materials, body_materials
 from .results import check_memory
 from .rigid_modes import RigidModes
-from .space import component, coordinates
+from .space import CELLS, component, coordinates
 from .time_grid import TimeGrid
 
 
@@ -40,7 +41,7 @@ class Problem:
     case: Case
     mesh: meshes.Mesh
     basis: Basis
-    elasticity: Elasticity
+    materials: Materials  # the material of each element, ℰ per element and the case's 𝒢
     A: sp.csr_matrix  # the elastic stiffness on all dofs
     free: np.ndarray  # dofs not fixed by Dirichlet conditions
     loads: LoadVector
@@ -54,6 +55,11 @@ class Problem:
 
     def __post_init__(self):
         self.times = TimeGrid(self.case.time.T, self.case.time.steps)
+
+    @property
+    def elasticity(self) -> Elasticity:
+        """ℰ of (2.1): E, ν numbers for one homogeneous material, arrays over the elements otherwise."""
+        return self.materials.elasticity
 
     @property
     def k(self) -> float:
@@ -92,14 +98,14 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     meshed = time.perf_counter()
     dim = mesh.dim
     _check_dimension(case, dim)
-    elasticity = Elasticity(case.material.E, case.material.nu,
-                            (case.material.hypothesis or "plane_strain") if dim == 2 else None)
+    materials = body_materials(case, mesh)
     with np.errstate(all="ignore"):  # a stiffness that is not finite is reported below
         basis = displacement_basis(mesh)
-        A = stiffness(basis, elasticity)
+        A = stiffness(basis, materials.elasticity)
     if not np.all(np.isfinite(A.data)):
-        raise CaseError(f"material.E = {_brief(case.material.E)}: the stiffness matrix is not finite in float64 (the "
-                        f"moduli or the sizes of the triangles are out of its range); state them in other units")
+        moduli = ", ".join(f"{key}.E = {_brief(entry.E)}" for key, entry in _material_keys(case))
+        raise CaseError(f"{moduli}: the stiffness matrix is not finite in float64 (the moduli or the sizes of the "
+                        f"{CELLS[dim][2]} are out of its range); state them in other units")
 
     fixed = np.zeros(basis.N, dtype=bool)
     for item in case.boundary.dirichlet:
@@ -130,7 +136,7 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     initial_stress = np.zeros((dim, dim)) if case.initial.stress is None else np.array(case.initial.stress, dtype=float)
     law_name = "material.viscoplastic" if viscoplastic is None else "viscoplastic"
     if viscoplastic is None:
-        viscoplastic = _viscoplastic_law(case)
+        viscoplastic = materials.viscoplastic
     elif not callable(viscoplastic):
         raise CaseError(f"viscoplastic = {_brief(viscoplastic)}: expected a function G(sigma, strain) of arrays of "
                         f"shape (d, d, elements)")
@@ -140,7 +146,7 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     _check_first_history(basis, initial_stress, viscoplastic, law_name, case.time.T / case.time.steps)
     done = time.perf_counter()
     timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
-    return Problem(case, mesh, basis, elasticity, A, free, loads, surface, law, probe, viscoplastic, timings,
+    return Problem(case, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic, timings,
                    initial_stress=initial_stress)
 
 
@@ -174,9 +180,10 @@ def _check_dimension(case: Case, dim: int) -> None:
     if case.initial.stress is not None and len(case.initial.stress) != dim:
         raise CaseError(f"initial.stress is {len(case.initial.stress)} x {len(case.initial.stress)} and {where}: "
                         f"give a {dim} x {dim} table")
-    if dim == 3 and case.material.hypothesis is not None:
-        raise CaseError(f"material.hypothesis = \"{case.material.hypothesis}\" is a 2D reduction and {where} (3D "
-                        f"uses the full isotropic tensor): remove material.hypothesis")
+    for key, entry in _material_keys(case):
+        if dim == 3 and entry.hypothesis is not None:
+            raise CaseError(f"{key}.hypothesis = \"{entry.hypothesis}\" is a 2D reduction and {where} (3D uses the "
+                            f"full isotropic tensor): remove {key}.hypothesis")
     for i, item in enumerate(case.boundary.dirichlet):
         extra = [c for c in item.components or () if c not in names]
         if extra:
@@ -185,6 +192,7 @@ def _check_dimension(case: Case, dim: int) -> None:
     expressions = [(f"{key}[{c}]", source) for key, value in loads for c, source in enumerate(value)]
     if case.contact is not None:
         expressions.append(("contact.gap", case.contact.gap))
+    expressions += [(f"{key}.{name}", getattr(entry, name)) for key, entry in _material_keys(case) for name in ("E", "nu")]
     for key, source in expressions:
         unknown = parse_expression(source, ("x", "y", "z", "t"), where=key).depends_on - {*names, "t"}
         if unknown:
@@ -315,16 +323,6 @@ def _layer_parameter(name: str, value, minimum: float | None = None, *, surface:
                         f"({at}) ({wrong.sum()} of {surface.size} nodes): expected {expected} at every node of the "
                         f"contact part")
     return values.copy()
-
-
-def _viscoplastic_law(case: Case) -> Callable | None:
-    """𝒢 of ``material.viscoplastic`` (None: 𝒢 = 0)."""
-    v = case.material.viscoplastic
-    if v is None:
-        return None
-    if v.law == "perzyna":
-        return Perzyna(v.eta, v.yield_stress)
-    return Relaxation(v.mu, Elasticity(v.E_inf, v.nu_inf, case.material.hypothesis))
 
 
 def _check_contact_can_move(case: Case, mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):

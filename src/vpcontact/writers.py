@@ -7,7 +7,8 @@ place: a reader never sees half a file), ``summary.json`` last: a directory whos
 - ``history.csv``       one row per time step (``Result.columns``);
 - ``contact.csv``       one row per contact node and step;
 - ``fields/body.pvd``   displacement, stress, von Mises (and the viscoplastic history z when there is
-                        one) at the field steps (VTU files, ParaView);
+                        one) at the field steps, and each element's material (its index in the case's
+                        material list), E and ν (VTU files, ParaView);
 - ``fields/contact.pvd``  Γ3 with penetration, ξ, K, pressures, status, normal and contact force;
 - ``solution.npz``      the fields at the field steps as arrays (see ``write_solution``);
 - ``case.resolved.toml``  every value used, defaults included, with the versions as a header;
@@ -246,11 +247,14 @@ def _write_fields(result: Result, folder: Path) -> None:
     contact_points = _in_space(surface.coordinates.T)
     facets = [(facet_cells, surface.facets.T)]
     body, contact = [], []
+    materials = {"material": [problem.materials.owner.astype(np.int32)], "E": [np.array(problem.materials.E)],
+                 "nu": [np.array(problem.materials.nu)]}
     for step, fields in sorted(result.fields.items()):
         t = problem.times[step - 1]
         displacement = _in_space(fields.displacement)
         name = f"body_{step:05d}.vtu"
-        cell_data = {"stress": [_tensors_in_space(fields.stress, fields.stress33)], "von_mises": [fields.von_mises]}
+        cell_data = {"stress": [_tensors_in_space(fields.stress, fields.stress33)], "von_mises": [fields.von_mises],
+                     **materials}
         if fields.z is not None:
             cell_data["z"] = [_tensors_in_space(fields.z)]
         with replacing(folder / name) as temporary:
