@@ -266,6 +266,8 @@ def _check_history(state: InitialState, surface: ContactSurface) -> None:
 
 
 # --- a restart from a run directory ----------------------------------------------------------------
+#: The arrays of solution.npz a restart needs (besides the elements); ``xi``, ``contact_nodes`` are optional.
+_NEEDED = ("points", "steps", "times", "displacement", "stress")
 #: The largest solution.npz read (bytes): beyond, it is not one a run of vpcontact wrote for this mesh.
 MAX_SOLUTION_BYTES = 2**36
 
@@ -284,7 +286,8 @@ def read_run_state(case: Case, mesh: Mesh, surface: ContactSurface) -> RunState:
     cells = CELLS[mesh.dim][2]
     try:
         with np.load(path, allow_pickle=False) as data:
-            arrays = {key: data[key] for key in data.files}
+            arrays = {key: data[key] for key in ("points", cells, "steps", "times", "displacement", "stress",
+                                                 "contact_nodes", "xi") if key in data.files or key in _NEEDED}
         points, elements, steps, times = arrays["points"], arrays[cells], arrays["steps"], arrays["times"]
     except KeyError as error:
         raise CaseError(f"{where}: '{path}' has no array {error} (the case's mesh has {cells}): is it the solution "

@@ -315,9 +315,10 @@ def write_solution(result: Result, path: Path) -> None:
         arrays["z"] = np.array([result.fields[s].z for s in steps])
     surface = result.problem.surface
     if surface.size:
+        ends = np.flatnonzero(result.ends_step())
+        row_of_step = dict(zip(result.series("step")[ends].tolist(), ends.tolist()))
         arrays["contact_nodes"] = surface.nodes
-        arrays["xi"] = np.array([result.contact["xi"][_end_of_step_row(result, s)] for s in steps]).reshape(
-            len(steps), surface.size)
+        arrays["xi"] = np.array([result.contact["xi"][row_of_step[s]] for s in steps]).reshape(len(steps), surface.size)
     with replacing(path) as temporary:
         np.savez_compressed(temporary, **arrays)
 
