@@ -289,9 +289,9 @@ def _check_first_history(basis: Basis, initial: InitialState, written, strain0: 
         z = z0 + k * np.asarray(rate, dtype=float)
         force = stress_force(basis, z) if np.all(np.isfinite(z)) else None
     if force is None:
-        raise CaseError(f"{law_name}: the history after the first step, initial.stress - E strain(initial.displacement) "
-                        f"+ k {call}, is not finite: is the time step k = {k:g} small against the law's relaxation "
-                        f"time?")
+        elastic = " - E strain(initial.displacement)" if initial.moves else ""
+        raise CaseError(f"{law_name}: the history after the first step, initial.stress{elastic} + k {call}, is not "
+                        f"finite: is the time step k = {k:g} small against the law's relaxation time?")
     if not np.all(np.isfinite(force)):
         source = initial.names["stress"]
         if source == "initial.stress":
