@@ -396,8 +396,8 @@ BAD = [
      "initial.stress = [[1.0, 2.0], [2.0]]: expected a d x d table, [[sxx, sxy], [sxy, syy]] in 2D or "
      "[[sxx, sxy, sxz], [sxy, syy, syz], [sxz, syz, szz]] in 3D"),
     ({"initial.stress": [[1.0, 0.0], [0.0, math.nan]]},
-     "initial.stress = [[1.0, 0.0], [0.0, nan]]: expected finite numbers, got nan"),
-    ({"initial.strain": 1.0}, "unknown key 'initial.strain' (valid keys: stress)"),
+     "initial.stress = [[1.0, 0.0], [0.0, nan]]: expected finite numbers or expressions in the coordinates, got nan"),
+    ({"initial.strain": 1.0}, "unknown key 'initial.strain' (valid keys: displacement, from_run, step, stress, xi)"),
 ]
 
 

@@ -253,28 +253,63 @@ Materials = Annotated[Union[Annotated[MaterialSection, Tag("table")],
                       Discriminator(_material_kind)]
 
 
+def _source(entry):
+    """An entry of initial.stress as it was written, for the symmetry check: a number by its value (a
+    string that is a number too), an expression by its text without spaces."""
+    if isinstance(entry, str):
+        text = "".join(entry.split())
+        try:
+            return float(text)
+        except ValueError:
+            return text
+    return float(entry)
+
+
 def _stress_tensor(value):
-    """A symmetric d × d tensor (d = 2 or 3) of finite numbers, e.g. [[sxx, sxy], [sxy, syy]]."""
+    """A d × d table (d = 2 or 3), e.g. [[sxx, sxy], [sxy, syy]], whose entries are finite numbers or
+    expressions in the coordinates (σ_0 per element, evaluated at the centroids), symmetric as written."""
     if not (isinstance(value, list) and len(value) in (2, 3)
             and all(isinstance(row, list) and len(row) == len(value) for row in value)):
         raise ValueError(f"initial.stress = {_brief(value)}: expected a d x d table, [[sxx, sxy], [sxy, syy]] in 2D "
                          f"or [[sxx, sxy, sxz], [sxy, syy, syz], [sxz, syz, szz]] in 3D")
     for row in value:
         for entry in row:
-            if isinstance(entry, bool) or not isinstance(entry, (int, float)) or not _finite(entry):
-                raise ValueError(f"initial.stress = {_brief(value)}: expected finite numbers, got {_brief(entry)}")
+            if isinstance(entry, bool) or not isinstance(entry, (int, float, str)) or (
+                    not isinstance(entry, str) and not _finite(entry)):
+                raise ValueError(f"initial.stress = {_brief(value)}: expected finite numbers or expressions in the "
+                                 f"coordinates, got {_brief(entry)}")
     for i in range(len(value)):
         for j in range(i + 1, len(value)):
-            if value[i][j] != value[j][i]:
+            if _source(value[i][j]) != _source(value[j][i]):
                 raise ValueError(f"initial.stress = {_brief(value)}: must be symmetric (stress[{i}][{j}] = "
                                  f"{_brief(value[i][j])}, stress[{j}][{i}] = {_brief(value[j][i])})")
-    return [[float(entry) for entry in row] for row in value]
+    return [[entry if isinstance(entry, str) else float(entry) for entry in row] for row in value]
 
 
 class InitialSection(_Section):
-    """Initial data (2.7): u_0 = 0 and a uniform initial stress σ_0 (default 0; d × d)."""
+    """Initial data (2.7), (2.21): the displacement u_0 (d expressions in the coordinates, at the nodes),
+    the stress σ_0 (a d × d table of expressions, per element) and the history ξ_0 of the layer (an
+    expression, at the contact nodes), each 0 by default; or, instead of u_0 and σ_0, the state of
+    another run at one of its field steps (``from_run``, ``step``: a restart)."""
 
     stress: Optional[Annotated[Any, AfterValidator(_stress_tensor)]] = None
+    displacement: Optional[Annotated[list[Expression], Field(min_length=2, max_length=3)]] = None
+    xi: Optional[Expression] = None
+    from_run: Optional[str] = None  # a run directory written by ``vpcontact run`` (its solution.npz)
+    step: Optional[Annotated[int, Field(ge=1)]] = None  # the field step of from_run to start from
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        if (self.from_run is None) != (self.step is None):
+            given, missing = ("from_run", "step") if self.step is None else ("step", "from_run")
+            raise ValueError(f"initial.{given} needs initial.{missing} (a restart from the field step initial.step "
+                             f"of the run directory initial.from_run)")
+        if self.from_run is not None:
+            for key in ("displacement", "stress"):
+                if getattr(self, key) is not None:
+                    raise ValueError(f"initial.{key} and initial.from_run exclude each other (the restart takes "
+                                     f"u_0 and sigma_0 from the run): remove one")
+        return self
 
 
 class DirichletSection(_Section):
@@ -371,11 +406,28 @@ class ContactSection(_Section):
         return self
 
 
+def check_time_span(start: float, T: float, steps: int, where: str) -> None:
+    """ValueError unless t_0 = ``start`` (named ``where``) is before T by steps of a positive float64 length."""
+    if not T > start:
+        raise ValueError(f"time.T = {_brief(T)} must be > {where} = {_brief(start)}")
+    if not (math.isfinite(T - start) and (T - start) / steps > 0):
+        raise ValueError(f"{where} = {_brief(start)}: the steps (T - {where}) / time.steps are not positive finite "
+                         f"numbers in float64")
+
+
 class TimeSection(_Section):
-    """[0, T] in ``steps`` equal steps k = T / steps."""
+    """[t_0, T] in ``steps`` equal steps k = (T − t_0) / steps; t_0 = ``start`` (default 0, or the time of
+    the step a restart starts from, initial.from_run)."""
 
     T: PositiveFloat
     steps: Annotated[int, Field(ge=1, le=MAX_STEPS)]
+    start: Optional[float] = None
+
+    @model_validator(mode="after")
+    def _start_before_end(self):
+        if self.start is not None:
+            check_time_span(self.start, self.T, self.steps, "time.start")
+        return self
 
 
 class SolverSection(_Section):
@@ -469,12 +521,19 @@ class Case(_Section):
     def mesh_path(self) -> Path | None:
         return None if self.mesh.file is None else Path(self.base_dir) / self.mesh.file
 
+    @property
+    def from_run_path(self) -> Path | None:
+        """initial.from_run, relative to the case file's folder."""
+        return None if self.initial.from_run is None else Path(self.base_dir) / self.initial.from_run
+
     def resolved(self) -> dict:
         """Every value used, defaults included (the content of case.resolved.toml); a mesh file by its
         absolute path, so that the resolved case runs again from any folder (its run directory too)."""
         data = self.model_dump(mode="python", exclude_none=True)
         if self.mesh.file is not None:
             data["mesh"]["file"] = os.path.abspath(self.mesh_path)
+        if self.initial.from_run is not None:
+            data["initial"]["from_run"] = os.path.abspath(self.from_run_path)
         return data
 
     def to_toml(self) -> str:
@@ -660,6 +719,14 @@ def _check_expressions(case: Case) -> None:
     for key, material in _material_keys(case):
         parse_expression(material.E, ("x", "y", "z"), where=f"{key}.E")
         parse_expression(material.nu, ("x", "y", "z"), where=f"{key}.nu")
+    initial = case.initial
+    for i, row in enumerate(initial.stress or ()):
+        for j, value in enumerate(row):
+            parse_expression(value, ("x", "y", "z"), where=f"initial.stress[{i}][{j}]")
+    for i, value in enumerate(initial.displacement or ()):
+        parse_expression(value, ("x", "y", "z"), where=f"initial.displacement[{i}]")
+    if initial.xi is not None:
+        parse_expression(initial.xi, ("x", "y", "z"), where="initial.xi")
 
 
 def _material_keys(case: Case) -> list[tuple[str, MaterialSection]]:

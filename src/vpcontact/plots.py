@@ -323,7 +323,8 @@ def time_series(result, columns=TIME_SERIES):
         ax.set_ylabel(column)
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("t")
-    axes[0].set_xlim(0.0, 1.02 * float(result.problem.times[-1]))  # room for the last marker
+    start, end = result.problem.times.start, float(result.problem.times[-1])
+    axes[0].set_xlim(start, end + 0.02 * (end - start))  # room for the last marker
     figure.suptitle(f"History of the run ({result.status}, {result.completed_steps} of {len(result.problem.times)} "
                     f"steps)", fontsize=10)
     return figure

@@ -18,12 +18,14 @@ import scipy.sparse as sp
 from skfem import Basis
 
 from . import mesh as meshes
-from .assembly import Density, ExpressionDensity, LoadVector, displacement_basis, stiffness, stress_force
+from .assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
+                       stress_force)
 from .case import Case, _brief, _material_keys
 from .contact import (CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness, PositivePart,
                       Power, PowerStiffness, contact_surface, empty_surface)
 from .errors import CaseError, quoted
 from .expressions import parse_expression
+from .initial import InitialState, initial_state
 from .material import Elasticity
 from .materials import Materials, body_materials
 from .results import check_memory
@@ -50,11 +52,12 @@ class Problem:
     probe: int | None  # index of the reported contact node
     viscoplastic: Callable | None = None  # 𝒢(σ, ε) over arrays (d, d, nelements); None: 𝒢 = 0
     timings: dict = field(default_factory=dict)  # seconds: mesh, assembly, build
-    initial_stress: np.ndarray | None = None  # σ_0 (uniform, d × d; None: 0); u_0 = 0
+    initial: InitialState | None = None  # u_0, σ_0, ξ_0 and t_0 (build_problem sets it)
     times: TimeGrid = field(init=False)  # t_1, …, t_steps
 
     def __post_init__(self):
-        self.times = TimeGrid(self.case.time.T, self.case.time.steps)
+        start = 0.0 if self.initial is None else self.initial.start
+        self.times = TimeGrid(self.case.time.T, self.case.time.steps, start)
 
     @property
     def elasticity(self) -> Elasticity:
@@ -63,7 +66,8 @@ class Problem:
 
     @property
     def k(self) -> float:
-        return self.case.time.T / self.case.time.steps
+        """The time step (T − t_0) / steps."""
+        return self.times.k
 
     def __repr__(self) -> str:
         """One line: the sizes (not the operators)."""
@@ -74,7 +78,8 @@ class Problem:
 
 def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Callable | None = None,
                   tractions: Mapping | None = None, body_force: Density | None = None,
-                  viscoplastic: Callable | None = None) -> Problem:
+                  viscoplastic: Callable | None = None, initial_displacement=None, initial_stress=None,
+                  initial_xi=None) -> Problem:
     """Assemble the problem of ``case``; the keyword arguments replace parts of the case by Python objects:
 
     - ``p``, ``stiffness_law``: the laws p(r) and K(ξ) of the contact, vectorized over NumPy arrays; an
@@ -85,9 +90,13 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     - ``body_force``: f(x, y, t) -> (fx, fy) (in 3D f(x, y, z, t) -> (fx, fy, fz)) replaces the case's
       body forces;
     - ``viscoplastic``: 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (d, d, nelements) (it
-      replaces ``material.viscoplastic``).
+      replaces ``material.viscoplastic``);
+    - ``initial_displacement`` (nodes, d), ``initial_stress`` (elements, d, d) or (d, d) (uniform),
+      ``initial_xi`` (contact nodes,): arrays of the initial state u_0, σ_0, ξ_0 that replace the case's
+      (``initial.*``, see :mod:`vpcontact.initial`; checked alike: shapes, finite, u_0 in V and admissible
+      on Γ3, ξ_0 ≥ 0).
 
-    Each is tried before the run (a law at 0 and 10⁻³, a load at every step time, 𝒢 at (σ_0, 0)): one
+    Each is tried before the run (a law at 0 and 10⁻³, a load at every step time, 𝒢 at (σ_0, ε(u_0))): one
     that is not callable, returns the wrong shape or a value that is not finite is a CaseError."""
     started = time.perf_counter()
     if case.contact is None and (p is not None or stiffness_law is not None):
@@ -133,7 +142,10 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     _check_rigid_motions(mesh, basis, free, surface)
 
     elements = mesh.mesh.t.shape[1]
-    initial_stress = np.zeros((dim, dim)) if case.initial.stress is None else np.array(case.initial.stress, dtype=float)
+    initial = initial_state(case, mesh, basis, surface, law, displacement=initial_displacement, stress=initial_stress,
+                            xi=initial_xi)
+    strain0 = element_strain(basis, initial.dofs(basis))
+    z0 = initial.stress - materials.elasticity.stress(strain0)
     law_name = "material.viscoplastic" if viscoplastic is None else "viscoplastic"
     if viscoplastic is None:
         viscoplastic = materials.viscoplastic
@@ -141,13 +153,14 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         raise CaseError(f"viscoplastic = {_brief(viscoplastic)}: expected a function G(sigma, strain) of arrays of "
                         f"shape (d, d, elements)")
     check_memory(case, mesh.mesh.p.shape[1], elements, surface.size,
-                 history=viscoplastic is not None or bool(np.any(initial_stress != 0.0)), dim=dim)
-    loads.check(TimeGrid(case.time.T, case.time.steps))
-    _check_first_history(basis, initial_stress, viscoplastic, law_name, case.time.T / case.time.steps)
+                 history=viscoplastic is not None or bool(np.any(z0 != 0.0)), dim=dim)
+    grid = TimeGrid(case.time.T, case.time.steps, initial.start)
+    loads.check(grid)
+    _check_first_history(basis, initial, case.initial.stress, strain0, z0, viscoplastic, law_name, grid.k)
     done = time.perf_counter()
     timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
     return Problem(case, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic, timings,
-                   initial_stress=initial_stress)
+                   initial=initial)
 
 
 def _make_mesh(case: Case) -> meshes.Mesh:
@@ -174,6 +187,7 @@ def _check_dimension(case: Case, dim: int) -> None:
     vectors = list(loads)
     if case.contact is not None:
         vectors += [("contact.probe", case.contact.probe), ("contact.normal", case.contact.normal)]
+    vectors.append(("initial.displacement", case.initial.displacement))
     for key, value in vectors:
         if isinstance(value, list) and len(value) != dim:
             raise CaseError(f"{key} has {len(value)} components and {where}: {give}")
@@ -193,6 +207,12 @@ def _check_dimension(case: Case, dim: int) -> None:
     if case.contact is not None:
         expressions.append(("contact.gap", case.contact.gap))
     expressions += [(f"{key}.{name}", getattr(entry, name)) for key, entry in _material_keys(case) for name in ("E", "nu")]
+    initial = case.initial
+    expressions += [(f"initial.displacement[{c}]", source) for c, source in enumerate(initial.displacement or ())]
+    expressions += [(f"initial.stress[{i}][{j}]", source) for i, row in enumerate(initial.stress or ())
+                    for j, source in enumerate(row)]
+    if initial.xi is not None:
+        expressions.append(("initial.xi", initial.xi))
     for key, source in expressions:
         unknown = parse_expression(source, ("x", "y", "z", "t"), where=key).depends_on - {*names, "t"}
         if unknown:
@@ -259,27 +279,32 @@ def _check_returned(name: str, call: str, values, shape: tuple) -> None:
         raise CaseError(f"{name}: {call} is not finite ({array.ravel()[~np.isfinite(array.ravel())][0]})")
 
 
-def _check_first_history(basis: Basis, initial_stress: np.ndarray, G: Callable | None, law_name: str,
-                         k: float) -> None:
-    """Refuse initial data whose first step cannot be finite: 𝒢(σ_0, 0) (of the shape of σ, finite), the
-    history z_1 = σ_0 + k 𝒢(σ_0, 0) of (2.28) and its nodal forces Bᵀz_1 in the right-hand side."""
-    if G is None and not np.any(initial_stress != 0.0):
+def _check_first_history(basis: Basis, initial: InitialState, written, strain0: np.ndarray, z0: np.ndarray,
+                         G: Callable | None, law_name: str, k: float) -> None:
+    """Refuse initial data whose first step cannot be finite: 𝒢(σ_0, ε(u_0)) (of the shape of σ, finite),
+    the history z_1 = σ_0 − ℰε(u_0) + k 𝒢(σ_0, ε(u_0)) of (2.28) and its nodal forces Bᵀz_1 in the
+    right-hand side. ``written``: initial.stress as the case gives it (for the message)."""
+    if G is None and not np.any(z0 != 0.0):
         return
-    sigma = np.repeat(initial_stress[:, :, None], basis.mesh.t.shape[1], axis=2)
+    sigma = initial.stress
     rate = 0.0
+    call = "G(initial.stress, 0)" if not initial.moves else "G(initial.stress, strain(initial.displacement))"
     if G is not None:
         with np.errstate(all="ignore"):  # a value that is not finite is reported
-            rate = G(sigma.copy(), np.zeros_like(sigma))
-        _check_returned(law_name, "G(initial.stress, 0)", rate, sigma.shape)
+            rate = G(sigma.copy(), strain0.copy())
+        _check_returned(law_name, call, rate, sigma.shape)
     with np.errstate(all="ignore"):  # an overflow is reported below
-        z = sigma + k * np.asarray(rate, dtype=float)
+        z = z0 + k * np.asarray(rate, dtype=float)
         force = stress_force(basis, z) if np.all(np.isfinite(z)) else None
     if force is None:
-        raise CaseError(f"{law_name}: the history after the first step, initial.stress + k G(initial.stress, 0), is "
-                        f"not finite: is the time step k = {k:g} small against the law's relaxation time?")
+        elastic = " - E strain(initial.displacement)" if initial.moves else ""
+        raise CaseError(f"{law_name}: the history after the first step, initial.stress{elastic} + k {call}, is not "
+                        f"finite: is the time step k = {k:g} small against the law's relaxation time?")
     if not np.all(np.isfinite(force)):
-        raise CaseError(f"initial.stress = {_brief(initial_stress.tolist())}: its nodal forces are not finite in "
-                        f"float64; state the stresses in other units")
+        source = initial.names["stress"]
+        if source == "initial.stress":
+            source += f" = {_brief(written)}"
+        raise CaseError(f"{source}: its nodal forces are not finite in float64; state the stresses in other units")
 
 
 def _p_law(case: Case):

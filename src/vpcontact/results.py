@@ -73,8 +73,8 @@ def field_step_numbers(field_steps, steps: int) -> Collection[int]:
 class Fields:
     """Displacement at the nodes (nnodes, d); per element: the stress (nelements, d, d), in 2D also the
     out-of-plane σ33 of the elastic response (None in 3D), and the von Mises stress of the 3D tensor;
-    with a viscoplastic law or an initial stress, the history z (nelements, d, d) of the step, so that
-    stress = ℰε(u) + z (None otherwise: z = 0)."""
+    with a viscoplastic law or initial data with z_0 = σ_0 − ℰε(u_0) ≠ 0, the history z (nelements, d, d)
+    of the step, so that stress = ℰε(u) + z (None otherwise: z = 0)."""
 
     displacement: np.ndarray
     stress: np.ndarray

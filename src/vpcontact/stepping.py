@@ -1,12 +1,15 @@
 """The quasistatic time loop (Sect. 3 of the paper, DESIGN §2).
 
-At t_n = n k:
+At t_n = t_0 + n k (k = (T − t_0) / steps, t_0 = ``time.start``, default 0):
     z_n   = σ_0 − ℰε(u_0) + Σ_{j=0}^{n−1} k 𝒢(σ_j, ε(u_j))   (explicit viscoplastic history, per element)
     b_n   = F(t_n) − Bᵀ z_n
     (u_n, λ_n) solves the step problem with ξ^{n−1}             (one solver call)
     ξ_n   = ξ_{n−1} + k (d_n)⁺                                  (implicit rectangle rule for (2.15))
     σ_n   = ℰε(u_n) + z_n                                       (the discrete (2.28))
-with u_0 = 0 and a uniform σ_0 (``problem.initial_stress``), so z_1 = σ_0 + k 𝒢(σ_0, 0). The bulk
+This is (2.28) as written, σ(t) = ℰε(u(t)) + ∫_0^t 𝒢(σ, ε(u)) ds + σ_0 − ℰε(u_0): z_0 = σ_0 − ℰε(u_0)
+and the j = 0 term is k 𝒢(σ_0, ε(u_0)), so z_1 = σ_0 − ℰε(u_0) + k 𝒢(σ_0, ε(u_0)); ξ starts from ξ_0
+(``problem.initial``: u_0 per node, σ_0 per element, ξ_0 per contact node, see :mod:`vpcontact.initial`;
+zero by default). The first Newton iteration starts from u_0 (from zero when u_0 = 0). The bulk
 operator is the same at every step; with 𝒢 ≠ 0, u_n is computed at every step (σ_n feeds z_{n+1}).
 
 Step cuts: when the Newton iteration of a step fails (iteration limit, non-finite iterates, a
@@ -87,13 +90,27 @@ class TimeLoop:
         self._created = started
         self.setup_time = clock.perf_counter() - started
         self.earlier_time, self.earlier_solves = 0.0, 0  # wall time and linear solves of earlier sessions (resumed)
-        nelements = problem.mesh.mesh.t.shape[1]
-        sigma0 = np.repeat(np.asarray(problem.initial_stress, dtype=float)[:, :, None], nelements, axis=2)
-        G = problem.viscoplastic
-        history = G is not None or np.any(sigma0 != 0.0)  # z ≠ 0 possible: the right-hand side carries Bᵀz
-        rate = viscoplastic_rate(G, sigma0, np.zeros_like(sigma0)) if G is not None else None  # the j = 0 term
-        self.state = LoopState(0, np.zeros(surface.size), sigma0 if history else None, rate, None)
+        self.state = self._initial_state()
         self._u = np.zeros(problem.basis.N)
+
+    def _initial_state(self) -> LoopState:
+        """The level t_0: ξ_0, z_0 = σ_0 − ℰε(u_0) and 𝒢(σ_0, ε(u_0)) (the j = 0 term of z), and u_0 with
+        its penetrations as the start of the first Newton iteration (none when u_0 = 0)."""
+        problem = self.problem
+        initial = problem.initial
+        u0 = initial.dofs(problem.basis)
+        strain0 = element_strain(problem.basis, u0)
+        z0 = initial.stress - problem.elasticity.stress(strain0)
+        G = problem.viscoplastic
+        history = G is not None or np.any(z0 != 0.0)  # z ≠ 0 possible: the right-hand side carries Bᵀz
+        rate = viscoplastic_rate(G, initial.stress, strain0) if G is not None else None  # the j = 0 term
+        start = None
+        if initial.moves:
+            surface = problem.surface
+            d0 = surface.operator @ u0 - surface.gap0
+            start = StepSolution(u0[problem.free], np.zeros(surface.size), d0, np.zeros(surface.size, dtype=bool), 0,
+                                 np.nan, np.nan, True)
+        return LoopState(0, initial.xi.copy(), z0 if history else None, rate, start)
 
     # --- the loop ---------------------------------------------------------------------------------
     def run(self, *, progress: bool = False, after_step: Callable[["TimeLoop"], None] | None = None,
@@ -108,7 +125,7 @@ class TimeLoop:
                 reason = stop() if stop is not None else None
                 if reason:
                     result.status = "interrupted"
-                    result.message = (f"{reason} after step {n - 1} (t = {times[n - 2] if n > 1 else 0.0:g}) "
+                    result.message = (f"{reason} after step {n - 1} (t = {times[n - 2] if n > 1 else times.start:g}) "
                                       f"of {len(times)}")
                     break
                 self._substep = 0

@@ -200,11 +200,12 @@ def _with_field_times(base: Path, overrides: dict, times: list[float], run_id: s
         raise CaseError(f"run '{run_id}': {error}") from None
     if not times:
         return overrides
-    k = case.time.T / case.time.steps
+    start = case.time.start or 0.0  # t_n = t_0 + n k
+    k = (case.time.T - start) / case.time.steps
     steps = []
     for t in times:
-        n = round(t / k)
-        if not (1 <= n <= case.time.steps and math.isclose(n * k, t, rel_tol=1e-9, abs_tol=1e-12)):
+        n = round((t - start) / k)
+        if not (1 <= n <= case.time.steps and math.isclose(start + n * k, t, rel_tol=1e-9, abs_tol=1e-12)):
             raise CaseError(f"run '{run_id}': compare time {t:g} is not a time step (k = {k:g}, T = {case.time.T:g})")
         steps.append(n)
     fields = case.output.field_steps

@@ -1,4 +1,4 @@
-"""The time grid of a run: t_n = n k, n = 1, …, steps (k = T / steps), computed when asked for."""
+"""The time grid of a run: t_n = t_0 + n k, n = 1, …, steps (k = (T − t_0) / steps), computed when asked for."""
 
 from __future__ import annotations
 
@@ -9,20 +9,21 @@ import numpy as np
 
 
 class TimeGrid(Sequence):
-    """The step times t_n = n k, n = 1, …, steps, with t_steps = T exactly (bitwise the values of
-    ``np.linspace(0, T, steps + 1)[1:]``), computed when asked for: a grid of 10⁸ steps costs nothing.
+    """The step times t_n = t_0 + n k, n = 1, …, steps, with t_steps = T exactly (bitwise the values of
+    ``np.linspace(t_0, T, steps + 1)[1:]``), computed when asked for: a grid of 10⁸ steps costs nothing.
+    t_0 = ``start`` (default 0: t_n = n k).
 
     Indexing gives t_n at index n − 1 (a NumPy float; negative indices count from the end), slicing and
     ``np.asarray`` give arrays, :meth:`at` gives t_n for an array of step numbers n.
     """
 
-    def __init__(self, T: float, steps: int):
-        self.T, self.steps, self.k = T, steps, T / steps
+    def __init__(self, T: float, steps: int, start: float = 0.0):
+        self.T, self.steps, self.start, self.k = T, steps, start, (T - start) / steps
 
     def at(self, n) -> np.ndarray:
         """t_n for step numbers n (an int or an array of ints in 1, …, steps)."""
         n = np.asarray(n)
-        return np.where(n == self.steps, self.T, n * self.k)
+        return np.where(n == self.steps, self.T, self.start + n * self.k)
 
     def __len__(self) -> int:
         return self.steps
@@ -44,4 +45,5 @@ class TimeGrid(Sequence):
         return self[:].astype(dtype or float)
 
     def __repr__(self) -> str:
-        return f"TimeGrid(T={self.T!r}, steps={self.steps})"
+        start = f", start={self.start!r}" if self.start else ""
+        return f"TimeGrid(T={self.T!r}, steps={self.steps}{start})"

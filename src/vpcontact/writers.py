@@ -10,7 +10,8 @@ place: a reader never sees half a file), ``summary.json`` last: a directory whos
                         one) at the field steps, and each element's material (its index in the case's
                         material list), E and ν (VTU files, ParaView);
 - ``fields/contact.pvd``  Γ3 with penetration, ξ, K, pressures, status, normal and contact force;
-- ``solution.npz``      the fields at the field steps as arrays (see ``write_solution``);
+- ``solution.npz``      the fields at the field steps as arrays, ξ too (see ``write_solution``): what a
+                        restart (``initial.from_run``) starts from;
 - ``case.resolved.toml``  every value used, defaults included, with the versions as a header;
 - ``figures/*.png``     with ``output.figures``, at the end of a complete or failed run: the contact
                         pressure, the deformed body and the history (see :mod:`vpcontact.plots`).
@@ -305,7 +306,9 @@ def write_solution(result: Result, path: Path) -> None:
     """solution.npz: ``points`` (d, nnodes), the elements by their type, ``triangles`` (3, nelements) in
     2D or ``tetrahedra`` (4, nelements) in 3D, ``steps`` (s,), ``times`` (s,), ``displacement``
     (s, nnodes, d), ``stress`` (s, nelements, d, d) at the s field steps; with a viscoplastic law or an
-    initial stress also ``z`` (s, nelements, d, d), the history of (2.28): stress = ℰε(u) + z."""
+    initial stress also ``z`` (s, nelements, d, d), the history of (2.28): stress = ℰε(u) + z; with a
+    contact part also ``contact_nodes`` (m,), the node indices of Γ3, and ``xi`` (s, m), the layer's
+    history ξ there. A run restarts from one of these steps with ``initial.from_run``."""
     steps = sorted(result.fields)
     mesh = result.problem.mesh.mesh
     arrays = dict(points=mesh.p, steps=np.array(steps), **{CELLS[result.dim][2]: mesh.t},
@@ -314,6 +317,12 @@ def write_solution(result: Result, path: Path) -> None:
                   stress=np.array([result.fields[s].stress for s in steps]))
     if steps and result.fields[steps[0]].z is not None:
         arrays["z"] = np.array([result.fields[s].z for s in steps])
+    surface = result.problem.surface
+    if surface.size:
+        ends = np.flatnonzero(result.ends_step())
+        row_of_step = dict(zip(result.series("step")[ends].tolist(), ends.tolist()))
+        arrays["contact_nodes"] = surface.nodes
+        arrays["xi"] = np.array([result.contact["xi"][row_of_step[s]] for s in steps]).reshape(len(steps), surface.size)
     with replacing(path) as temporary:
         np.savez_compressed(temporary, **arrays)
 

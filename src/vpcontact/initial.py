@@ -1,0 +1,327 @@
+"""The initial state of a run (2.7), (2.21): u_0 at the nodes, σ_0 per element, ξ_0 at the contact nodes
+and the start time t_0.
+
+Where each comes from, the first that applies:
+
+1. the arrays of the Python API (``build_problem(..., initial_displacement=, initial_stress=,
+   initial_xi=)``);
+2. a restart, ``initial.from_run`` at ``initial.step``: u_0, σ_0 and ξ_0 of that field step of the run's
+   ``solution.npz`` (the mesh and the contact nodes must be the same); t_0 is the time of that step
+   unless ``time.start`` is given;
+3. the case's expressions in the coordinates: ``initial.displacement`` at the nodes, ``initial.stress``
+   at the element centroids, ``initial.xi`` at the contact nodes;
+4. zero (t_0 = ``time.start``, default 0).
+
+u_0 must lie in V: zero on the Dirichlet components (values within rounding of zero, 1e-12 of the
+largest |u_0|, are set to 0) and admissible on Γ3, u_0·ν − g0 ≤ g at every contact node (to the
+solver's complementarity tolerance, ``solver.tolerance`` × the body's size: the state a run reached is
+admissible); ξ_0 ≥ 0; everything finite. A refusal is a CaseError naming the worst node or element.
+"""
+
+from __future__ import annotations
+
+import zipfile
+from dataclasses import dataclass
+
+import numpy as np
+from skfem import Basis
+
+from .case import Case, _brief, check_time_span
+from .contact import ContactLaw, ContactSurface
+from .errors import CaseError, quoted
+from .expressions import parse_expression
+from .inputs import check_regular_file
+from .mesh import Mesh
+from .space import CELLS, component, coordinates
+
+#: |u_0| below this fraction of the largest |u_0| is rounding: such values on a Dirichlet component are 0.
+ROUNDING = 1e-12
+
+
+@dataclass(repr=False)
+class InitialState:
+    """u_0 (nnodes, d), σ_0 (d, d, nelements), ξ_0 (m,) and t_0 of a run; ``names``: how the messages
+    name the source of each field (a case key, an argument of the API, or the run restarted from)."""
+
+    displacement: np.ndarray
+    stress: np.ndarray
+    xi: np.ndarray
+    start: float
+    names: dict
+
+    def __repr__(self) -> str:
+        return (f"InitialState(displacement{self.displacement.shape}, stress{self.stress.shape}, xi{self.xi.shape}, "
+                f"start={self.start!r})")
+
+    def dofs(self, basis: Basis) -> np.ndarray:
+        """u_0 as a vector of the basis' dofs."""
+        u = np.zeros(basis.N)
+        u[basis.nodal_dofs] = self.displacement.T
+        return u
+
+    @property
+    def moves(self) -> bool:
+        """Is u_0 ≠ 0?"""
+        return bool(np.any(self.displacement != 0.0))
+
+
+@dataclass
+class RunState:
+    """A field step of a run directory: u, σ (as stored in solution.npz), ξ (None: not stored) and t."""
+
+    displacement: np.ndarray  # (nnodes, d)
+    stress: np.ndarray  # (nelements, d, d)
+    xi: np.ndarray | None  # (m,)
+    time: float
+
+
+def initial_state(case: Case, mesh: Mesh, basis: Basis, surface: ContactSurface, law: ContactLaw, *,
+                  displacement=None, stress=None, xi=None) -> InitialState:
+    """The checked initial state of ``case`` (see the module's docstring); ``displacement``, ``stress``,
+    ``xi``: arrays of the API that replace the case's."""
+    d, nodes, elements = mesh.dim, mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
+    given = case.initial
+    names = {"displacement": "initial.displacement", "stress": "initial.stress", "xi": "initial.xi"}
+    start = case.time.start
+    if given.from_run is not None:
+        run = read_run_state(case, mesh, surface)
+        label = f"initial.from_run = {quoted(given.from_run)} at step {given.step}"
+        u0, sigma0 = run.displacement, np.moveaxis(run.stress, 0, -1)
+        names.update(displacement=f"{label} (u)", stress=f"{label} (stress)")
+        if start is None:
+            start = run.time
+        if run.xi is not None and given.xi is not None:
+            raise CaseError(f"initial.xi and {label}: the run's solution.npz holds xi, which the restart takes; "
+                            f"remove initial.xi")
+        if run.xi is None and surface.size and given.xi is None:
+            raise CaseError(f"{label}: the run's solution.npz holds no xi (a run without contact, or written by an "
+                            f"earlier vpcontact): give the layer's history initial.xi (e.g. 0)")
+        xi0 = run.xi if run.xi is not None else _at_contact_nodes(given.xi, surface)
+        if run.xi is not None:
+            names["xi"] = f"{label} (xi)"
+    else:
+        u0 = _at_nodes(given.displacement, mesh)
+        sigma0 = _at_centroids(given.stress, mesh)
+        xi0 = _at_contact_nodes(given.xi, surface)
+    if surface.size == 0 and given.xi is not None:
+        raise CaseError("initial.xi is the history of the contact layer and the case has no [contact]: remove it")
+    if displacement is not None:
+        u0, names["displacement"] = _api_array("initial_displacement", displacement, [(nodes, d)],
+                                               "(nodes, d)"), "initial_displacement"
+    if stress is not None:
+        sigma0 = _api_array("initial_stress", stress, [(elements, d, d), (d, d)], "(elements, d, d) or (d, d)")
+        sigma0 = np.moveaxis(np.broadcast_to(sigma0, (elements, d, d)), 0, -1).copy()
+        names["stress"] = "initial_stress"
+        _check_symmetric(sigma0)
+    if xi is not None:
+        if surface.size == 0:
+            raise CaseError("initial_xi is the history of the contact layer and the case has no [contact]")
+        xi0, names["xi"] = _api_array("initial_xi", xi, [(surface.size,)], "(contact nodes,)"), "initial_xi"
+    if start is None:
+        start = 0.0
+    else:
+        try:
+            check_time_span(start, case.time.T, case.time.steps, "time.start" if case.time.start is not None
+                            else f"the time of step {given.step} of initial.from_run")
+        except ValueError as error:
+            raise CaseError(str(error)) from None
+    state = InitialState(np.array(u0, dtype=float), np.array(sigma0, dtype=float), np.array(xi0, dtype=float),
+                         float(start), names)
+    _check_finite(state, mesh, surface)
+    _check_dirichlet(state, case, mesh)
+    _check_admissible(state, case, mesh, basis, surface, law)
+    _check_history(state, surface)
+    return state
+
+
+# --- the case's expressions ------------------------------------------------------------------------
+def _values(source, where: str, points: np.ndarray, count: int) -> np.ndarray:
+    """An expression (or number) in the coordinates at ``points`` (d, count), as ``count`` floats."""
+    names = coordinates(points.shape[0])
+    expression = parse_expression(source, names, where=where)
+    with np.errstate(all="ignore"):  # values that are not finite are reported by the checks
+        return np.broadcast_to(expression(**dict(zip(names, points))), (count,)).astype(float)
+
+
+def _at_nodes(sources, mesh: Mesh) -> np.ndarray:
+    """u_0 of initial.displacement at the nodes (nnodes, d); 0 when not given."""
+    p = mesh.mesh.p
+    if sources is None:
+        return np.zeros((p.shape[1], mesh.dim))
+    return np.column_stack([_values(source, f"initial.displacement[{i}]", p, p.shape[1])
+                            for i, source in enumerate(sources)])
+
+
+def _at_centroids(sources, mesh: Mesh) -> np.ndarray:
+    """σ_0 of initial.stress at the element centroids (d, d, nelements); 0 when not given. A number is
+    the same float at every element as the expression of its text."""
+    d, elements = mesh.dim, mesh.mesh.t.shape[1]
+    sigma = np.zeros((d, d, elements))
+    if sources is None:
+        return sigma
+    centroids = mesh.mesh.p[:, mesh.mesh.t].mean(axis=1)
+    for i, row in enumerate(sources):
+        for j, source in enumerate(row):
+            sigma[i, j] = _values(source, f"initial.stress[{i}][{j}]", centroids, elements)
+    return sigma
+
+
+def _at_contact_nodes(source, surface: ContactSurface) -> np.ndarray:
+    """ξ_0 of initial.xi at the contact nodes (m,); 0 when not given."""
+    if source is None or surface.size == 0:
+        return np.zeros(surface.size)
+    return _values(source, "initial.xi", surface.coordinates, surface.size)
+
+
+# --- the arrays of the API -------------------------------------------------------------------------
+def _api_array(name: str, value, shapes: list[tuple], expected: str) -> np.ndarray:
+    """``value`` as a float array of one of ``shapes``, else CaseError."""
+    try:
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise CaseError(f"{name} = {_brief(value)}: expected an array of numbers of shape {expected}") from None
+    if array.shape not in shapes:
+        sizes = " or ".join(str(shape) for shape in shapes)
+        raise CaseError(f"{name}: an array of shape {array.shape}; expected {expected} = {sizes}")
+    return array
+
+
+def _check_symmetric(sigma: np.ndarray) -> None:
+    """σ_0 of the API symmetric to rounding at every element."""
+    scale = np.abs(sigma).max(initial=0.0)
+    asymmetry = np.abs(sigma - np.swapaxes(sigma, 0, 1)).max(axis=(0, 1))
+    with np.errstate(invalid="ignore"):  # values that are not finite are reported by _check_finite
+        wrong = asymmetry > ROUNDING * scale
+    if np.any(wrong):
+        element = int(np.argmax(np.where(wrong, asymmetry, -np.inf)))
+        raise CaseError(f"initial_stress is not symmetric at element {element} (|sigma - sigma^T| = "
+                        f"{asymmetry[element]:g}): give symmetric tensors")
+
+
+# --- the checks --------------------------------------------------------------------------------------
+def _point(x: np.ndarray) -> str:
+    return f"({', '.join(f'{c + 0.0:.6g}' for c in x)})"
+
+
+def _check_finite(state: InitialState, mesh: Mesh, surface: ContactSurface) -> None:
+    p = mesh.mesh.p
+    centroids = p[:, mesh.mesh.t].mean(axis=1)
+    for key, values, points, where in (
+            ("displacement", state.displacement.T, p, "node"),
+            ("stress", state.stress.reshape(-1, state.stress.shape[-1]), centroids, "element centroid"),
+            ("xi", state.xi[None, :], surface.coordinates, "contact node")):
+        wrong = ~np.isfinite(values)
+        if wrong.any():
+            _, index = np.argwhere(wrong)[0]
+            raise CaseError(f"{state.names[key]} is not finite ({values[:, index][wrong[:, index]][0]}) at the {where} "
+                            f"{_point(points[:, index])} ({int(wrong.any(axis=0).sum())} of {values.shape[1]}): "
+                            f"expected finite values")
+
+
+def _check_dirichlet(state: InitialState, case: Case, mesh: Mesh) -> None:
+    """u_0 = 0 on the Dirichlet components (u_0 ∈ V); values at rounding level are set to 0."""
+    u = state.displacement
+    rounding = ROUNDING * np.abs(u).max(initial=0.0)
+    p = mesh.mesh.p
+    for i, item in enumerate(case.boundary.dirichlet):
+        names = item.components or coordinates(mesh.dim)
+        nodes = mesh.nodes(item.part)
+        columns = [component(c) for c in names]
+        values = u[np.ix_(nodes, columns)]
+        size = np.abs(values)
+        if np.any(size > rounding):
+            node, c = np.unravel_index(np.argmax(size), size.shape)
+            raise CaseError(f"{state.names['displacement']}: u_{names[c]} = {values[node, c]:g} at the node "
+                            f"{_point(p[:, nodes[node]])} of the Dirichlet part '{item.part}' (boundary.dirichlet[{i}], "
+                            f"{int(np.sum(size.max(axis=1) > rounding))} of {nodes.size} nodes): u_0 must be 0 there "
+                            f"(u_0 in V)")
+        u[np.ix_(nodes, columns)] = 0.0
+
+
+def _check_admissible(state: InitialState, case: Case, mesh: Mesh, basis: Basis, surface: ContactSurface,
+                      law: ContactLaw) -> None:
+    """u_0·ν − g0 ≤ g at every contact node (to the complementarity tolerance of the solver)."""
+    if surface.size == 0 or not state.moves:
+        return
+    d0 = surface.operator @ state.dofs(basis) - surface.gap0
+    g = np.broadcast_to(law.g, d0.shape)
+    excess = d0 - g
+    wrong = excess > case.solver.tolerance * mesh.diameter
+    if wrong.any():
+        node = int(np.argmax(excess))
+        raise CaseError(f"{state.names['displacement']} penetrates the foundation beyond the layer: u_0.nu - gap = "
+                        f"{d0[node]:.6g} > g = {g[node]:.6g} at the contact node {_point(surface.coordinates[:, node])} "
+                        f"({int(wrong.sum())} of {surface.size} nodes): u_0 must be admissible, u_0.nu - gap <= g on "
+                        f"the contact part")
+
+
+def _check_history(state: InitialState, surface: ContactSurface) -> None:
+    """ξ_0 ≥ 0: a history of penetration."""
+    wrong = state.xi < 0.0
+    if wrong.any():
+        node = int(np.argmin(state.xi))
+        raise CaseError(f"{state.names['xi']} = {state.xi[node]:g} at the contact node "
+                        f"{_point(surface.coordinates[:, node])} ({int(wrong.sum())} of {surface.size} nodes): the "
+                        f"history of penetration xi_0 must be >= 0")
+
+
+# --- a restart from a run directory ----------------------------------------------------------------
+#: The arrays of solution.npz a restart needs (besides the elements); ``xi``, ``contact_nodes`` are optional.
+_NEEDED = ("points", "steps", "times", "displacement", "stress")
+#: The largest solution.npz read (bytes): beyond, it is not one a run of vpcontact wrote for this mesh.
+MAX_SOLUTION_BYTES = 2**36
+
+
+def read_run_state(case: Case, mesh: Mesh, surface: ContactSurface) -> RunState:
+    """The state of the run directory initial.from_run at its field step initial.step, checked against
+    the case's mesh (same nodes, coordinates and elements) and contact nodes; CaseError otherwise."""
+    folder, step = case.from_run_path, case.initial.step
+    where = f"initial.from_run = {quoted(case.initial.from_run)}"
+    if not folder.is_dir():
+        raise CaseError(f"{where}: '{folder}' is not a run directory (give the --out folder of a vpcontact run)")
+    path = folder / "solution.npz"
+    if not path.exists():
+        raise CaseError(f"{where}: '{path}' not found: the run kept no fields (output.field_steps) or has not ended")
+    check_regular_file(path, f"{where}: the file", MAX_SOLUTION_BYTES)
+    cells = CELLS[mesh.dim][2]
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {key: data[key] for key in ("points", cells, "steps", "times", "displacement", "stress",
+                                                 "contact_nodes", "xi") if key in data.files or key in _NEEDED}
+        points, elements, steps, times = arrays["points"], arrays[cells], arrays["steps"], arrays["times"]
+    except KeyError as error:
+        raise CaseError(f"{where}: '{path}' has no array {error} (the case's mesh has {cells}): is it the solution "
+                        f"of a {mesh.dim}D vpcontact run?") from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        raise CaseError(f"{where}: '{path}' cannot be read ({error})") from None
+    _check_same_mesh(where, points, elements, mesh, cells)
+    written = [int(s) for s in steps]
+    if step not in written:
+        kept = ", ".join(map(str, written)) or "none"
+        raise CaseError(f"initial.step = {step}: the run in {quoted(case.initial.from_run)} wrote its fields at the "
+                        f"steps {kept} (its output.field_steps): give one of them")
+    at = written.index(step)
+    xi = None
+    if "xi" in arrays:
+        run_nodes = arrays.get("contact_nodes", np.zeros(0, dtype=np.int64))
+        if not np.array_equal(run_nodes, surface.nodes):
+            ours = (f"the case's contact part '{case.contact.part}' has {surface.size} other nodes"
+                    if case.contact is not None else "the case has no [contact]")
+            raise CaseError(f"{where}: the run's contact part has {run_nodes.size} nodes and {ours}: a restart "
+                            f"needs the same contact part")
+        xi = arrays["xi"][at]
+    return RunState(arrays["displacement"][at], arrays["stress"][at], xi, float(times[at]))
+
+
+def _check_same_mesh(where: str, points: np.ndarray, elements: np.ndarray, mesh: Mesh, cells: str) -> None:
+    p, t = mesh.mesh.p, mesh.mesh.t
+    if points.shape != p.shape or elements.shape != t.shape:
+        nodes, count = (points.shape[1], elements.shape[1]) if points.ndim == 2 and elements.ndim == 2 else ("?", "?")
+        raise CaseError(f"{where}: the run's mesh has {nodes} nodes and {count} {cells}, the case's {p.shape[1]} and "
+                        f"{t.shape[1]}: a restart needs the same mesh")
+    offset = np.abs(points - p).max(initial=0.0)
+    if not (offset <= ROUNDING * mesh.diameter and np.array_equal(elements, t)):
+        what = (f"nodes moved by up to {offset:g}" if not offset <= ROUNDING * mesh.diameter
+                else f"other {cells} on the same nodes")
+        raise CaseError(f"{where}: the run's mesh has the case's node and element counts but {what}: a restart "
+                        f"needs the same mesh")
