@@ -21,7 +21,7 @@ from . import mesh as meshes
 from .assembly import Density, ExpressionDensity, LoadVector, displacement_basis, stiffness, stress_force
 from .case import Case, _brief
 from .contact import (CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness, PositivePart,
-                      Power, PowerStiffness, contact_surface, empty_surface)
+                      Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
 from .errors import CaseError, quoted
 from .expressions import parse_expression
 from .material import Elasticity, Perzyna, Relaxation
@@ -117,10 +117,11 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     law = ContactLaw(PositivePart(), ConstantStiffness(0.0), np.inf)
     if case.contact is not None:
         c = case.contact
-        gap = parse_expression(c.gap, coordinates(dim), where="contact.gap")
-        surface = contact_surface(mesh, c.part, basis.nodal_dofs, gap, None if c.normal == "body" else c.normal)
-        law = ContactLaw(p=p or _p_law(case), stiffness=stiffness_law or _stiffness_law(case, surface),
-                         g=_layer_parameter("g", c.g, 0.0, surface=surface, strict=True), rho=c.rho)
+        layers = c.layers()
+        gaps = [parse_expression(layer.gap, coordinates(dim), where=f"{key}.gap") for key, layer in layers]
+        surface = contact_surface(mesh, [layer.part for _, layer in layers], basis.nodal_dofs, gaps,
+                                  None if c.normal == "body" else c.normal)
+        law = _contact_law(case, surface, p, stiffness_law)
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
     _check_contact_can_move(case, mesh, basis, free, surface)
@@ -184,7 +185,7 @@ def _check_dimension(case: Case, dim: int) -> None:
                             f"{', '.join(repr(n) for n in names)}")
     expressions = [(f"{key}[{c}]", source) for key, value in loads for c, source in enumerate(value)]
     if case.contact is not None:
-        expressions.append(("contact.gap", case.contact.gap))
+        expressions += [(f"{key}.gap", layer.gap) for key, layer in case.contact.layers()]
     for key, source in expressions:
         unknown = parse_expression(source, ("x", "y", "z", "t"), where=key).depends_on - {*names, "t"}
         if unknown:
@@ -274,45 +275,52 @@ def _check_first_history(basis: Basis, initial_stress: np.ndarray, G: Callable |
                         f"float64; state the stresses in other units")
 
 
-def _p_law(case: Case):
-    c = case.contact
-    return PositivePart() if c.p == "positive_part" else Power(c.exponent)
+def _contact_law(case: Case, surface: ContactSurface, p: Callable | None, stiffness_law: Callable | None) -> ContactLaw:
+    """The layer of each contact part at the nodes it owns (its keys' numbers, or expressions evaluated
+    there), merged into one law over the contact nodes (see contact.merged_law); ``p`` and
+    ``stiffness_law`` of the API, when given, replace the case's on every part."""
+    ps, stiffnesses, limits = [], [], []
+    for j, (key, layer) in enumerate(case.contact.layers()):
+        at = partial(_layer_parameter, points=surface.coordinates[:, surface.owner == j])
+        ps.append(PositivePart() if layer.p == "positive_part" else Power(at(f"{key}.exponent", layer.exponent, 1.0)))
+        stiffnesses.append(_stiffness_law(layer.stiffness, f"{key}.stiffness", at))
+        limits.append(at(f"{key}.g", layer.g, 0.0, strict=True))
+    owner = surface.owner
+    return ContactLaw(p=p or merged_law(ps, owner), stiffness=stiffness_law or merged_law(stiffnesses, owner),
+                      g=per_node(limits, owner), rho=case.contact.rho)
 
 
-def _stiffness_law(case: Case, surface: ContactSurface):
-    """K(x, ξ) of ``contact.stiffness`` (2.18): each parameter a number, or an expression in the
-    coordinates evaluated at the contact nodes (an array with one value per node)."""
-    s = case.contact.stiffness
-    at = partial(_layer_parameter, surface=surface)
+def _stiffness_law(s, key: str, at: Callable):
+    """K(x, ξ) of the stiffness table ``s`` (2.18) of the case key ``key``: each parameter a number, or an
+    expression in the coordinates evaluated by ``at`` at the nodes of its part."""
     if s.law == "power":
-        return PowerStiffness(at("stiffness.c_v", s.c_v, 0.0), at("stiffness.alpha", s.alpha, 0.0),
-                              at("stiffness.beta", s.beta))
+        return PowerStiffness(at(f"{key}.c_v", s.c_v, 0.0), at(f"{key}.alpha", s.alpha, 0.0), at(f"{key}.beta", s.beta))
     if s.law == "constant":
-        return ConstantStiffness(at("stiffness.value", s.value, 0.0))
-    return ExponentialStiffness(at("stiffness.c_v", s.c_v, 0.0), at("stiffness.alpha", s.alpha))
+        return ConstantStiffness(at(f"{key}.value", s.value, 0.0))
+    return ExponentialStiffness(at(f"{key}.c_v", s.c_v, 0.0), at(f"{key}.alpha", s.alpha))
 
 
-def _layer_parameter(name: str, value, minimum: float | None = None, *, surface: ContactSurface,
-                     strict: bool = False):
-    """``contact.<name>``: a number as it is; an expression's values at the contact nodes, refused
-    (naming the node) where they are not finite or below ``minimum`` (or equal to it, when ``strict``)."""
+def _layer_parameter(where: str, value, minimum: float | None = None, *, points: np.ndarray, strict: bool = False):
+    """The layer parameter of the case key ``where``: a number as it is; an expression's values at the
+    contact nodes ``points`` (d, k), refused (naming the node) where they are not finite or below
+    ``minimum`` (or equal to it, when ``strict``)."""
     if not isinstance(value, str):
         return float(value)
-    where = f"contact.{name}"
-    names = coordinates(surface.coordinates.shape[0])
+    names = coordinates(points.shape[0])
+    count = points.shape[1]
     expression = parse_expression(value, names, where=where)
     with np.errstate(all="ignore"):  # values that are not finite are reported below
-        values = np.broadcast_to(expression(**dict(zip(names, surface.coordinates))), (surface.size,)).astype(float)
+        values = np.broadcast_to(expression(**dict(zip(names, points))), (count,)).astype(float)
     if minimum is None:
         wrong = ~np.isfinite(values)
     else:
         wrong = ~np.isfinite(values) | ~(values > minimum if strict else values >= minimum)
     if wrong.any():
         node = np.flatnonzero(wrong)[0]
-        at = ", ".join(f"{c:.6g}" for c in surface.coordinates[:, node])
+        at = ", ".join(f"{c:.6g}" for c in points[:, node])
         expected = "finite" if minimum is None else f"a finite number {'>' if strict else '>='} {minimum:g}"
         raise CaseError(f"{where} = {quoted(value)} is {values[node]:g} at the contact node ({', '.join(names)}) = "
-                        f"({at}) ({wrong.sum()} of {surface.size} nodes): expected {expected} at every node of the "
+                        f"({at}) ({wrong.sum()} of {count} nodes): expected {expected} at every node of the "
                         f"contact part")
     return values.copy()
 
@@ -345,7 +353,9 @@ def _check_contact_can_move(case: Case, mesh: meshes.Mesh, basis: Basis, free: n
         components = [component(c) for c in names]
         if np.intersect1d(basis.nodal_dofs[components][:, mesh.nodes(item.part)], contact_dofs).size:
             entries.append(f"boundary.dirichlet[{i}] (part '{item.part}', components {', '.join(names)})")
-    raise CaseError(f"contact part '{case.contact.part}' is clamped: {' and '.join(entries)} fix every contact node "
+    parts = f"part '{surface.parts[0]}' is" if len(surface.parts) == 1 else \
+        f"parts {', '.join(repr(part) for part in surface.parts)} are"
+    raise CaseError(f"contact {parts} clamped: {' and '.join(entries)} fix every contact node "
                     f"along its normal, so the contact force cannot change whatever the load; remove the contact part "
                     f"from boundary.dirichlet or fix only components along the contact surface")
 
