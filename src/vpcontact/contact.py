@@ -10,7 +10,7 @@ and the rigid base adds a multiplier λ_i ≥ 0 once d_i reaches g.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Callable
 
 import numpy as np
@@ -121,6 +121,18 @@ class CallableLaw:
         scale = np.abs(r).max(initial=0.0)
         delta = 1e-7 * (scale if scale > 0.0 else 1.0)
         return (self(r + delta) - self(r - delta)) / (2.0 * delta)
+
+
+@dataclass(frozen=True, eq=False)
+class AtNodes:
+    """A law f(r, x) of the API with x bound to the (d, m) coordinates of the contact nodes: a law of r
+    over the contact nodes."""
+
+    function: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    coordinates: np.ndarray = field(repr=False)
+
+    def __call__(self, r: np.ndarray) -> np.ndarray:
+        return self.function(r, self.coordinates)
 
 
 @dataclass(frozen=True, eq=False)

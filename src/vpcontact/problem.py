@@ -7,6 +7,7 @@ are not laws) fails here, before any computation and before anything is written.
 
 from __future__ import annotations
 
+import inspect
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -20,8 +21,8 @@ from skfem import Basis
 from . import mesh as meshes
 from .assembly import Density, ExpressionDensity, LoadVector, displacement_basis, stiffness, stress_force
 from .case import Case, _brief
-from .contact import (CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness, PositivePart,
-                      Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
+from .contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
+                      PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
 from .errors import CaseError, quoted
 from .expressions import parse_expression
 from .material import Elasticity, Perzyna, Relaxation
@@ -73,7 +74,10 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
 
     - ``p``, ``stiffness_law``: the laws p(r) and K(ξ) of the contact, vectorized over NumPy arrays; an
       object with a ``derivative`` method is used as it is (see :mod:`vpcontact.contact`), a plain
-      function is wrapped in :class:`~vpcontact.contact.CallableLaw` (central-difference derivative);
+      function is wrapped in :class:`~vpcontact.contact.CallableLaw` (central-difference derivative).
+      A law of two arguments, p(r, x) or K(ξ, x) (and its derivative of the same two), gets x = the
+      (d, m) coordinates of the contact nodes with r of shape (m,): a law that varies along Γ3. They
+      replace the case's laws on every contact part;
     - ``tractions``: {part: f(x, y, t) -> (fx, fy)} (in 3D f(x, y, z, t) -> (fx, fy, fz)): f replaces the
       case's traction on that part (the case's tractions on other parts stay);
     - ``body_force``: f(x, y, t) -> (fx, fy) (in 3D f(x, y, z, t) -> (fx, fy, fz)) replaces the case's
@@ -81,8 +85,9 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     - ``viscoplastic``: 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (d, d, nelements) (it
       replaces ``material.viscoplastic``).
 
-    Each is tried before the run (a law at 0 and 10⁻³, a load at every step time, 𝒢 at (σ_0, 0)): one
-    that is not callable, returns the wrong shape or a value that is not finite is a CaseError."""
+    Each is tried before the run (a law at 0 and 10⁻³ (at every contact node for a law of x), a load at
+    every step time, 𝒢 at (σ_0, 0)): one that is not callable, takes other arguments, returns the wrong
+    shape or a value that is not finite is a CaseError."""
     started = time.perf_counter()
     if case.contact is None and (p is not None or stiffness_law is not None):
         raise CaseError("p and stiffness_law are laws of the contact, and the case has no [contact]")
@@ -220,19 +225,66 @@ def _traction_terms(case: Case, mesh: meshes.Mesh, tractions: Mapping | None) ->
 _LAW_SAMPLE = (0.0, 1e-3)
 
 
-def _api_law(law, name: str) -> Callable:
-    """A law p or K of the API: an object with a ``derivative`` method as it is, a plain function wrapped
-    in CallableLaw; both tried at _LAW_SAMPLE (elementwise, finite), else CaseError."""
+def _api_law(law, name: str):
+    """A law p or K of the API: a law f(r) tried at _LAW_SAMPLE (elementwise, finite), an object with a
+    ``derivative`` method as it is, a plain function wrapped in CallableLaw; a law f(r, x) of the nodes'
+    coordinates x is a LawOfNodes, tried when the contact nodes are known; else CaseError."""
     if not callable(law):
         raise CaseError(f"{name} = {_brief(law)}: expected a function f(r) of a NumPy array (optionally with a "
-                        f"method f.derivative(r))")
+                        f"method f.derivative(r)), or f(r, x) with x the coordinates of the contact nodes")
     derivative = getattr(law, "derivative", None)
-    for what, f in ((name, law), (f"{name}.derivative", derivative)) if callable(derivative) else ((name, law),):
+    derivative = derivative if callable(derivative) else None
+    arguments = _arguments(law, name)
+    if derivative is not None and (other := _arguments(derivative, f"{name}.derivative")) != arguments:
+        raise CaseError(f"{name} takes {arguments} argument(s) and {name}.derivative {other}: give both f(r) or "
+                        f"both f(r, x)")
+    if arguments == 2:
+        return LawOfNodes(law, derivative, name)
+    for what, f in ((name, law), (f"{name}.derivative", derivative)) if derivative else ((name, law),):
         sample = np.array(_LAW_SAMPLE)
         with np.errstate(all="ignore"):  # a non-finite value is reported below
             values = f(sample.copy())
         _check_returned(what, f"{what}({', '.join(map(str, _LAW_SAMPLE))})", values, sample.shape)
-    return law if callable(derivative) else CallableLaw(law)
+    return law if derivative else CallableLaw(law)
+
+
+def _arguments(law: Callable, name: str) -> int:
+    """The arguments ``law`` takes, from its signature: 1 (r), or 2 (r, x); 1 when Python cannot tell
+    (a NumPy ufunc) or when it takes any number (*args); CaseError for more."""
+    try:
+        parameters = list(inspect.signature(law).parameters.values())
+    except (TypeError, ValueError):
+        return 1
+    required = [p.name for p in parameters
+                if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is p.empty]
+    if len(required) <= 1 or any(p.kind == p.VAR_POSITIONAL for p in parameters):
+        return 1
+    if len(required) > 2:
+        raise CaseError(f"{name} takes {len(required)} arguments ({', '.join(required)}): expected f(r), or f(r, x) "
+                        f"with x the coordinates of the contact nodes")
+    return 2
+
+
+@dataclass(frozen=True)
+class LawOfNodes:
+    """A law f(r, x) of the API (and its derivative df(r, x), or None), waiting for the contact nodes."""
+
+    function: Callable
+    derivative: Callable | None
+    name: str
+
+    def at(self, points: np.ndarray) -> CallableLaw:
+        """The law at the contact nodes ``points`` (d, m), tried at r = 0 and 10⁻³ at every node."""
+        m = points.shape[1]
+        for what, f in ((self.name, self.function), (f"{self.name}.derivative", self.derivative)):
+            if f is None:
+                continue
+            for r in _LAW_SAMPLE:
+                with np.errstate(all="ignore"):  # a non-finite value is reported below
+                    values = f(np.full(m, r), points.copy())
+                _check_returned(what, f"{what}({r}, x) at the {m} contact nodes", values, (m,))
+        derivative = None if self.derivative is None else AtNodes(self.derivative, points)
+        return CallableLaw(AtNodes(self.function, points), derivative)
 
 
 def _check_returned(name: str, call: str, values, shape: tuple) -> None:
@@ -286,6 +338,8 @@ def _contact_law(case: Case, surface: ContactSurface, p: Callable | None, stiffn
         stiffnesses.append(_stiffness_law(layer.stiffness, f"{key}.stiffness", at))
         limits.append(at(f"{key}.g", layer.g, 0.0, strict=True))
     owner = surface.owner
+    p, stiffness_law = (law.at(surface.coordinates) if isinstance(law, LawOfNodes) else law
+                        for law in (p, stiffness_law))
     return ContactLaw(p=p or merged_law(ps, owner), stiffness=stiffness_law or merged_law(stiffnesses, owner),
                       g=per_node(limits, owner), rho=case.contact.rho)
 
