@@ -18,7 +18,8 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
 import tomli_w
-from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator,
+                      model_validator)
 
 from .errors import CaseError, quoted, shown
 from .expressions import parse_expression

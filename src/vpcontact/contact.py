@@ -50,7 +50,8 @@ class Power:
         return np.maximum(r, 0.0) ** self.exponent
 
     def derivative(self, r: np.ndarray) -> np.ndarray:
-        """m (r⁺)^(m−1), and where m = 1 the derivative of r⁺ (1 at r = 0, where (r⁺)^0 would be 1 for r < 0 too)."""
+        """m (r⁺)^(m−1), and where m = 1 the derivative of r⁺ (1 for r ≥ 0, 0 below: (r⁺)^0 would be 1
+        for r < 0 too)."""
         m = self.exponent
         return np.where(m == 1.0, PositivePart().derivative(r), m * np.maximum(r, 0.0) ** (m - 1.0))
 
@@ -355,7 +356,8 @@ def empty_surface(ndofs: int, dim: int) -> ContactSurface:
     """The contact surface of a case without contact: no nodes."""
     none = np.zeros(0)
     return ContactSurface(np.zeros(0, dtype=np.int64), np.zeros((dim, 0)), np.zeros((dim, 0)), none, none,
-                          sp.csr_matrix((0, ndofs)), np.zeros((dim, 0), dtype=np.int64), (), np.zeros(0, dtype=np.int64))
+                          sp.csr_matrix((0, ndofs)), np.zeros((dim, 0), dtype=np.int64), (),
+                          np.zeros(0, dtype=np.int64))
 
 
 def node_status(d: np.ndarray, active: np.ndarray) -> np.ndarray:

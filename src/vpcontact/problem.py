@@ -334,14 +334,17 @@ def _contact_law(case: Case, surface: ContactSurface, p: Callable | None, stiffn
     ps, stiffnesses, limits = [], [], []
     for j, (key, layer) in enumerate(case.contact.layers()):
         at = partial(_layer_parameter, points=surface.coordinates[:, surface.owner == j])
-        ps.append(PositivePart() if layer.p == "positive_part" else Power(at(f"{key}.exponent", layer.exponent, 1.0)))
-        stiffnesses.append(_stiffness_law(layer.stiffness, f"{key}.stiffness", at))
+        if p is None:
+            ps.append(PositivePart() if layer.p == "positive_part" else
+                      Power(at(f"{key}.exponent", layer.exponent, 1.0)))
+        if stiffness_law is None:
+            stiffnesses.append(_stiffness_law(layer.stiffness, f"{key}.stiffness", at))
         limits.append(at(f"{key}.g", layer.g, 0.0, strict=True))
     owner = surface.owner
     p, stiffness_law = (law.at(surface.coordinates) if isinstance(law, LawOfNodes) else law
                         for law in (p, stiffness_law))
-    return ContactLaw(p=p or merged_law(ps, owner), stiffness=stiffness_law or merged_law(stiffnesses, owner),
-                      g=per_node(limits, owner), rho=case.contact.rho)
+    return ContactLaw(p=merged_law(ps, owner) if p is None else p, g=per_node(limits, owner), rho=case.contact.rho,
+                      stiffness=merged_law(stiffnesses, owner) if stiffness_law is None else stiffness_law)
 
 
 def _stiffness_law(s, key: str, at: Callable):
