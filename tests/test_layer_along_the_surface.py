@@ -2,6 +2,8 @@
 the stiffness parameters and g as expressions in the coordinates, evaluated at the contact nodes, in
 2D and 3D."""
 
+import copy
+
 import numpy as np
 import pytest
 import tomli_w
@@ -29,7 +31,7 @@ CASES = {
 def test_a_layer_varying_along_the_surface_matches_a_generic_root_finder(dim):
     """Nodes in compliance and at the limit with different (c_v, α, β) along Γ3, against MINPACK on
     the same P1 matrices with the parameters computed here at each node."""
-    case = CASES[dim]
+    case = copy.deepcopy(CASES[dim])  # each test changes its own copy
     case["contact"]["stiffness"] = dict(zip(("c_v", "alpha", "beta"), LAYER), law="power")
     result = vpcontact.solve(case)
     assert result.status == "complete", result.message
@@ -58,7 +60,7 @@ THICKNESS = "0.2 - 0.15*x*x"
 def test_a_layer_of_varying_thickness_matches_a_generic_root_finder(dim):
     """g(x) along Γ3 with the paper's K = 100 (1 + 20 ξ)^−1: the nodes reach the rigid base at different
     penetrations; against MINPACK with g computed here at each node."""
-    case = CASES[dim]
+    case = copy.deepcopy(CASES[dim])  # each test changes its own copy
     case["contact"]["g"] = THICKNESS
     case["contact"]["stiffness"] = {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0}
     result = vpcontact.solve(case)
@@ -122,7 +124,7 @@ EXPONENT = "1 + 1.5*x*x"
 def test_a_compliance_exponent_varying_along_the_surface_matches_a_generic_root_finder(dim):
     """p = (r⁺)^m with m(x) per node and the paper's K = 100 (1 + 20 ξ), g = 0.2: against MINPACK with m
     computed here at each node; the nodes where m > 1 penetrate further, some to the rigid base."""
-    case = CASES[dim]
+    case = copy.deepcopy(CASES[dim])  # each test changes its own copy
     case["contact"].update(p="power", exponent=EXPONENT)
     result = vpcontact.solve(case)
     assert result.status == "complete", result.message
