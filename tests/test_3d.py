@@ -165,10 +165,10 @@ def fischer_burmeister(a, b):
     return a + b - np.hypot(a, b)
 
 
-def compliance_with_the_limit(problem, N, w, c_v, alpha, beta, g):
-    """The steps of K = c_v (1 + α ξ)^β with the rigid limit g (each a number or one value per contact
-    node), on the problem's P1 matrices and the contact data N, w given: each step is the system
-        A u + Nᵀ (w K(ξ_{n−1} + k d⁺) d⁺ + λ) = b,   φ(λ, c_v w (g − d)) = 0,   d = N u,
+def compliance_with_the_limit(problem, N, w, c_v, alpha, beta, g, exponent=1.0):
+    """The steps of K = c_v (1 + α ξ)^β and p(d) = (d⁺)^m with the rigid limit g (each a number or one
+    value per contact node), on the problem's P1 matrices and the contact data N, w given: each step is
+        A u + Nᵀ (w K(ξ_{n−1} + k d⁺) (d⁺)^m + λ) = b,   φ(λ, c_v w (g − d)) = 0,   d = N u,
     with φ the Fischer–Burmeister function, solved by MINPACK's hybrid method (with its Jacobian) from
     the previous step, then Newton steps where it stalls, and checked on its residual and KKT
     conditions (to rounding). Returns the
@@ -185,7 +185,7 @@ def compliance_with_the_limit(problem, N, w, c_v, alpha, beta, g):
             u, lam = x[:n], x[n:]
             d = N @ u
             K = c_v * (1.0 + alpha * (xi + k * np.maximum(d, 0.0))) ** beta
-            return np.concatenate([A @ u + N.T @ (w * K * np.maximum(d, 0.0) + lam) - b,
+            return np.concatenate([A @ u + N.T @ (w * K * np.maximum(d, 0.0) ** exponent + lam) - b,
                                    fischer_burmeister(lam, scale * (g - d))])
 
         def jacobian(x, xi=xi):
@@ -196,7 +196,9 @@ def compliance_with_the_limit(problem, N, w, c_v, alpha, beta, g):
             K, dK = c_v * base**beta, c_v * alpha * beta * base ** (beta - 1.0)
             a, c = lam, scale * (g - d)
             r = np.where(np.hypot(a, c) > 0, np.hypot(a, c), 1.0)
-            return np.block([[A + N.T @ ((w * on * (K + dK * k * positive))[:, None] * N), N.T],
+            dp = exponent * positive ** (exponent - 1.0)  # times `on`: d⁺ has the derivative 1 at d = 0
+            tangent = w * on * (K * dp + dK * k * positive**exponent)
+            return np.block([[A + N.T @ (tangent[:, None] * N), N.T],
                              [-((1.0 - c / r) * scale)[:, None] * N, np.diag(1.0 - a / r)]])
 
         x = root(residual, x, jac=jacobian, method="hybr", tol=1e-15).x

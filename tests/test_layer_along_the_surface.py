@@ -2,6 +2,8 @@
 the stiffness parameters and g as expressions in the coordinates, evaluated at the contact nodes, in
 2D and 3D."""
 
+import copy
+
 import numpy as np
 import pytest
 import tomli_w
@@ -29,7 +31,7 @@ CASES = {
 def test_a_layer_varying_along_the_surface_matches_a_generic_root_finder(dim):
     """Nodes in compliance and at the limit with different (c_v, α, β) along Γ3, against MINPACK on
     the same P1 matrices with the parameters computed here at each node."""
-    case = CASES[dim]
+    case = copy.deepcopy(CASES[dim])  # each test changes its own copy
     case["contact"]["stiffness"] = dict(zip(("c_v", "alpha", "beta"), LAYER), law="power")
     result = vpcontact.solve(case)
     assert result.status == "complete", result.message
@@ -58,7 +60,7 @@ THICKNESS = "0.2 - 0.15*x*x"
 def test_a_layer_of_varying_thickness_matches_a_generic_root_finder(dim):
     """g(x) along Γ3 with the paper's K = 100 (1 + 20 ξ)^−1: the nodes reach the rigid base at different
     penetrations; against MINPACK with g computed here at each node."""
-    case = CASES[dim]
+    case = copy.deepcopy(CASES[dim])  # each test changes its own copy
     case["contact"]["g"] = THICKNESS
     case["contact"]["stiffness"] = {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0}
     result = vpcontact.solve(case)
@@ -107,6 +109,60 @@ def test_a_layer_parameter_that_is_wrong_somewhere_on_the_surface_is_refused(tmp
     case = half_disc_case(h=0.2)
     case["contact"].update({k: v for k, v in stiffness.items() if k == "g"})
     case["contact"]["stiffness"].update({k: v for k, v in stiffness.items() if k != "g"})
+    path = tmp_path / "case.toml"
+    path.write_text(tomli_w.dumps(case))
+    before = snapshot_tree(tmp_path)
+    status, _, err = run_cli("run", path, "--out", tmp_path / "out")
+    assert_refused(status, err, *words, untouched=[(tmp_path, before)])
+
+
+#: a compliance exponent that grows away from the bottom point: p(x, r) = (r⁺)^m(x), m from 1 to 2.5
+EXPONENT = "1 + 1.5*x*x"
+
+
+@pytest.mark.parametrize("dim", CASES)
+def test_a_compliance_exponent_varying_along_the_surface_matches_a_generic_root_finder(dim):
+    """p = (r⁺)^m with m(x) per node and the paper's K = 100 (1 + 20 ξ), g = 0.2: against MINPACK with m
+    computed here at each node; the nodes where m > 1 penetrate further, some to the rigid base."""
+    case = copy.deepcopy(CASES[dim])  # each test changes its own copy
+    case["contact"].update(p="power", exponent=EXPONENT)
+    result = vpcontact.solve(case)
+    assert result.status == "complete", result.message
+    problem, surface = result.problem, result.problem.surface
+    m = 1 + 1.5 * surface.coordinates[0] ** 2
+    assert m.min() == 1.0 and m.max() > 2.0
+    N = surface.operator[:, problem.free].toarray()
+    d, lam, u, xi = compliance_with_the_limit(problem, N, surface.weights, 100.0, 20.0, 1.0, 0.2, exponent=m)
+    np.testing.assert_allclose(result.contact_history("penetration"), d, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(result.contact_history("xi")[-1], xi, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(result.final.displacement, full_vector(problem, u), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(result.contact_history("pressure_rigid") * surface.weights, lam, rtol=0,
+                               atol=1e-10 * 100.0 * 0.2 * surface.weights.max())
+    compliance = result.contact_history("pressure_compliance")[-1]
+    np.testing.assert_allclose(compliance, 100.0 * (1 + 20.0 * xi) * np.maximum(d[-1], 0.0) ** m, rtol=1e-10)
+    _, in_compliance, at_limit = states(result)[-1]
+    assert in_compliance > 0 and at_limit > 0, (in_compliance, at_limit)
+
+
+def test_an_exponent_written_as_an_expression_is_the_same_law():
+    """Bitwise: contact.exponent = "1.5 + 0*x" gives the same run as 1.5."""
+    number, expression = half_disc_case(h=0.2, load=25.0), half_disc_case(h=0.2, load=25.0)
+    number["contact"].update(p="power", exponent=1.5)
+    expression["contact"].update(p="power", exponent="1.5 + 0*x")
+    a, b = vpcontact.solve(number), vpcontact.solve(expression)
+    np.testing.assert_array_equal(a.final.displacement, b.final.displacement)
+    np.testing.assert_array_equal(a.contact_history("pressure_compliance"), b.contact_history("pressure_compliance"))
+
+
+@pytest.mark.parametrize("exponent, words", [
+    ("0.5 + x", ["contact.exponent = \"0.5 + x\" is 0.5 at the contact node (x, y) = (0, 0)",
+                 "expected a finite number >= 1"]),
+    ("1/(x - 1)", ["contact.exponent = \"1/(x - 1)\"", "expected a finite number >= 1"]),
+    (0.5, ["contact.exponent", "expected a number >= 1 or an expression in the coordinates, got 0.5"]),
+])
+def test_an_exponent_below_one_somewhere_on_the_surface_is_refused(tmp_path, exponent, words):
+    case = half_disc_case(h=0.2)
+    case["contact"].update(p="power", exponent=exponent)
     path = tmp_path / "case.toml"
     path.write_text(tomli_w.dumps(case))
     before = snapshot_tree(tmp_path)

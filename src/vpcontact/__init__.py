@@ -45,10 +45,10 @@ def solve(case, *, progress: bool = False, **laws) -> Result:
 
     ``laws`` replace parts of the case by Python objects (see :func:`build_problem`): ``p`` and
     ``stiffness_law`` (functions of a NumPy array; with a ``derivative`` method, or a central difference is
-    used), ``tractions`` ({part: f(x, y, t) -> (fx, fy)}: replaces the case's traction on that part),
-    ``body_force`` (f(x, y, t) -> (fx, fy): replaces the case's body forces), ``viscoplastic`` (𝒢(σ, ε)) and
-    the initial state's arrays ``initial_displacement`` (nodes, d), ``initial_stress`` (elements, d, d) or
-    (d, d), ``initial_xi`` (contact nodes,).
+    used; f(r, x) of the contact nodes' coordinates x too), ``tractions`` ({part: f(x, y, t) -> (fx, fy)}:
+    replaces the case's traction on that part), ``body_force`` (f(x, y, t) -> (fx, fy): replaces the case's
+    body forces), ``viscoplastic`` (𝒢(σ, ε)) and the initial state's arrays ``initial_displacement``
+    (nodes, d), ``initial_stress`` (elements, d, d) or (d, d), ``initial_xi`` (contact nodes,).
     Bad objects are a :class:`CaseError` before the first step.
     """
     if not isinstance(case, Case):

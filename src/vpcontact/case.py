@@ -18,8 +18,8 @@ from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
 import tomli_w
-from pydantic import (AfterValidator, BaseModel, ConfigDict, Discriminator, Field, Tag, ValidationError, field_validator,
-                      model_validator)
+from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, ValidationError,
+                      field_validator, model_validator)
 
 from .errors import CaseError, quoted, shown
 from .expressions import parse_expression
@@ -86,20 +86,34 @@ def _layer_value(minimum: float | None):
     return Annotated[Any, AfterValidator(check)]
 
 
+def _infinite(value):
+    """contact.g = "inf" (or "infinity"): the number inf; nan refused."""
+    if isinstance(value, str) and value.strip().lower() in ("inf", "infinity"):
+        return math.inf
+    if isinstance(value, float) and math.isnan(value):
+        raise ValueError("g = nan: expected a positive number or \"inf\"")
+    return value
+
+
 def _thickness(value):
     """contact.g: a number > 0, inf (no rigid base: classical normal compliance), or an expression in the
     coordinates (a thickness that varies along Γ3, checked > 0 at the contact nodes)."""
     if isinstance(value, str):
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-        raise ValueError(f"contact.g = {_brief(value)}: must be > 0 (a number, \"inf\" or an expression in the "
+        raise ValueError(f"g = {_brief(value)}: must be > 0 (a number, \"inf\" or an expression in the "
                          f"coordinates)")
     return value
+
+
+Thickness = Annotated[Any, BeforeValidator(_infinite), AfterValidator(_thickness)]
 
 
 #: Layer parameters that may vary along Γ3 (the paper's K(x, ξ), (2.18)).
 NonNegativeLayerValue = _layer_value(0.0)
 LayerValue = _layer_value(None)
+#: The exponent m ≥ 1 of p = power, which may vary along Γ3 too (the paper's p(x, r), (2.19)).
+Exponent = _layer_value(1.0)
 
 
 class _Section(BaseModel):
@@ -367,18 +381,49 @@ Stiffness = Annotated[
 ]
 
 
-class ContactSection(_Section):
-    """The contact condition (2.5) on a part: soft layer of thickness g on a rigid base."""
+#: The keys of one layer: stated in [contact] for one contact part, in each entry of contact.parts for several.
+LAYER_KEYS = ("part", "g", "gap", "p", "exponent", "stiffness")
+#: The keys of the whole contact, one value for all its parts.
+GLOBAL_CONTACT_KEYS = ("rho", "probe", "normal")
+
+
+class ContactPartSection(_Section):
+    """One part of Γ3 with its own layer (an entry of contact.parts)."""
 
     part: Part
-    g: Annotated[Any, AfterValidator(_thickness)]
+    g: Thickness
     gap: Expression = 0.0
     p: Literal["positive_part", "power"] = "positive_part"
-    exponent: Optional[Annotated[float, Field(ge=1)]] = None
+    exponent: Optional[Exponent] = None
+    stiffness: Stiffness
+
+    @model_validator(mode="before")
+    @classmethod
+    def _no_global_key(cls, data):
+        if isinstance(data, dict):
+            for key in GLOBAL_CONTACT_KEYS:
+                if key in data:
+                    raise ValueError(f"{key} is one value for the whole contact, not a part's: state it once in "
+                                     f"[contact] (contact.{key})")
+        return data
+
+
+class ContactSection(_Section):
+    """The contact condition (2.5) on Γ3: soft layer of thickness g on a rigid base. Γ3 is one part
+    (``part`` and its layer's keys here) or several (``parts``: a list of parts, each with its layer); a
+    node where two parts meet takes the layer of the one listed first. rho, probe and normal are the
+    whole contact's."""
+
+    part: Optional[Part] = None
+    g: Thickness = None
+    gap: Optional[Expression] = None  # default 0 with part
+    p: Optional[Literal["positive_part", "power"]] = None  # default "positive_part" with part
+    exponent: Optional[Exponent] = None
     rho: NonNegativeFloat = 1.0
     probe: Optional[Annotated[list[float], Field(min_length=2, max_length=3)]] = None
     normal: Union[Literal["body"], Annotated[list[float], Field(min_length=2, max_length=3)]] = "body"
-    stiffness: Stiffness
+    stiffness: Optional[Stiffness] = None
+    parts: Optional[Annotated[list[ContactPartSection], Field(min_length=1)]] = None
 
     @field_validator("normal")
     @classmethod
@@ -388,22 +433,44 @@ class ContactSection(_Section):
                              f"foundation's outward direction seen from the body, e.g. [0, 0, -1])")
         return value
 
-    @field_validator("g", mode="before")
-    @classmethod
-    def _infinite_layer(cls, value):
-        if isinstance(value, str) and value.strip().lower() in ("inf", "infinity"):
-            return math.inf
-        if isinstance(value, float) and math.isnan(value):
-            raise ValueError("contact.g = nan: expected a positive number or \"inf\"")
-        return value
-
     @model_validator(mode="after")
-    def _exponent_with_power(self):
-        if self.p == "power" and self.exponent is None:
-            raise ValueError("missing required value 'contact.exponent' (needed by contact.p = \"power\")")
-        if self.p != "power" and self.exponent is not None:
-            raise ValueError(f"contact.exponent is only used with contact.p = \"power\" (contact.p = \"{self.p}\")")
+    def _one_form(self):
+        if self.parts is None:
+            self._one_part()
+        else:
+            self._several_parts()
+        for key, layer in self.layers():
+            if layer.p == "power" and layer.exponent is None:
+                raise ValueError(f"missing required value '{key}.exponent' (needed by {key}.p = \"power\")")
+            if layer.p != "power" and layer.exponent is not None:
+                raise ValueError(f"{key}.exponent is only used with {key}.p = \"power\" ({key}.p = \"{layer.p}\")")
         return self
+
+    def _one_part(self) -> None:
+        for key in ("part", "g", "stiffness"):
+            if getattr(self, key) is None:
+                hint = " (or contact.parts, a list of parts each with its layer)" if key == "part" else ""
+                raise ValueError(f"missing required value 'contact.{key}'{hint}")
+        self.gap = 0.0 if self.gap is None else self.gap
+        self.p = "positive_part" if self.p is None else self.p
+
+    def _several_parts(self) -> None:
+        given = [key for key in LAYER_KEYS if getattr(self, key) is not None]
+        if given:
+            raise ValueError(f"contact.{given[0]} is given with contact.parts: each entry of contact.parts states "
+                             f"its own layer ({', '.join(LAYER_KEYS)}); move contact.{given[0]} into the entries")
+        names = [str(entry.part) for entry in self.parts]
+        for j, name in enumerate(names):
+            if name in names[:j]:
+                raise ValueError(f"contact.parts[{j}].part = {_show(name)} is also contact.parts[{names.index(name)}]"
+                                 f".part: each part has one layer")
+
+    def layers(self) -> list[tuple[str, "ContactSection | ContactPartSection"]]:
+        """(key, layer) of each contact part, in order: ("contact", self) for one part, else
+        ("contact.parts[j]", entry); a layer has the attributes part, g, gap, p, exponent, stiffness."""
+        if self.parts is None:
+            return [("contact", self)]
+        return [(f"contact.parts[{j}]", entry) for j, entry in enumerate(self.parts)]
 
 
 def check_time_span(start: float, T: float, steps: int, where: str) -> None:
@@ -715,7 +782,8 @@ def _check_expressions(case: Case) -> None:
         for c, value in enumerate(force.value):
             parse_expression(value, ("x", "y", "z", "t"), where=f"boundary.body_force[{i}].value[{c}]")
     if case.contact is not None:
-        parse_expression(case.contact.gap, ("x", "y", "z"), where="contact.gap")
+        for key, layer in case.contact.layers():
+            parse_expression(layer.gap, ("x", "y", "z"), where=f"{key}.gap")
     for key, material in _material_keys(case):
         parse_expression(material.E, ("x", "y", "z"), where=f"{key}.E")
         parse_expression(material.nu, ("x", "y", "z"), where=f"{key}.nu")
@@ -785,7 +853,12 @@ def _describe(error: dict) -> str:
         message = str(ctx.get("error", error["msg"]))
         if message.startswith("= "):  # "= <value>: ..." of a validator that does not know its key
             return f"{key} {message}"
-        return message if key in ("", "mesh", "material", "contact", "output") or message.startswith(key) else f"{key}: {message}"
+        if key in ("", "mesh", "material", "contact", "output") or message.startswith(key):
+            return message
+        name = loc[-1] if loc else ""
+        if isinstance(name, str) and message.startswith(f"{name} "):  # "g = 0: ..." of the key contact.parts[1].g
+            return key + message[len(name):]
+        return f"{key}: {message}"
     if kind in ("union_tag_invalid", "union_tag_not_found"):
         laws = ", ".join(f'"{t}"' for t in _LAW_TAGS.get(loc[-1] if loc else "", _STIFFNESS_TAGS))
         given = ctx.get("tag")

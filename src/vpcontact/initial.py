@@ -305,7 +305,8 @@ def read_run_state(case: Case, mesh: Mesh, surface: ContactSurface) -> RunState:
     if "xi" in arrays:
         run_nodes = arrays.get("contact_nodes", np.zeros(0, dtype=np.int64))
         if not np.array_equal(run_nodes, surface.nodes):
-            ours = (f"the case's contact part '{case.contact.part}' has {surface.size} other nodes"
+            parts = "', '".join(str(layer.part) for _, layer in case.contact.layers()) if case.contact else ""
+            ours = (f"the case's contact part '{parts}' has {surface.size} other nodes"
                     if case.contact is not None else "the case has no [contact]")
             raise CaseError(f"{where}: the run's contact part has {run_nodes.size} nodes and {ours}: a restart "
                             f"needs the same contact part")

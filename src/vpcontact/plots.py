@@ -98,9 +98,10 @@ def contact_pressure(result, steps=None):
         view = f"seen along {names[along]}, on the ({names[plane[0]]}, {names[plane[1]]}) plane"
     else:
         figure, view = _profile_panels(surface, times, pressure, status), "along Γ3"
-    part = result.problem.case.contact.part
+    parts = ", ".join(repr(part) for part in surface.parts)
     figure.legend(handles=_state_handles(), loc="outside lower center", ncol=3, frameon=False, fontsize=9)
-    figure.suptitle(f"Contact pressure and node states on Γ3 (part {part!r}, {surface.size} nodes), {view}",
+    figure.suptitle(f"Contact pressure and node states on Γ3 (part{'s' * (len(surface.parts) > 1)} {parts}, "
+                    f"{surface.size} nodes), {view}",
                     fontsize=10)
     return figure
 

@@ -7,6 +7,7 @@ are not laws) fails here, before any computation and before anything is written.
 
 from __future__ import annotations
 
+import inspect
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -21,8 +22,8 @@ from . import mesh as meshes
 from .assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
 from .case import Case, _brief, _material_keys
-from .contact import (CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness, PositivePart,
-                      Power, PowerStiffness, contact_surface, empty_surface)
+from .contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
+                      PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
 from .errors import CaseError, quoted
 from .expressions import parse_expression
 from .initial import InitialState, initial_state
@@ -84,7 +85,10 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
 
     - ``p``, ``stiffness_law``: the laws p(r) and K(ξ) of the contact, vectorized over NumPy arrays; an
       object with a ``derivative`` method is used as it is (see :mod:`vpcontact.contact`), a plain
-      function is wrapped in :class:`~vpcontact.contact.CallableLaw` (central-difference derivative);
+      function is wrapped in :class:`~vpcontact.contact.CallableLaw` (central-difference derivative).
+      A law of two arguments, p(r, x) or K(ξ, x) (and its derivative of the same two), gets x = the
+      (d, m) coordinates of the contact nodes with r of shape (m,): a law that varies along Γ3. They
+      replace the case's laws on every contact part;
     - ``tractions``: {part: f(x, y, t) -> (fx, fy)} (in 3D f(x, y, z, t) -> (fx, fy, fz)): f replaces the
       case's traction on that part (the case's tractions on other parts stay);
     - ``body_force``: f(x, y, t) -> (fx, fy) (in 3D f(x, y, z, t) -> (fx, fy, fz)) replaces the case's
@@ -96,8 +100,9 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
       (``initial.*``, see :mod:`vpcontact.initial`; checked alike: shapes, finite, u_0 in V and admissible
       on Γ3, ξ_0 ≥ 0).
 
-    Each is tried before the run (a law at 0 and 10⁻³, a load at every step time, 𝒢 at (σ_0, ε(u_0))): one
-    that is not callable, returns the wrong shape or a value that is not finite is a CaseError."""
+    Each is tried before the run (a law at 0 and 10⁻³ (at every contact node for a law of x), a load at
+    every step time, 𝒢 at (σ_0, ε(u_0))): one that is not callable, takes other arguments, returns the wrong
+    shape or a value that is not finite is a CaseError."""
     started = time.perf_counter()
     if case.contact is None and (p is not None or stiffness_law is not None):
         raise CaseError("p and stiffness_law are laws of the contact, and the case has no [contact]")
@@ -132,10 +137,11 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     law = ContactLaw(PositivePart(), ConstantStiffness(0.0), np.inf)
     if case.contact is not None:
         c = case.contact
-        gap = parse_expression(c.gap, coordinates(dim), where="contact.gap")
-        surface = contact_surface(mesh, c.part, basis.nodal_dofs, gap, None if c.normal == "body" else c.normal)
-        law = ContactLaw(p=p or _p_law(case), stiffness=stiffness_law or _stiffness_law(case, surface),
-                         g=_layer_parameter("g", c.g, 0.0, surface=surface, strict=True), rho=c.rho)
+        layers = c.layers()
+        gaps = [parse_expression(layer.gap, coordinates(dim), where=f"{key}.gap") for key, layer in layers]
+        surface = contact_surface(mesh, [layer.part for _, layer in layers], basis.nodal_dofs, gaps,
+                                  None if c.normal == "body" else c.normal)
+        law = _contact_law(case, surface, p, stiffness_law)
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
     _check_contact_can_move(case, mesh, basis, free, surface)
@@ -205,7 +211,7 @@ def _check_dimension(case: Case, dim: int) -> None:
                             f"{', '.join(repr(n) for n in names)}")
     expressions = [(f"{key}[{c}]", source) for key, value in loads for c, source in enumerate(value)]
     if case.contact is not None:
-        expressions.append(("contact.gap", case.contact.gap))
+        expressions += [(f"{key}.gap", layer.gap) for key, layer in case.contact.layers()]
     expressions += [(f"{key}.{name}", getattr(entry, name)) for key, entry in _material_keys(case) for name in ("E", "nu")]
     initial = case.initial
     expressions += [(f"initial.displacement[{c}]", source) for c, source in enumerate(initial.displacement or ())]
@@ -247,19 +253,66 @@ def _traction_terms(case: Case, mesh: meshes.Mesh, tractions: Mapping | None) ->
 _LAW_SAMPLE = (0.0, 1e-3)
 
 
-def _api_law(law, name: str) -> Callable:
-    """A law p or K of the API: an object with a ``derivative`` method as it is, a plain function wrapped
-    in CallableLaw; both tried at _LAW_SAMPLE (elementwise, finite), else CaseError."""
+def _api_law(law, name: str):
+    """A law p or K of the API: a law f(r) tried at _LAW_SAMPLE (elementwise, finite), an object with a
+    ``derivative`` method as it is, a plain function wrapped in CallableLaw; a law f(r, x) of the nodes'
+    coordinates x is a LawOfNodes, tried when the contact nodes are known; else CaseError."""
     if not callable(law):
         raise CaseError(f"{name} = {_brief(law)}: expected a function f(r) of a NumPy array (optionally with a "
-                        f"method f.derivative(r))")
+                        f"method f.derivative(r)), or f(r, x) with x the coordinates of the contact nodes")
     derivative = getattr(law, "derivative", None)
-    for what, f in ((name, law), (f"{name}.derivative", derivative)) if callable(derivative) else ((name, law),):
+    derivative = derivative if callable(derivative) else None
+    arguments = _arguments(law, name)
+    if derivative is not None and (other := _arguments(derivative, f"{name}.derivative")) != arguments:
+        raise CaseError(f"{name} takes {arguments} argument(s) and {name}.derivative {other}: give both f(r) or "
+                        f"both f(r, x)")
+    if arguments == 2:
+        return LawOfNodes(law, derivative, name)
+    for what, f in ((name, law), (f"{name}.derivative", derivative)) if derivative else ((name, law),):
         sample = np.array(_LAW_SAMPLE)
         with np.errstate(all="ignore"):  # a non-finite value is reported below
             values = f(sample.copy())
         _check_returned(what, f"{what}({', '.join(map(str, _LAW_SAMPLE))})", values, sample.shape)
-    return law if callable(derivative) else CallableLaw(law)
+    return law if derivative else CallableLaw(law)
+
+
+def _arguments(law: Callable, name: str) -> int:
+    """The arguments ``law`` takes, from its signature: 1 (r), or 2 (r, x); 1 when Python cannot tell
+    (a NumPy ufunc) or when it takes any number (*args); CaseError for more."""
+    try:
+        parameters = list(inspect.signature(law).parameters.values())
+    except (TypeError, ValueError):
+        return 1
+    required = [p.name for p in parameters
+                if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is p.empty]
+    if len(required) <= 1 or any(p.kind == p.VAR_POSITIONAL for p in parameters):
+        return 1
+    if len(required) > 2:
+        raise CaseError(f"{name} takes {len(required)} arguments ({', '.join(required)}): expected f(r), or f(r, x) "
+                        f"with x the coordinates of the contact nodes")
+    return 2
+
+
+@dataclass(frozen=True)
+class LawOfNodes:
+    """A law f(r, x) of the API (and its derivative df(r, x), or None), waiting for the contact nodes."""
+
+    function: Callable
+    derivative: Callable | None
+    name: str
+
+    def at(self, points: np.ndarray) -> CallableLaw:
+        """The law at the contact nodes ``points`` (d, m), tried at r = 0 and 10⁻³ at every node."""
+        m = points.shape[1]
+        for what, f in ((self.name, self.function), (f"{self.name}.derivative", self.derivative)):
+            if f is None:
+                continue
+            for r in _LAW_SAMPLE:
+                with np.errstate(all="ignore"):  # a non-finite value is reported below
+                    values = f(np.full(m, r), points.copy())
+                _check_returned(what, f"{what}({r}, x) at the {m} contact nodes", values, (m,))
+        derivative = None if self.derivative is None else AtNodes(self.derivative, points)
+        return CallableLaw(AtNodes(self.function, points), derivative)
 
 
 def _check_returned(name: str, call: str, values, shape: tuple) -> None:
@@ -307,45 +360,57 @@ def _check_first_history(basis: Basis, initial: InitialState, written, strain0: 
         raise CaseError(f"{source}: its nodal forces are not finite in float64; state the stresses in other units")
 
 
-def _p_law(case: Case):
-    c = case.contact
-    return PositivePart() if c.p == "positive_part" else Power(c.exponent)
+def _contact_law(case: Case, surface: ContactSurface, p: Callable | None, stiffness_law: Callable | None) -> ContactLaw:
+    """The layer of each contact part at the nodes it owns (its keys' numbers, or expressions evaluated
+    there), merged into one law over the contact nodes (see contact.merged_law); ``p`` and
+    ``stiffness_law`` of the API, when given, replace the case's on every part."""
+    ps, stiffnesses, limits = [], [], []
+    for j, (key, layer) in enumerate(case.contact.layers()):
+        at = partial(_layer_parameter, points=surface.coordinates[:, surface.owner == j])
+        if p is None:
+            ps.append(PositivePart() if layer.p == "positive_part" else
+                      Power(at(f"{key}.exponent", layer.exponent, 1.0)))
+        if stiffness_law is None:
+            stiffnesses.append(_stiffness_law(layer.stiffness, f"{key}.stiffness", at))
+        limits.append(at(f"{key}.g", layer.g, 0.0, strict=True))
+    owner = surface.owner
+    p, stiffness_law = (law.at(surface.coordinates) if isinstance(law, LawOfNodes) else law
+                        for law in (p, stiffness_law))
+    return ContactLaw(p=merged_law(ps, owner) if p is None else p, g=per_node(limits, owner), rho=case.contact.rho,
+                      stiffness=merged_law(stiffnesses, owner) if stiffness_law is None else stiffness_law)
 
 
-def _stiffness_law(case: Case, surface: ContactSurface):
-    """K(x, ξ) of ``contact.stiffness`` (2.18): each parameter a number, or an expression in the
-    coordinates evaluated at the contact nodes (an array with one value per node)."""
-    s = case.contact.stiffness
-    at = partial(_layer_parameter, surface=surface)
+def _stiffness_law(s, key: str, at: Callable):
+    """K(x, ξ) of the stiffness table ``s`` (2.18) of the case key ``key``: each parameter a number, or an
+    expression in the coordinates evaluated by ``at`` at the nodes of its part."""
     if s.law == "power":
-        return PowerStiffness(at("stiffness.c_v", s.c_v, 0.0), at("stiffness.alpha", s.alpha, 0.0),
-                              at("stiffness.beta", s.beta))
+        return PowerStiffness(at(f"{key}.c_v", s.c_v, 0.0), at(f"{key}.alpha", s.alpha, 0.0), at(f"{key}.beta", s.beta))
     if s.law == "constant":
-        return ConstantStiffness(at("stiffness.value", s.value, 0.0))
-    return ExponentialStiffness(at("stiffness.c_v", s.c_v, 0.0), at("stiffness.alpha", s.alpha))
+        return ConstantStiffness(at(f"{key}.value", s.value, 0.0))
+    return ExponentialStiffness(at(f"{key}.c_v", s.c_v, 0.0), at(f"{key}.alpha", s.alpha))
 
 
-def _layer_parameter(name: str, value, minimum: float | None = None, *, surface: ContactSurface,
-                     strict: bool = False):
-    """``contact.<name>``: a number as it is; an expression's values at the contact nodes, refused
-    (naming the node) where they are not finite or below ``minimum`` (or equal to it, when ``strict``)."""
+def _layer_parameter(where: str, value, minimum: float | None = None, *, points: np.ndarray, strict: bool = False):
+    """The layer parameter of the case key ``where``: a number as it is; an expression's values at the
+    contact nodes ``points`` (d, k), refused (naming the node) where they are not finite or below
+    ``minimum`` (or equal to it, when ``strict``)."""
     if not isinstance(value, str):
         return float(value)
-    where = f"contact.{name}"
-    names = coordinates(surface.coordinates.shape[0])
+    names = coordinates(points.shape[0])
+    count = points.shape[1]
     expression = parse_expression(value, names, where=where)
     with np.errstate(all="ignore"):  # values that are not finite are reported below
-        values = np.broadcast_to(expression(**dict(zip(names, surface.coordinates))), (surface.size,)).astype(float)
+        values = np.broadcast_to(expression(**dict(zip(names, points))), (count,)).astype(float)
     if minimum is None:
         wrong = ~np.isfinite(values)
     else:
         wrong = ~np.isfinite(values) | ~(values > minimum if strict else values >= minimum)
     if wrong.any():
         node = np.flatnonzero(wrong)[0]
-        at = ", ".join(f"{c:.6g}" for c in surface.coordinates[:, node])
+        at = ", ".join(f"{c:.6g}" for c in points[:, node])
         expected = "finite" if minimum is None else f"a finite number {'>' if strict else '>='} {minimum:g}"
         raise CaseError(f"{where} = {quoted(value)} is {values[node]:g} at the contact node ({', '.join(names)}) = "
-                        f"({at}) ({wrong.sum()} of {surface.size} nodes): expected {expected} at every node of the "
+                        f"({at}) ({wrong.sum()} of {count} nodes): expected {expected} at every node of the "
                         f"contact part")
     return values.copy()
 
@@ -368,7 +433,9 @@ def _check_contact_can_move(case: Case, mesh: meshes.Mesh, basis: Basis, free: n
         components = [component(c) for c in names]
         if np.intersect1d(basis.nodal_dofs[components][:, mesh.nodes(item.part)], contact_dofs).size:
             entries.append(f"boundary.dirichlet[{i}] (part '{item.part}', components {', '.join(names)})")
-    raise CaseError(f"contact part '{case.contact.part}' is clamped: {' and '.join(entries)} fix every contact node "
+    parts = f"part '{surface.parts[0]}' is" if len(surface.parts) == 1 else \
+        f"parts {', '.join(repr(part) for part in surface.parts)} are"
+    raise CaseError(f"contact {parts} clamped: {' and '.join(entries)} fix every contact node "
                     f"along its normal, so the contact force cannot change whatever the load; remove the contact part "
                     f"from boundary.dirichlet or fix only components along the contact surface")
 

@@ -9,7 +9,8 @@ place: a reader never sees half a file), ``summary.json`` last: a directory whos
 - ``fields/body.pvd``   displacement, stress, von Mises (and the viscoplastic history z when there is
                         one) at the field steps, and each element's material (its index in the case's
                         material list), E and ν (VTU files, ParaView);
-- ``fields/contact.pvd``  Γ3 with penetration, ξ, K, pressures, status, normal and contact force;
+- ``fields/contact.pvd``  Γ3 with penetration, ξ, K, pressures, status, normal and contact force, and the
+                        local layer parameters (``layer_columns``);
 - ``solution.npz``      the fields at the field steps as arrays, ξ too (see ``write_solution``): what a
                         restart (``initial.from_run``) starts from;
 - ``case.resolved.toml``  every value used, defaults included, with the versions as a header;
@@ -214,12 +215,29 @@ def _write_history(result: Result, path: Path) -> None:
 CONTACT_BLOCK = 2**14
 
 
+def layer_columns(problem) -> dict[str, np.ndarray]:
+    """The local layer parameters per contact node, as the last columns of contact.csv and point data of
+    the contact VTU: g, those of K (c_v, alpha, beta or value) and the exponent of p = power where the
+    laws have them (empty, or NaN in a VTU, at the nodes of a part whose law has not that parameter), and
+    with several contact parts each node's part (its name in contact.csv, its index in contact.parts in
+    a VTU: ``part`` there)."""
+    surface = problem.surface
+    columns = problem.law.parameters(surface.size)
+    if len(surface.parts) > 1:
+        columns["part"] = np.asarray(surface.parts)[surface.owner]
+    return columns
+
+
 def _write_contact(result: Result, path: Path) -> None:
     surface = result.problem.surface
     rows, m = len(result.rows), surface.size
     steps, substeps, times = result.series("step").astype(int), result.series("substep").astype(int), result.times
     axes = coordinates(result.dim)
-    names = ["step", "t", "node", *axes, *(f"normal_{c}" for c in axes), "weight", *CONTACT_ARRAYS, "substep"]
+    layer = layer_columns(result.problem)
+    layer_text = [np.where(np.isnan(values), None, values) if values.dtype.kind == "f" else values
+                  for values in layer.values()]  # None: an empty cell
+    names = ["step", "t", "node", *axes, *(f"normal_{c}" for c in axes), "weight", *CONTACT_ARRAYS, "substep",
+             *layer]
     block = max(1, CONTACT_BLOCK // max(m, 1))
     with replacing(path) as temporary, temporary.open("w", newline="") as handle:
         writer = csv.writer(handle)
@@ -233,6 +251,7 @@ def _write_contact(result: Result, path: Path) -> None:
             columns += [np.array(result.contact[name][chosen]).ravel() for name in CONTACT_ARRAYS]
             columns[-1] = np.asarray(STATUS_NAMES)[columns[-1].astype(int)]
             columns.append(np.repeat(substeps[chosen], m))
+            columns += [np.tile(values, count) for values in layer_text]
             writer.writerows(zip(*(c.tolist() for c in columns)))
 
 
@@ -247,6 +266,9 @@ def _write_fields(result: Result, folder: Path) -> None:
     surface = problem.surface
     contact_points = _in_space(surface.coordinates.T)
     facets = [(facet_cells, surface.facets.T)]
+    layer = layer_columns(problem)
+    if "part" in layer:  # VTU point data are numbers: the index in contact.parts
+        layer["part"] = surface.owner
     body, contact = [], []
     materials = {"material": [problem.materials.owner.astype(np.int32)], "E": [np.array(problem.materials.E)],
                  "nu": [np.array(problem.materials.nu)]}
@@ -273,7 +295,8 @@ def _write_fields(result: Result, folder: Path) -> None:
                     **{key: np.asarray(value, dtype=float) for key, value in data.items()},
                     "pressure": pressure, "normal": normal,
                     "contact_force": -normal * (surface.weights * pressure)[:, None],
-                    "displacement": displacement[surface.nodes]}))
+                    "displacement": displacement[surface.nodes],
+                    **{key: np.asarray(value, dtype=float) for key, value in layer.items()}}))
             contact.append((t, name))
     _write_pvd(folder / "body.pvd", body)
     if contact:
