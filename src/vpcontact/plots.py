@@ -204,6 +204,57 @@ def arc_length(coordinates: np.ndarray, segments: np.ndarray) -> tuple[np.ndarra
     return order, np.concatenate([[0.0], np.cumsum(np.where(joined, step, 0.0))]), np.flatnonzero(~joined) + 1
 
 
+# --- several runs along Γ3 ------------------------------------------------------------------------
+ALONG_CONTACT = ("pressure", "K")
+"""Default quantities of :func:`along_contact`."""
+
+
+def along_contact(results, quantities=ALONG_CONTACT, step=None):
+    """Per-node quantities of several runs along Γ3 at the end of ``step`` (default: each run's last
+    step), one panel per quantity, one curve per run: ``results`` is {label: Result}, a quantity
+    ``"pressure"`` (compliance + rigid part) or a contact array (``penetration``, ``xi``, ``K``, ...).
+    2D: against the arc length along Γ3 (from its end of least x); 3D: against the distance from the
+    run's probe node (a point per node). Runs on different meshes or contact parts may be compared."""
+    if not results:
+        raise CaseError("along_contact: give at least one run ({label: result})")
+    if len({result.dim for result in results.values()}) > 1:
+        raise CaseError("along_contact: the runs mix 2D and 3D bodies; compare runs of one dimension")
+    quantities = (quantities,) if isinstance(quantities, str) else tuple(quantities)
+    figure = _figure(figsize=(7.0, 2.2 * len(quantities) + 1.0))
+    axes = figure.subplots(len(quantities), 1, sharex=True, squeeze=False)[:, 0]
+    times = set()
+    for color, (label, result) in enumerate(results.items()):
+        surface = result.problem.surface
+        if surface.size == 0:
+            raise CaseError(f"along_contact: the run {label!r} has no contact")
+        n = result.completed_steps if step is None else step
+        row = _step_rows(result, [n])[n]
+        times.add(float(result.times[row]))
+        if result.dim == 2:
+            order, s, breaks = arc_length(surface.coordinates, surface.facets)
+        else:
+            s = np.linalg.norm(surface.coordinates - surface.coordinates[:, [result.problem.probe]], axis=0)
+            order, breaks = np.argsort(s), np.zeros(0, dtype=int)
+            s = s[order]
+        for ax, quantity in zip(axes, quantities):
+            if quantity == "pressure":
+                value = result.contact_history("pressure_compliance")[row] + result.contact_history("pressure_rigid")[row]
+            else:
+                value = result.contact_history(quantity)[row]
+            style = dict(lw=1.2) if result.dim == 2 else dict(ls="none", marker=".", markersize=3)
+            ax.plot(np.insert(s, breaks, np.nan), np.insert(value[order], breaks, np.nan), color=f"C{color}",
+                    label=label, **style)
+    for ax, quantity in zip(axes, quantities):
+        ax.set_ylabel(quantity)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8, frameon=False)
+    two_d = next(iter(results.values())).dim == 2
+    axes[-1].set_xlabel("arc length s along Γ3" if two_d else "distance from the probe node")
+    when = f"t = {times.pop():g}" if len(times) == 1 else "the last step of each run"
+    figure.suptitle(f"Along Γ3 at {when}", fontsize=10)
+    return figure
+
+
 # --- deformed body -----------------------------------------------------------------------------
 def deformed_body(result, step=None, scale=None):
     """The body deformed at the end of ``step`` (a step whose fields the run kept, see
