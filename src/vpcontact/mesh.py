@@ -437,8 +437,11 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     named by the tag number (str) and, if the file names that physical group, by its name too (a facet
     may be in several named groups); each such facet must be a boundary facet of the mesh. Two physical
     groups of the parts' dimension with one name are refused. Facet cells without a physical tag (or
-    tag 0, gmsh's "none") are ignored. No exact normals. The orientation of the cells in the file is
-    not used. Any problem raises CaseError naming the file.
+    tag 0, gmsh's "none") are ignored. The physical groups of the body's dimension (physical surfaces in
+    2D, volumes in 3D) are the regions, keyed like the parts (tag number and name; two such groups with
+    one name are refused); an element in several of them is one element of each (`_body_elements`),
+    elements of none are in no region, and a file without them has no regions. No exact normals. The
+    orientation of the cells in the file is not used. Any problem raises CaseError naming the file.
     """
     label = os.fspath(path)
     check_regular_file(path, "mesh file")
@@ -459,12 +462,12 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     names = _physical_names(label) or [(int(v[1]), int(v[0]), k) for k, v in data.field_data.items() if np.size(v) == 2]
     dim = 3 if any(block.dim == 3 for block in data.cells) else 2
     _check_cell_types(label, data.cells, dim)
-    _check_unique_names(label, names, dim - 1)
-    element, facet = CELLS[dim]
-    elements = [block.data for block in data.cells if block.type == element]
-    if not elements:
+    _check_unique_names(label, names, dim, body=False)
+    _check_unique_names(label, names, dim, body=True)
+    facet = CELLS[dim][1]
+    t, members = _body_elements(data, names, dim)
+    if not t.size:
         raise CaseError(_no_triangles(label, data, names))
-    t = np.vstack(elements).T.astype(np.int64)
     check_memory(t.shape[1], f"mesh file '{label}'", "use a coarser mesh", dim=dim)
     outside = (t < 0) | (t >= len(data.points))
     if outside.any():
@@ -512,7 +515,21 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
                     f"mesh file '{label}': physical name '{name}' (group {tag}) clashes with physical group {name}"
                 )
             parts[name] = parts[str(tag)]
-    return Mesh(mesh.with_boundaries(parts), parts, {}, label)
+    return Mesh(mesh.with_boundaries(parts), parts, {}, label, _regions(label, names, dim, members))
+
+
+def _regions(label: str, names: list[tuple[int, int, str]], dim: int, members: np.ndarray) -> dict[str, np.ndarray]:
+    """Region name -> sorted element indices, from the (element, physical tag) pairs `members` (2, k):
+    one region per tag (named by its number) and, if the file names the group, by its name too."""
+    regions = {str(tag): np.unique(members[0, members[1] == tag]) for tag in np.unique(members[1])}
+    for group_dim, tag, name in names:
+        if group_dim != dim or str(tag) not in regions:
+            continue
+        if name in regions and not np.array_equal(regions[name], regions[str(tag)]):
+            raise CaseError(f"mesh file '{label}': physical name '{name}' (group {tag}) clashes with physical group "
+                            f"{name}")
+        regions[name] = regions[str(tag)]
+    return regions
 
 
 #: The meshio cell types of each dimension: (the body's, the parts').
@@ -623,17 +640,60 @@ def _physical_names(path: str) -> list[tuple[int, int, str]]:
     return found
 
 
-def _check_unique_names(label: str, names: list[tuple[int, int, str]], part_dim: int) -> None:
-    """CaseError if two physical groups of the parts' dimension have one name (meshio would keep only
-    one of them)."""
-    group = PHYSICAL_GROUPS[part_dim + 1][0]
+def _check_unique_names(label: str, names: list[tuple[int, int, str]], dim: int, body: bool) -> None:
+    """CaseError if two physical groups of the parts' dimension (`body` False) or of the body's (`body` True)
+    of a `dim`-dimensional mesh have one name (meshio would keep only one of them)."""
+    group = PHYSICAL_GROUPS[dim][body]
+    what = "region" if body else "part"
     tags: dict[str, int] = {}
-    for dim, tag, name in names:
-        if dim == part_dim and tags.setdefault(name, tag) != tag:
+    for group_dim, tag, name in names:
+        if group_dim == dim - 1 + body and tags.setdefault(name, tag) != tag:
             raise CaseError(f"mesh file '{label}': two physical {group.lower()}s are named '{name}' (groups "
-                            f"{tags[name]} and {tag}); a part of that name would hold only one of them: give each "
+                            f"{tags[name]} and {tag}); a {what} of that name would hold only one of them: give each "
                             f"group its own name, or put all its {group.lower()}s in one Physical {group}(\"{name}\") "
                             f"= {{...}};")
+
+
+def _body_elements(data: meshio.Mesh, names: list[tuple[int, int, str]], dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes (d + 1, m) (file numbering) of the body's elements (triangles in 2D, tetrahedra in 3D) in file
+    order, and their physical groups: (element, tag) pairs (2, k), tags > 0.
+
+    An element in several physical groups is one element of each: a gmsh 2.2 file writes it once per group
+    (as cells with the same nodes and different tags, merged here into the first of them); a 4.1 file once,
+    meshio's cell_data keeping its entity's first group and its cell_sets each named group's cells. Cells
+    with the same nodes that are not all in distinct physical groups (a cell written twice in one group, or
+    without a group) are all kept: the mesh checks refuse them as a region covered twice."""
+    kind = CELLS[dim][0]
+    physical = data.cell_data.get("gmsh:physical", [None] * len(data.cells))
+    start = np.cumsum([0] + [len(block.data) if block.type == kind else 0 for block in data.cells])
+    cells = [block.data.T for block in data.cells if block.type == kind]
+    if not cells:
+        return np.zeros((dim + 1, 0), dtype=np.int64), np.zeros((2, 0), dtype=np.int64)
+    t = np.hstack(cells).astype(np.int64)
+    tags = np.concatenate([np.zeros(len(block.data), dtype=np.int64) if block_tags is None
+                           else np.asarray(block_tags, dtype=np.int64)
+                           for block, block_tags in zip(data.cells, physical) if block.type == kind])
+    occurrences, groups = [np.arange(tags.size)[tags > 0]], [tags[tags > 0]]
+    for group_dim, tag, name in names:
+        for b, members in enumerate(data.cell_sets.get(name, []) if group_dim == dim else []):
+            if data.cells[b].type == kind and members is not None and len(members):
+                occurrences.append(start[b] + np.asarray(members, dtype=np.int64))
+                groups.append(np.full(len(members), tag, dtype=np.int64))
+
+    # cells with the same nodes: merged when all of them have distinct tags > 0
+    _, same, count = np.unique(np.sort(t, axis=0), axis=1, return_inverse=True, return_counts=True)
+    same = same.ravel()
+    distinct = np.bincount(np.unique(np.vstack((same, tags)), axis=1)[0], minlength=count.size)
+    lowest = np.full(count.size, np.iinfo(np.int64).max)
+    np.minimum.at(lowest, same, tags)
+    merged = (count > 1) & (distinct == count) & (lowest > 0)
+    first = np.full(count.size, tags.size)
+    np.minimum.at(first, same, np.arange(tags.size))
+    keep = ~merged[same] | (np.arange(tags.size) == first[same])
+    new_index = np.cumsum(keep) - 1
+    element = np.where(merged[same], new_index[first[same]], new_index)
+    members = np.unique(np.vstack((element[np.concatenate(occurrences)], np.concatenate(groups))), axis=1)
+    return t[:, keep], members
 
 
 def _physical_facets(data: meshio.Mesh, names: list[tuple[int, int, str]], kind: str,
