@@ -75,20 +75,11 @@ def box_grid(n: int) -> tuple[np.ndarray, np.ndarray]:
     return q, np.hstack(tetrahedra)
 
 
-def to_ball(q: np.ndarray, coating: float | None = None, interface: float | None = None) -> np.ndarray:
+def to_ball(q: np.ndarray) -> np.ndarray:
     """The points of the quarter ball that points q (3, k) of the box [0, 1]² × [−1, 1] map to: the cube
     of q₃ ≥ 0 onto the octant above the plane z = 1 and that of q₃ ≤ 0 onto its mirror image below, by
-    the equiangular map (the shell max(q₁, q₂, |q₃|) = s onto the sphere of radius s). With a `coating`
-    c, the shell s goes to the sphere of radius (1 − c) s / `interface` for s ≤ `interface`, and of
-    radius 1 − c (1 − s) / (1 − `interface`) for s ≥ `interface` (piecewise linear in s: the shell
-    `interface` onto the sphere of radius 1 − c, the outer one still onto the unit sphere)."""
-    octant_q = np.vstack((q[0], q[1], np.abs(q[2])))
-    octant = _equiangular(octant_q)
-    if coating is not None:
-        s = octant_q.max(axis=0)
-        radius = np.where(s <= interface, (1.0 - coating) * s / interface,
-                          1.0 - coating * (1.0 - s) / (1.0 - interface))
-        octant = octant * (radius / np.where(s > 0.0, s, 1.0))
+    the equiangular map (the shell max(q₁, q₂, |q₃|) = s onto the sphere of radius s)."""
+    octant = _equiangular(np.vstack((q[0], q[1], np.abs(q[2]))))
     return np.vstack((octant[0], octant[1], 1.0 + np.sign(q[2]) * octant[2]))
 
 
@@ -98,26 +89,35 @@ def coated_tetrahedra(n: int, coating: float, h: float, h_bottom: float | None) 
     sphere of radius 1 − `coating` of the quarter ball of radius 1 centred at (0, 0, 1), n cells along
     each radius, graded towards the bottom point like `graded_towards_bottom` when h_bottom < h.
 
-    The box grid's shell m = interface_shell(n, coating) is mapped onto that sphere (`to_ball`), and the
-    grading bisects the tetrahedra of the box (choosing their longest edges in the box, marking them by
-    their lengths in the ball): the shells s = m/n and s = 1 are planes there, which midpoints of their
-    edges stay on exactly, so the new nodes lie on the interface sphere and on the unit sphere once
-    mapped, and each node's side is the sign of max(q₁, q₂, |q₃|) − m/n, exact."""
+    The box grid's shells s = max(q₁, q₂, |q₃|) are moved to s' = (1 − c) s/s_m for s ≤ s_m and
+    s' = 1 − c (1 − s)/(1 − s_m) for s ≥ s_m (piecewise linear, s_m = m/n, m = interface_shell(n, c)):
+    the shell m onto the cube's shell 1 − c, which `to_ball` maps onto the sphere of that radius. The
+    grading bisects the tetrahedra in that box (marking them by their lengths in the ball): the shells are
+    planes there, which midpoints of their edges stay on exactly, so the nodes it adds on the interface
+    and on the outer shell lie on their spheres once mapped, and each node's side is exact."""
     q, t = box_grid(n)
-    interface = interface_shell(n, coating) / n
-
-    def mapped(q: np.ndarray) -> np.ndarray:
-        return to_ball(q, coating, interface)
-
+    s = np.vstack((q[0], q[1], np.abs(q[2]))).max(axis=0)
+    s_m = interface_shell(n, coating) / n
+    moved = np.where(s <= s_m, (1.0 - coating) * s / s_m, 1.0 - coating * (1.0 - s) / (1.0 - s_m))
+    q = q * (moved / np.where(s > 0.0, s, 1.0))
+    interface = (1.0 - coating) * s_m / s_m  # the shell the interface's nodes are on, as computed for them
     if h_bottom is not None and h_bottom < h:
-        mesh = skfem.MeshTet1(q, t)
+        mesh = _BoxOfBall(q, t)
         with _quiet_bisection():
-            while (marked := _too_long(mapped(mesh.p), mesh.t, h, h_bottom)).size:
+            while (marked := _too_long(to_ball(mesh.p), mesh.t, h, h_bottom)).size:
                 mesh = mesh.refined(marked)
         q, t = mesh.p, mesh.t
-    p = mapped(q)
+    p = to_ball(q)
     side = np.sign(np.vstack((q[0], q[1], np.abs(q[2]))).max(axis=0) - interface).astype(np.int64)
     return p, positively_oriented(p, t), side
+
+
+class _BoxOfBall(skfem.MeshTet1):
+    """Tetrahedra of the box that `to_ball` maps onto the ball, bisected (skfem's longest-edge bisection) at
+    the edge that is longest once mapped: the same choices as bisecting the mapped tetrahedra."""
+
+    def _adaptive_sort_mesh(self, p, t, marked):
+        return super()._adaptive_sort_mesh(to_ball(p), t, marked)
 
 
 def interface_shell(n: int, coating: float) -> int:
