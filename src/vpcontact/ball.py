@@ -18,6 +18,11 @@ same triangles and share its nodes.
 `graded_towards_bottom` then bisects the tetrahedra near the bottom point (0, 0, 0) (scikit-fem's
 longest-edge bisection, `MeshTet1.refined(marked)`), one level at a time, and after each level moves
 the new nodes of the spherical boundary radially onto the sphere.
+
+`coated_tetrahedra` makes the quarter ball with a coating of thickness c: the grid's shells are moved
+along the radius so that one shell of nodes lands on the sphere of radius 1 − c (the interface), and
+its grading bisects the tetrahedra of the grid's box, where the shells are planes, before they are
+mapped onto the ball: the nodes it adds on the interface and the sphere stay on them exactly.
 """
 
 from __future__ import annotations
