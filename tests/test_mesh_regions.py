@@ -157,6 +157,22 @@ def test_an_element_in_two_groups_with_its_nodes_in_another_order_is_one_element
         read_mesh(path)
 
 
+def test_messages_name_elements_by_their_place_in_the_file(tmp_path):
+    """After the cells of an element in two groups are merged, a bad triangle is still named by its position
+    among the file's triangles: here the last of 56 (28 triangles, each in "core"/"shell" and in "body")."""
+    text = (MESHES / "regions_msh22.msh").read_text()
+    head, rest = text.split("$Elements\n", 1)
+    lines, tail = rest.split("$EndElements", 1)
+    lines = lines.splitlines()
+    last = lines[-1].split()
+    assert last[1] == "2" and sum(line.split()[1] == "2" for line in lines[1:]) == 56
+    lines[-1] = " ".join(last[:-1] + [last[-3]])  # its first node again: zero area
+    path = tmp_path / "flat.msh"
+    path.write_text(f"{head}$Elements\n" + "\n".join(lines) + "\n$EndElements" + tail)
+    with pytest.raises(CaseError, match=rf"triangle 56 \(nodes {last[-3]}, {last[-2]}, {last[-3]}\) has zero area"):
+        read_mesh(path)
+
+
 def test_two_physical_body_groups_of_one_name_are_refused():
     with pytest.raises(CaseError, match=r"two physical surfaces are named 'core' \(groups 5 and 6\); a region of "
                                         r"that name would hold only one of them"):

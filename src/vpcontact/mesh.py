@@ -559,14 +559,14 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     _check_unique_names(label, names, dim, body=False)
     _check_unique_names(label, names, dim, body=True)
     facet = CELLS[dim][1]
-    t, members = _body_elements(data, names, dim)
+    t, position, members = _body_elements(data, names, dim)
     if not t.size:
         raise CaseError(_no_triangles(label, data, names))
     check_memory(t.shape[1], f"mesh file '{label}'", "use a coarser mesh", dim=dim)
     outside = (t < 0) | (t >= len(data.points))
     if outside.any():
         k = np.flatnonzero(outside.any(axis=0))[0]
-        raise CaseError(f"mesh file '{label}': {ELEMENT_NAMES[dim][0]} {k + 1} refers to node "
+        raise CaseError(f"mesh file '{label}': {ELEMENT_NAMES[dim][0]} {position[k]} refers to node "
                         f"{t[outside[:, k], k][0] + 1}, but the file has nodes 1 to {len(data.points)}: the file is "
                         f"damaged")
     used, t = np.unique(t, return_inverse=True)
@@ -578,9 +578,9 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     check_finite(label, points, used + 1)
     if dim == 2:
         points = _plane(label, data, names, points)
-        check_triangles(label, points, t, used + 1)
+        check_triangles(label, points, t, used + 1, position)
     else:
-        check_tetrahedra(label, points, t, used + 1)
+        check_tetrahedra(label, points, t, used + 1, position)
 
     mesh = SKFEM_MESH[dim](np.ascontiguousarray(points), np.ascontiguousarray(t))
     facet_nodes, facet_tags = _physical_facets(data, names, facet, dim - 1)
@@ -748,9 +748,11 @@ def _check_unique_names(label: str, names: list[tuple[int, int, str]], dim: int,
                             f"= {{...}};")
 
 
-def _body_elements(data: meshio.Mesh, names: list[tuple[int, int, str]], dim: int) -> tuple[np.ndarray, np.ndarray]:
+def _body_elements(data: meshio.Mesh, names: list[tuple[int, int, str]],
+                   dim: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The nodes (d + 1, m) (file numbering) of the body's elements (triangles in 2D, tetrahedra in 3D) in file
-    order, and their physical groups: (element, tag) pairs (2, k), tags > 0.
+    order, their positions (m,) among the file's cells of their kind (from 1, for messages), and their physical
+    groups: (element, tag) pairs (2, k), tags > 0.
 
     An element in several physical groups is one element of each: a gmsh 2.2 file writes it once per group
     (as cells with the same nodes and different tags, merged here into the first of them); a 4.1 file once,
@@ -762,7 +764,7 @@ def _body_elements(data: meshio.Mesh, names: list[tuple[int, int, str]], dim: in
     start = np.cumsum([0] + [len(block.data) if block.type == kind else 0 for block in data.cells])
     cells = [block.data.T for block in data.cells if block.type == kind]
     if not cells:
-        return np.zeros((dim + 1, 0), dtype=np.int64), np.zeros((2, 0), dtype=np.int64)
+        return np.zeros((dim + 1, 0), dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((2, 0), dtype=np.int64)
     t = np.hstack(cells).astype(np.int64)
     tags = np.concatenate([np.zeros(len(block.data), dtype=np.int64) if block_tags is None
                            else np.asarray(block_tags, dtype=np.int64)
@@ -787,7 +789,7 @@ def _body_elements(data: meshio.Mesh, names: list[tuple[int, int, str]], dim: in
     new_index = np.cumsum(keep) - 1
     element = np.where(merged[same], new_index[first[same]], new_index)
     members = np.unique(np.vstack((element[np.concatenate(occurrences)], np.concatenate(groups))), axis=1)
-    return t[:, keep], members
+    return t[:, keep], np.flatnonzero(keep) + 1, members
 
 
 def _physical_facets(data: meshio.Mesh, names: list[tuple[int, int, str]], kind: str,
