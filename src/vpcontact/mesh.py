@@ -613,9 +613,10 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
 
 
 def _regions(label: str, names: list[tuple[int, int, str]], dim: int, members: np.ndarray) -> dict[str, np.ndarray]:
-    """Region name -> sorted element indices, from the (element, physical tag) pairs `members` (2, k):
-    one region per tag (named by its number) and, if the file names the group, by its name too."""
-    regions = {str(tag): np.unique(members[0, members[1] == tag]) for tag in np.unique(members[1])}
+    """Region name -> sorted element indices, from the distinct (element, physical tag) pairs `members` (2, k),
+    sorted by element: one region per tag (named by its number) and, if the file names the group, by its
+    name too."""
+    regions = {str(tag): members[0, members[1] == tag] for tag in _distinct(members[1])}
     for group_dim, tag, name in names:
         if group_dim != dim or str(tag) not in regions:
             continue
@@ -776,20 +777,34 @@ def _body_elements(data: meshio.Mesh, names: list[tuple[int, int, str]],
                 occurrences.append(start[b] + np.asarray(members, dtype=np.int64))
                 groups.append(np.full(len(members), tag, dtype=np.int64))
 
-    # cells with the same nodes: merged when all of them have distinct tags > 0
-    _, same, count = np.unique(np.sort(t, axis=0), axis=1, return_inverse=True, return_counts=True)
-    same = same.ravel()
-    distinct = np.bincount(np.unique(np.vstack((same, tags)), axis=1)[0], minlength=count.size)
-    lowest = np.full(count.size, np.iinfo(np.int64).max)
-    np.minimum.at(lowest, same, tags)
-    merged = (count > 1) & (distinct == count) & (lowest > 0)
-    first = np.full(count.size, tags.size)
-    np.minimum.at(first, same, np.arange(tags.size))
+    # cells with the same nodes (`same`: one number for each set of nodes), merged when all of them have
+    # distinct tags > 0 (the first kept); one sort, and 1D keys (set · (largest tag + 1) + tag) for pairs
+    nodes = np.sort(t, axis=0)
+    order = np.lexsort(nodes[::-1])
+    starts = np.concatenate(([True], (nodes[:, order[1:]] != nodes[:, order[:-1]]).any(axis=0)))
+    same = np.empty(tags.size, dtype=np.int64)
+    same[order] = np.cumsum(starts) - 1
+    start = np.flatnonzero(starts)
+    count = np.diff(np.append(start, tags.size))
+    scale = int(tags.max(initial=0)) + 1
+    distinct = np.bincount(_distinct(same * scale + tags) // scale, minlength=count.size)
+    merged = (count > 1) & (distinct == count) & (np.minimum.reduceat(tags[order], start) > 0)
+    first = order[start]  # the first cell of each set: the sort is stable
     keep = ~merged[same] | (np.arange(tags.size) == first[same])
     new_index = np.cumsum(keep) - 1
     element = np.where(merged[same], new_index[first[same]], new_index)
-    members = np.unique(np.vstack((element[np.concatenate(occurrences)], np.concatenate(groups))), axis=1)
-    return t[:, keep], np.flatnonzero(keep) + 1, members
+    groups = np.concatenate(groups)
+    scale = int(groups.max(initial=0)) + 1
+    pairs = _distinct(element[np.concatenate(occurrences)] * scale + groups)
+    return t[:, keep], np.flatnonzero(keep) + 1, np.vstack((pairs // scale, pairs % scale))
+
+
+def _distinct(keys: np.ndarray) -> np.ndarray:
+    """The distinct integers of `keys`, sorted (np.unique, without its slower hashing of large arrays)."""
+    keys = np.sort(keys)
+    new = np.ones(keys.size, dtype=bool)
+    new[1:] = keys[1:] != keys[:-1]
+    return keys[new]
 
 
 def _physical_facets(data: meshio.Mesh, names: list[tuple[int, int, str]], kind: str,
