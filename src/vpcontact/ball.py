@@ -105,7 +105,8 @@ def coated_tetrahedra(n: int, coating: float, h: float, h_bottom: float | None) 
     s_m = interface_shell(n, coating) / n
     moved = np.where(s <= s_m, (1.0 - coating) * s / s_m, 1.0 - coating * (1.0 - s) / (1.0 - s_m))
     q = q * (moved / np.where(s > 0.0, s, 1.0))
-    interface = (1.0 - coating) * s_m / s_m  # the shell the interface's nodes are on, as computed for them
+    shell = np.vstack((q[0], q[1], np.abs(q[2]))).max(axis=0)
+    interface = shell[s == s_m][0]  # the interface's nodes' shell: one product s_m · (s'/s_m) for all of them
     if h_bottom is not None and h_bottom < h:
         mesh = _BoxOfBall(q, t)
         with _quiet_bisection():
