@@ -225,6 +225,35 @@ def test_a_coated_half_disc_has_a_conforming_interface(h, R, c):
     assert p[1, mesh.nodes("axis")].min() == 0.0 and p[1, mesh.nodes("axis")].max() == 2 * R
 
 
+def test_a_coating_thinner_than_the_facets_cut_is_refused_or_conforming():
+    """A coating thinner than the gap between the circle / sphere and the mesh's facets on it (about
+    h²/(8R)) cannot be meshed: the interface's nodes would lie beyond the outer facets (in 2D the
+    triangulation then left the boundary, e.g. h = (π/2)/(10·1.0005), c = 0.001, where the core's arc has
+    one facet fewer than the outer one; in 3D the coating's tetrahedra folded). Such coatings are refused
+    with the size that works; every other is meshed conforming."""
+    refused = []
+    for h in [(np.pi / 2) / (k * 1.0005) for k in (4, 10, 30)] + [1.0, 0.33, 0.1, 0.05]:
+        for c in (0.0001, 0.001, 0.003, 0.01, 0.05):
+            try:
+                mesh = half_disc(h, 1.0, c)
+            except CaseError as error:
+                assert f"mesh.coating = {c:g} is too thin for mesh.h = {h:g}" in str(error)
+                assert f"use mesh.h < sqrt(8 radius coating) = {np.sqrt(8 * c):.3g}" in str(error)
+                assert c < h * h / 8
+                refused.append((h, c))
+            else:
+                assert_conforming_coating(mesh, 1.0, c)
+    assert ((np.pi / 2) / (10 * 1.0005), 0.001) in refused and len(refused) >= 10
+    for h, h_bottom, c, thin in ((0.6, None, 0.01, True), (0.6, 0.2, 0.01, True), (0.3, None, 0.001, True),
+                                 (0.3, None, 0.02, False), (0.3, 0.1, 0.02, False)):
+        if thin:
+            with pytest.raises(CaseError, match=rf"mesh.coating = {c:g} is too thin for mesh.h = {h:g}: the facets "
+                                                r"of the mesh on the sphere of radius 1 cut"):
+                quarter_ball(h, 1.0, h_bottom, c)
+        else:
+            assert_conforming_coating(quarter_ball(h, 1.0, h_bottom, c), 1.0, c)
+
+
 #: (h, c) with h ≤ c ≤ R − h (R = 1): measured smallest angles 25.5° to 45.2° (smallest in the coating, h = 0.1,
 #: c = 0.3), longest edges 0.99 h to 1.40 h.
 QUALITY_2D = [(h, c) for h in (0.2, 0.1, 0.05, 0.02) for c in (0.05, 0.1, 0.2, 0.3, 0.5, 0.9) if h <= c <= 1 - h]
@@ -348,6 +377,8 @@ def test_the_coated_quarter_ball_volumes_converge():
     ({"shape": "quarter_ball", "h": 0.5, "radius": 2.0, "coating": 3.0},
      ["mesh.coating = 3", "must be less than mesh.radius = 2"]),
     ({"shape": "half_disc", "h": 0.25, "coating": 0.0}, ["mesh.coating = 0", "must be > 0"]),
+    ({"shape": "half_disc", "h": 0.25, "coating": 0.001}, ["mesh.coating = 0.001 is too thin for mesh.h = 0.25",
+                                                           "use mesh.h < sqrt(8 radius coating) = 0.0894"]),
     ({"shape": "rectangle", "h": 0.25, "coating": 0.1}, ["mesh.coating is only used with", "mesh.shape = \"rectangle\""]),
     ({"shape": "block", "h": 0.5, "coating": 0.1}, ["mesh.coating is only used with", "mesh.shape = \"block\""]),
     ({"file": "mesh.msh", "coating": 0.1}, ["mesh.coating is only used with", "mesh.file"]),

@@ -90,9 +90,10 @@ def to_ball(q: np.ndarray) -> np.ndarray:
 
 def coated_tetrahedra(n: int, coating: float, h: float, h_bottom: float | None) -> tuple[np.ndarray, np.ndarray,
                                                                                           np.ndarray]:
-    """Nodes, positively oriented tetrahedra and each node's side (−1 inside, 0 on, 1 outside) of the
-    sphere of radius 1 − `coating` of the quarter ball of radius 1 centred at (0, 0, 1), n cells along
-    each radius, graded towards the bottom point like `graded_towards_bottom` when h_bottom < h.
+    """Nodes, tetrahedra (positively oriented in the box: also in the ball unless the coating is too thin
+    for the grid, which folds it) and each node's side (−1 inside, 0 on, 1 outside) of the sphere of
+    radius 1 − `coating` of the quarter ball of radius 1 centred at (0, 0, 1), n cells along each radius,
+    graded towards the bottom point like `graded_towards_bottom` when h_bottom < h.
 
     The box grid's shells s = max(q₁, q₂, |q₃|) are moved to s' = (1 − c) s/s_m for s ≤ s_m and
     s' = 1 − c (1 − s)/(1 − s_m) for s ≥ s_m (piecewise linear, s_m = m/n, m = interface_shell(n, c)):
@@ -113,9 +114,8 @@ def coated_tetrahedra(n: int, coating: float, h: float, h_bottom: float | None) 
             while (marked := _too_long(to_ball(mesh.p), mesh.t, h, h_bottom)).size:
                 mesh = mesh.refined(marked)
         q, t = mesh.p, mesh.t
-    p = to_ball(q)
     side = np.sign(np.vstack((q[0], q[1], np.abs(q[2]))).max(axis=0) - interface).astype(np.int64)
-    return p, positively_oriented(p, t), side
+    return to_ball(q), positively_oriented(q, t), side
 
 
 class _BoxOfBall(skfem.MeshTet1):

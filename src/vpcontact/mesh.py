@@ -197,7 +197,8 @@ def half_disc(h: float, radius: float = 1.0, coating: float | None = None) -> Me
     and "coating", and a conforming interface: the half circle of radius R − c is a line of nodes
     (`_coated_half_disc`); the parts and their facets on the arcs are the same. Measured for R/h in
     [5, 50] and h ≤ c ≤ R − h: smallest angle ≥ 25°, longest edge ≤ 1.41 h; a coating thinner than h
-    is one layer of flat triangles (their height c against their length h).
+    is one layer of flat triangles (their height c against their length h); one not thicker than the
+    depth of the arc's facets, R (1 − cos(π/(4 n))) ≈ h²/(8R), is refused.
     """
     h = _positive("h", h)
     R = _positive("radius", radius)
@@ -214,6 +215,8 @@ def half_disc(h: float, radius: float = 1.0, coating: float | None = None) -> Me
         p, t = _unit_half_disc(h / R, n_arc, n_axis)  # built for R = 1, then scaled: the same triangles in any unit
         p, regions = R * p, {}
     else:
+        if not coating > R * (1.0 - math.cos(0.25 * np.pi / n_arc)):  # the interface would cross the arc's facets
+            raise _too_thin(coating, h, R, "circle")
         p, t, regions, n_axis = _coated_half_disc(h / R, coating / R, n_arc)  # built for R = 1 too
         p = R * p
     center = np.array([0.0, R])
@@ -236,6 +239,15 @@ def half_disc(h: float, radius: float = 1.0, coating: float | None = None) -> Me
     if mesh.parts["bottom_arc"].size != n_arc or mesh.parts["axis"].size != n_axis or not used.all():
         raise RuntimeError("half_disc: the triangulation does not follow the boundary nodes or misses a node")
     return mesh
+
+
+def _too_thin(coating: float, h: float, radius: float, boundary: str) -> CaseError:
+    """The refusal of a coating thinner than the gap between the `boundary` ("circle" or "sphere") and the
+    mesh's facets on it: the interface's nodes would lie beyond those facets."""
+    return CaseError(f"mesh.coating = {coating:g} is too thin for mesh.h = {h:g}: the facets of the mesh on the "
+                     f"{boundary} of radius {radius:g} cut about h^2 / (8 radius) deep into the body, deeper than the "
+                     f"coating; use mesh.h < sqrt(8 radius coating) = {math.sqrt(8.0 * radius * coating):.3g} or a "
+                     f"thicker coating")
 
 
 def _coating(coating: float, radius: float) -> float:
@@ -436,7 +448,8 @@ def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None, c
     nodes it adds on that sphere lie on it too (`vpcontact.ball.coated_tetrahedra`). Measured for R/h
     in [4, 16] and h ≤ c ≤ R − h: smallest dihedral angle ≥ 24°, largest ≤ 117°, longest edge ≤ 1.08 h;
     graded (R/h in [1, 4], h_bottom = h/5 ≤ c ≤ R/2): smallest ≥ 14°, largest ≤ 160°. A coating thinner
-    than the elements is one layer of flat tetrahedra.
+    than the elements is one layer of flat tetrahedra; one that folds them (thinner than about h²/(8R),
+    the depth of the facets on the sphere) is refused.
     """
     h = _positive("h", h)
     R = _positive("radius", radius)
@@ -460,6 +473,8 @@ def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None, c
             p, t = ball.graded_towards_bottom(p, t, h, h_bottom)
     else:
         p, t, side = ball.coated_tetrahedra(n, coating, h, h_bottom)
+        if not np.all(ball.signed_volumes(p, t) > 0.0):
+            raise _too_thin(coating * radius, h * radius, radius, "sphere")
     if not np.all(ball.signed_volumes(p, t) > 0.0):
         raise RuntimeError("quarter_ball: a tetrahedron is flat or inverted")
     if coating is not None:
