@@ -777,19 +777,19 @@ def _body_elements(data: meshio.Mesh, names: list[tuple[int, int, str]],
     without a group) are all kept: the mesh checks refuse them as a region covered twice."""
     kind = CELLS[dim][0]
     physical = data.cell_data.get("gmsh:physical", [None] * len(data.cells))
-    start = np.cumsum([0] + [len(block.data) if block.type == kind else 0 for block in data.cells])
+    offset = np.cumsum([0] + [len(block.data) if block.type == kind else 0 for block in data.cells])
     cells = [block.data.T for block in data.cells if block.type == kind]
     if not cells:
         return np.zeros((dim + 1, 0), dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((2, 0), dtype=np.int64)
     t = np.hstack(cells).astype(np.int64)
     tags = np.concatenate([np.zeros(len(block.data), dtype=np.int64) if block_tags is None
-                           else np.asarray(block_tags, dtype=np.int64)
+                           else np.maximum(np.asarray(block_tags, dtype=np.int64), 0)  # 0: no group
                            for block, block_tags in zip(data.cells, physical) if block.type == kind])
     occurrences, groups = [np.arange(tags.size)[tags > 0]], [tags[tags > 0]]
     for group_dim, tag, name in names:
         for b, members in enumerate(data.cell_sets.get(name, []) if group_dim == dim else []):
             if data.cells[b].type == kind and members is not None and len(members):
-                occurrences.append(start[b] + np.asarray(members, dtype=np.int64))
+                occurrences.append(offset[b] + np.asarray(members, dtype=np.int64))
                 groups.append(np.full(len(members), tag, dtype=np.int64))
 
     # cells with the same nodes (`same`: one number for each set of nodes), merged when all of them have
