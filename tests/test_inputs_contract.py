@@ -222,7 +222,7 @@ def test_a_long_string_for_a_choice_is_cut_and_the_choices_kept(tmp_path):
     ('contact.part="' + "q" * 100000 + '"', ["unknown part 'qqqq", "(100000 characters)'",
                                              "the mesh has parts: bottom, left, right, top"]),
     ("mesh." + "q" * 100000 + "=1", ["unknown key 'mesh.qqqq", "(100005 characters)'",
-                                     "valid keys: depth, file, h, h_bottom, height, radius, shape, width"]),
+                                     "valid keys: coating, depth, file, h, h_bottom, height, radius, shape, width"]),
     ("output.field_steps=[" + "1," * 50000 + "0]", ["output.field_steps = [1, 1,", "(150003 characters)",
                                                     'expected "all", "final", "none" or a list of step numbers']),
 ])

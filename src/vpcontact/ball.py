@@ -18,11 +18,17 @@ same triangles and share its nodes.
 `graded_towards_bottom` then bisects the tetrahedra near the bottom point (0, 0, 0) (scikit-fem's
 longest-edge bisection, `MeshTet1.refined(marked)`), one level at a time, and after each level moves
 the new nodes of the spherical boundary radially onto the sphere.
+
+`coated_tetrahedra` makes the quarter ball with a coating of thickness c: the grid's shells are moved
+along the radius so that one shell of nodes lands on the sphere of radius 1 − c (the interface), and
+its grading bisects the tetrahedra of the grid's box, where the shells are planes, before they are
+mapped onto the ball: the nodes it adds on the interface and the sphere stay on them exactly.
 """
 
 from __future__ import annotations
 
 import logging
+from contextlib import contextmanager
 from itertools import permutations
 
 import numpy as np
@@ -44,12 +50,20 @@ VOLUME_PER_CUBED_EDGE = 0.02
 def structured_tetrahedra(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Nodes (3, (n + 1)²(2n + 1)) and positively oriented tetrahedra (4, 12n³) of the quarter ball of
     radius 1 centred at (0, 0, 1), n cells along each radius of each octant (see the module docstring)."""
+    q, t = box_grid(n)
+    p = to_ball(q)
+    return p, positively_oriented(p, t)
+
+
+def box_grid(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The points (i, j, k)/n (0 ≤ i, j ≤ n, −n ≤ k ≤ n) of the box [0, 1]² × [−1, 1] (3, (n + 1)²(2n + 1))
+    and the tetrahedra (4, 12n³) of its cells, which `to_ball` maps onto the quarter ball (k > 0 above
+    the plane z = 1, k < 0 below it)."""
     k = np.arange(-n, n + 1)
     I, J, K = np.meshgrid(np.arange(n + 1), np.arange(n + 1), k, indexing="ij")
-    octant = _equiangular(np.vstack((I.ravel(), J.ravel(), np.abs(K.ravel()))) / n)
-    p = np.vstack((octant[0], octant[1], 1.0 + np.sign(K.ravel()) * octant[2]))
+    q = np.vstack((I.ravel(), J.ravel(), K.ravel())) / n
 
-    index = np.arange(p.shape[1]).reshape(I.shape)
+    index = np.arange(q.shape[1]).reshape(I.shape)
     cells = np.stack(np.meshgrid(np.arange(n), np.arange(n), np.arange(2 * n), indexing="ij")).reshape(3, -1)
     upper = cells[2] >= n  # the cell between k and k + 1 ≥ 1 (grid index k + n)
     # A Kuhn tetrahedron runs from a corner of its cell to the opposite corner along the cell's
@@ -63,7 +77,61 @@ def structured_tetrahedra(n: int) -> tuple[np.ndarray, np.ndarray]:
             corner[axis] += 1 if axis < 2 else step
             corners.append(index[tuple(corner)])
         tetrahedra.append(np.vstack(corners))
-    return p, positively_oriented(p, np.hstack(tetrahedra))
+    return q, np.hstack(tetrahedra)
+
+
+def to_ball(q: np.ndarray) -> np.ndarray:
+    """The points of the quarter ball that points q (3, k) of the box [0, 1]² × [−1, 1] map to: the cube
+    of q₃ ≥ 0 onto the octant above the plane z = 1 and that of q₃ ≤ 0 onto its mirror image below, by
+    the equiangular map (the shell max(q₁, q₂, |q₃|) = s onto the sphere of radius s)."""
+    octant = _equiangular(np.vstack((q[0], q[1], np.abs(q[2]))))
+    return np.vstack((octant[0], octant[1], 1.0 + np.sign(q[2]) * octant[2]))
+
+
+def coated_tetrahedra(n: int, coating: float, h: float, h_bottom: float | None) -> tuple[np.ndarray, np.ndarray,
+                                                                                          np.ndarray]:
+    """Nodes, tetrahedra (positively oriented in the box: also in the ball unless the coating is too thin
+    for the grid, which folds it) and each node's side (−1 inside, 0 on, 1 outside) of the sphere of
+    radius 1 − `coating` of the quarter ball of radius 1 centred at (0, 0, 1), n cells along each radius,
+    graded towards the bottom point like `graded_towards_bottom` when h_bottom < h.
+
+    The box grid's shells s = max(q₁, q₂, |q₃|) are moved to s' = (1 − c) s/s_m for s ≤ s_m and
+    s' = 1 − c (1 − s)/(1 − s_m) for s ≥ s_m (piecewise linear, s_m = m/n, m = interface_shell(n, c)):
+    the shell m onto the cube's shell 1 − c, which `to_ball` maps onto the sphere of that radius. The
+    grading bisects the tetrahedra in that box (marking them by their lengths in the ball): the shells are
+    planes there, which midpoints of their edges stay on exactly, so the nodes it adds on the interface
+    and on the outer shell lie on their spheres once mapped, and each node's side is exact."""
+    q, t = box_grid(n)
+    s = np.vstack((q[0], q[1], np.abs(q[2]))).max(axis=0)
+    s_m = interface_shell(n, coating) / n
+    moved = np.where(s <= s_m, (1.0 - coating) * s / s_m, 1.0 - coating * (1.0 - s) / (1.0 - s_m))
+    q = q * (moved / np.where(s > 0.0, s, 1.0))
+    shell = np.vstack((q[0], q[1], np.abs(q[2]))).max(axis=0)
+    interface = shell[s == s_m][0]  # the interface's nodes' shell: one product s_m · (s'/s_m) for all of them
+    if h_bottom is not None and h_bottom < h:
+        mesh = _BoxOfBall(q, t)
+        with _quiet_bisection():
+            while (marked := _too_long(to_ball(mesh.p), mesh.t, h, h_bottom)).size:
+                mesh = mesh.refined(marked)
+        q, t = mesh.p, mesh.t
+    side = np.sign(np.vstack((q[0], q[1], np.abs(q[2]))).max(axis=0) - interface).astype(np.int64)
+    return to_ball(q), positively_oriented(q, t), side
+
+
+class _BoxOfBall(skfem.MeshTet1):
+    """Tetrahedra of the box that `to_ball` maps onto the ball, bisected (skfem's longest-edge bisection) at
+    the edge that is longest once mapped: the same choices as bisecting the mapped tetrahedra. (It overrides
+    a private method of scikit-fem 12; were it no longer called, the edges would be chosen by their lengths
+    in the box: the mesh would still be conforming with its interface exact, only its angles would differ.)"""
+
+    def _adaptive_sort_mesh(self, p, t, marked):
+        return super()._adaptive_sort_mesh(to_ball(p), t, marked)
+
+
+def interface_shell(n: int, coating: float) -> int:
+    """The shell of nodes (of 0 ... n along a radius) that `coated_tetrahedra` puts on the sphere of radius
+    1 − coating: the nearest to it, with at least one layer of cells on each side."""
+    return min(max(round((1.0 - coating) * n), 1), n - 1)
 
 
 def _equiangular(q: np.ndarray) -> np.ndarray:
@@ -115,19 +183,8 @@ def graded_towards_bottom(p: np.ndarray, t: np.ndarray, h: float, h_bottom: floa
     bisection level, the new nodes on the sphere are moved radially onto it."""
     mesh = skfem.MeshTet1(p, t)
     centre = np.array([[0.0], [0.0], [1.0]])
-    pairs = np.array([(i, j) for i in range(4) for j in range(i + 1, 4)]).T
-    # skfem's bisection seeds NumPy's global generator (keep the caller's state) and logs a warning
-    # for each copy of its arrays (silenced)
-    rng, log = np.random.get_state(), logging.getLogger("skfem.mesh.mesh")
-    level = log.level
-    log.setLevel(logging.ERROR)
-    try:
-        while True:
-            corners = mesh.p[:, mesh.t]  # (3, 4, m)
-            longest = np.linalg.norm(corners[:, pairs[0]] - corners[:, pairs[1]], axis=0).max(axis=0)
-            marked = np.flatnonzero(longest > target_edge(np.linalg.norm(corners.mean(axis=1), axis=0), h, h_bottom))
-            if not marked.size:
-                break
+    with _quiet_bisection():
+        while (marked := _too_long(mesh.p, mesh.t, h, h_bottom)).size:
             mesh = mesh.refined(marked)
             boundary = mesh.facets[:, mesh.boundary_facets()]
             centroid = mesh.p[:, boundary].mean(axis=1)
@@ -136,7 +193,27 @@ def graded_towards_bottom(p: np.ndarray, t: np.ndarray, h: float, h_bottom: floa
             offset = q[:, on_sphere] - centre
             q[:, on_sphere] = centre + offset / np.linalg.norm(offset, axis=0)
             mesh = skfem.MeshTet1(q, mesh.t)
+    return mesh.p, positively_oriented(mesh.p, mesh.t)
+
+
+def _too_long(p: np.ndarray, t: np.ndarray, h: float, h_bottom: float) -> np.ndarray:
+    """The tetrahedra t on the nodes p whose longest edge exceeds target_edge(distance of their centroid
+    from the bottom point (0, 0, 0))."""
+    pairs = np.array([(i, j) for i in range(4) for j in range(i + 1, 4)]).T
+    corners = p[:, t]  # (3, 4, m)
+    longest = np.linalg.norm(corners[:, pairs[0]] - corners[:, pairs[1]], axis=0).max(axis=0)
+    return np.flatnonzero(longest > target_edge(np.linalg.norm(corners.mean(axis=1), axis=0), h, h_bottom))
+
+
+@contextmanager
+def _quiet_bisection():
+    """Around skfem's bisection, which seeds NumPy's global generator (the caller's state is kept) and logs
+    a warning for each copy of its arrays (silenced)."""
+    rng, log = np.random.get_state(), logging.getLogger("skfem.mesh.mesh")
+    level = log.level
+    log.setLevel(logging.ERROR)
+    try:
+        yield
     finally:
         np.random.set_state(rng)
         log.setLevel(level)
-    return mesh.p, positively_oriented(mesh.p, mesh.t)

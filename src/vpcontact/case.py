@@ -137,6 +137,7 @@ class MeshSection(_Section):
     width: Optional[PositiveFloat] = None  # rectangle, block: default 1
     depth: Optional[PositiveFloat] = None  # block: default 1
     height: Optional[PositiveFloat] = None  # rectangle, block: default 1
+    coating: Optional[PositiveFloat] = None  # half_disc, quarter_ball: regions "core" and "coating" (this thick)
 
     @model_validator(mode="after")
     def _one_source(self):
@@ -154,6 +155,14 @@ class MeshSection(_Section):
         if self.h_bottom is not None and self.shape != "quarter_ball":
             where = f"mesh.shape = \"{self.shape}\"" if self.shape else "mesh.file"
             raise ValueError(f"mesh.h_bottom is only used with mesh.shape = \"quarter_ball\" (not with {where})")
+        if self.coating is not None and self.shape not in ("half_disc", "quarter_ball"):
+            where = f"mesh.shape = \"{self.shape}\"" if self.shape else "mesh.file (whose regions are its physical groups)"
+            raise ValueError(f"mesh.coating is only used with mesh.shape = \"half_disc\" or \"quarter_ball\" (not with "
+                             f"{where})")
+        if self.coating is not None and not self.coating < self.radius:
+            raise ValueError(f"mesh.coating = {_brief(self.coating)} must be less than mesh.radius = "
+                             f"{_brief(self.radius)} (the coating is the outer shell of that thickness; the core has "
+                             f"the radius radius - coating)")
         if self.file is not None and self.h is not None:
             raise ValueError("mesh.h is not used with mesh.file (the file fixes the elements)")
         if self.shape is not None:

@@ -136,8 +136,8 @@ def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
 
 
 def _wrap(p: np.ndarray, t: np.ndarray, classify: Callable[[np.ndarray], dict[str, np.ndarray]],
-          exact_normals: dict[str, NormalField]) -> Mesh:
-    """Build a `Mesh` from nodes `p` (d, n) and triangles or tetrahedra `t` (d + 1, m).
+          exact_normals: dict[str, NormalField], regions: dict[str, np.ndarray] | None = None) -> Mesh:
+    """Build a `Mesh` from nodes `p` (d, n) and triangles or tetrahedra `t` (d + 1, m) (and its `regions`).
 
     `classify(centroids (d, k))` returns part name -> boolean mask over the k boundary
     facets; the masks must partition the boundary (checked).
@@ -148,7 +148,7 @@ def _wrap(p: np.ndarray, t: np.ndarray, classify: Callable[[np.ndarray], dict[st
     if not np.array_equal(np.sum(list(masks.values()), axis=0), np.ones(boundary.size)):
         raise RuntimeError("boundary facets do not split exactly into the parts")
     parts = {name: boundary[mask] for name, mask in masks.items()}
-    return Mesh(mesh.with_boundaries(parts), parts, exact_normals)
+    return Mesh(mesh.with_boundaries(parts), parts, exact_normals, regions=regions or {})
 
 
 def _signed_areas(p: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -178,7 +178,7 @@ def _smooth(p: np.ndarray, t: np.ndarray, movable: np.ndarray, sweeps: int) -> n
     return p
 
 
-def half_disc(h: float, radius: float = 1.0) -> Mesh:
+def half_disc(h: float, radius: float = 1.0, coating: float | None = None) -> Mesh:
     """Quasi-uniform mesh of the half disc {x > 0, x² + (y − R)² < R²} (center (0, R)).
 
     Parts: "axis" (x = 0), "bottom_arc" (arc from (0, 0) to (R, R)), "top_arc" (arc from
@@ -192,18 +192,124 @@ def half_disc(h: float, radius: float = 1.0) -> Mesh:
     smoothed. The mesh is built for R = 1 and h/R, then scaled by R: the same triangles in any
     unit of length. Measured for R/h in [1, 300]: longest edge ≤ 1.45 h, smallest angle ≥ 27°;
     for R/h ≥ 5 the triangle count is within 5 % of (πR²/2)/(√3 h²/4).
+
+    With a `coating` c (0 < c < R) the mesh has the regions "core" (distance to the center < R − c)
+    and "coating", and a conforming interface: the half circle of radius R − c is a line of nodes
+    (`_coated_half_disc`); the parts and their facets on the arcs are the same. Measured for R/h in
+    [5, 50] and h ≤ c ≤ R − h: smallest angle ≥ 25°, longest edge ≤ 1.41 h; a coating thinner than h
+    is one layer of flat triangles (their height c against their length h); one not thicker than the
+    depth of the arc's facets, R (1 − cos(π/(4 n))) ≈ h²/(8R), is refused.
     """
     h = _positive("h", h)
     R = _positive("radius", radius)
     if h > R:
         raise CaseError(f"h = {h} must not exceed the radius {R}")
+    if coating is not None:
+        coating = _coating(coating, R)
     with np.errstate(over="ignore", divide="ignore"):
         triangles = 0.5 * np.pi * R * R / (0.25 * np.sqrt(3.0) * h * h)
     check_memory(triangles, f"mesh.h = {h:g} on a half disc of radius {R:g}", "use a larger mesh.h")
     n_arc = int(np.ceil(0.5 * np.pi * R / h))
-    n_axis = int(np.ceil(2.0 * R / h))
-    radius, h, R = R, h / R, 1.0  # built for R = 1, then scaled: the same triangles in any unit of length
+    if coating is None:
+        n_axis = int(np.ceil(2.0 * R / h))
+        p, t = _unit_half_disc(h / R, n_arc, n_axis)  # built for R = 1, then scaled: the same triangles in any unit
+        p, regions = R * p, {}
+    else:
+        if not coating > R * (1.0 - math.cos(0.25 * np.pi / n_arc)):  # the interface would cross the arc's facets
+            raise _too_thin(coating, h, R, "circle")
+        p, t, regions, n_axis = _coated_half_disc(h / R, coating / R, n_arc)  # built for R = 1 too
+        p = R * p
+    center = np.array([0.0, R])
 
+    def radial(x: np.ndarray) -> np.ndarray:
+        d = x - center.reshape((2,) + (1,) * (x.ndim - 1))
+        return d / np.sqrt((d**2).sum(axis=0))
+
+    def axis_normal(x: np.ndarray) -> np.ndarray:
+        out = np.zeros_like(x, dtype=float)
+        out[0] = -1.0
+        return out
+
+    def classify(mid: np.ndarray) -> dict[str, np.ndarray]:
+        on_axis = mid[0] < 1e-9 * h
+        return {"axis": on_axis, "bottom_arc": ~on_axis & (mid[1] < R), "top_arc": ~on_axis & (mid[1] > R)}
+
+    mesh = _wrap(p, t, classify, {"axis": axis_normal, "bottom_arc": radial, "top_arc": radial}, regions)
+    used = np.bincount(t.ravel(), minlength=p.shape[1]) > 0
+    if mesh.parts["bottom_arc"].size != n_arc or mesh.parts["axis"].size != n_axis or not used.all():
+        raise RuntimeError("half_disc: the triangulation does not follow the boundary nodes or misses a node")
+    return mesh
+
+
+def _too_thin(coating: float, h: float, radius: float, boundary: str) -> CaseError:
+    """The refusal of a coating thinner than the gap between the `boundary` ("circle" or "sphere") and the
+    mesh's facets on it: the interface's nodes would lie beyond those facets."""
+    return CaseError(f"mesh.coating = {coating:g} is too thin for mesh.h = {h:g}: the facets of the mesh on the "
+                     f"{boundary} of radius {radius:g} cut about h^2 / (8 radius) deep into the body, deeper than the "
+                     f"coating; use mesh.h < sqrt(8 radius coating) = {math.sqrt(8.0 * radius * coating):.3g} or a "
+                     f"thicker coating")
+
+
+def _coating(coating: float, radius: float) -> float:
+    """`coating` as a float, or CaseError unless 0 < coating < radius."""
+    coating = _positive("coating", coating)
+    if not coating < radius:
+        raise CaseError(f"coating = {coating:g} must be less than the radius {radius:g}: it is the thickness of the "
+                        f"outer shell, the core has the radius (radius - coating)")
+    return coating
+
+
+def _coated_half_disc(h: float, c: float, n_arc: int) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], int]:
+    """Nodes, counter-clockwise triangles, regions {"core", "coating"} and the number of axis facets of the
+    half disc of radius R = 1 centred at (0, R) with a coating of thickness c, n_arc facets on each quarter
+    of its arc (h and c relative to R).
+
+    The core is `half_disc`'s mesh of radius R − c (size min(h, R − c)) moved to the center (0, R); its arc
+    nodes are the interface. The coating holds L = max(1, round(c / (√3/2·h))) rows of nodes on the
+    half circles of radius R − c + j·c/L (j = 1 ... L), ending on the axis: row j has ceil(π r_j / h)
+    equal arcs, shifted by half of one for odd j below L (staggered against the row inside it), row L is
+    `half_disc`'s arc (n_arc facets on each quarter, (R, R) a node). The coating's triangles are scipy's
+    Delaunay triangles of the interface nodes and the rows (those between interface nodes only are the
+    core's polygon and dropped); the interface chords are Delaunay edges, so no triangle crosses the
+    interface."""
+    R = 1.0
+    inner = R - c
+    h_core = min(h, inner)
+    n_core = int(np.ceil(0.5 * np.pi * inner / h_core))
+    n_core_axis = int(np.ceil(2.0 * inner / h_core))
+    core_p, core_t = _unit_half_disc(h_core / inner, n_core, n_core_axis)
+    core_p = inner * core_p + np.array([[0.0], [c]])
+    interface = np.arange(2 * n_core + 1)  # the core's arc nodes, from (0, c) to (0, 2R − c)
+
+    L = max(1, round(c / (0.5 * np.sqrt(3.0) * h)))
+    rows = []
+    for j in range(1, L + 1):
+        r = R if j == L else inner + j * c / L
+        arcs = 2 * n_arc if j == L else int(np.ceil(np.pi * r / h))
+        angle = np.linspace(-0.5 * np.pi, 0.5 * np.pi, arcs + 1)
+        if j % 2 and j < L:  # staggered: the middles of the arcs, and the two ends on the axis
+            angle = np.concatenate((angle[:1], 0.5 * (angle[1:] + angle[:-1]), angle[-1:]))
+        row = np.vstack((r * np.cos(angle), R + r * np.sin(angle)))
+        row[0, [0, -1]] = 0.0
+        if j == L:
+            row[:, n_arc] = (R, R)
+        rows.append(row)
+    p = np.hstack([core_p] + rows)
+    nodes = np.concatenate((interface, np.arange(core_p.shape[1], p.shape[1])))
+    t = nodes[Delaunay(p[:, nodes].T).simplices.T]
+    t = t[:, ~(t < interface.size).all(axis=0)]
+    flip = _signed_areas(p, t) < 0
+    t[1:, flip] = t[2:0:-1, flip]
+    regions = {"core": np.arange(core_t.shape[1], dtype=np.int64),
+               "coating": np.arange(core_t.shape[1], core_t.shape[1] + t.shape[1], dtype=np.int64)}
+    return p, np.hstack((core_t, t)), regions, n_core_axis + 2 * L
+
+
+def _unit_half_disc(h: float, n_arc: int, n_axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes (2, n) and counter-clockwise triangles (3, m) of `half_disc` for R = 1 and h (relative to R), with
+    n_arc facets on each quarter arc and n_axis on the axis: the arc's 2 n_arc + 1 nodes first, from (0, 0)
+    counter-clockwise to (0, 2), then the axis' inner nodes downwards, then the interior nodes."""
+    R = 1.0
     # Boundary: the arc counter-clockwise from (0, 0) to (0, 2R), then the axis downwards.
     angle = np.linspace(-0.5 * np.pi, 0.5 * np.pi, 2 * n_arc + 1)
     arc = np.vstack((R * np.cos(angle), R + R * np.sin(angle)))
@@ -267,29 +373,8 @@ def half_disc(h: float, radius: float = 1.0) -> Mesh:
     flip = _signed_areas(p, t) < 0
     t[1:, flip] = t[2:0:-1, flip]
     t = np.hstack((core_t, t))
-    p = radius * _smooth(p, t, np.arange(p.shape[1]) >= n_boundary, sweeps=6)
-    h, R = h * radius, radius
-
-    center = np.array([0.0, R])
-
-    def radial(x: np.ndarray) -> np.ndarray:
-        d = x - center.reshape((2,) + (1,) * (x.ndim - 1))
-        return d / np.sqrt((d**2).sum(axis=0))
-
-    def axis_normal(x: np.ndarray) -> np.ndarray:
-        out = np.zeros_like(x, dtype=float)
-        out[0] = -1.0
-        return out
-
-    def classify(mid: np.ndarray) -> dict[str, np.ndarray]:
-        on_axis = mid[0] < 1e-9 * h
-        return {"axis": on_axis, "bottom_arc": ~on_axis & (mid[1] < R), "top_arc": ~on_axis & (mid[1] > R)}
-
-    mesh = _wrap(p, t, classify, {"axis": axis_normal, "bottom_arc": radial, "top_arc": radial})
-    used = np.bincount(t.ravel(), minlength=p.shape[1]) > 0
-    if mesh.parts["bottom_arc"].size != n_arc or mesh.parts["axis"].size != n_axis or not used.all():
-        raise RuntimeError("half_disc: the triangulation does not follow the boundary nodes or misses a node")
-    return mesh
+    p = _smooth(p, t, np.arange(p.shape[1]) >= n_boundary, sweeps=6)
+    return p, t
 
 
 def rectangle(width: float, height: float, h: float) -> Mesh:
@@ -332,7 +417,7 @@ def _constant(normal: tuple[float, ...]) -> NormalField:
     return field
 
 
-def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None) -> Mesh:
+def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None, coating: float | None = None) -> Mesh:
     """Tetrahedral mesh of the quarter ball {x > 0, y > 0, x² + y² + (z − R)² < R²} (center (0, 0, R)).
 
     Parts: "sym_x" (x = 0), "sym_y" (y = 0), "top" (the sphere above z = R), "bottom" (the
@@ -355,6 +440,16 @@ def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None) -
     30: smallest dihedral angle ≥ 20°, largest ≤ 149° (16° and 154° for h = R); about 15k to 30k
     tetrahedra in the fine zone, whatever h_bottom. The mesh is built for R = 1, h/R and
     h_bottom/R, then scaled by R: the same tetrahedra in any unit of length.
+
+    With a `coating` c (0 < c < R) the mesh has the regions "core" (distance to the center < R − c)
+    and "coating", and a conforming interface: the nodes are moved along their radii so that the shell
+    of nodes nearest the radius R − c (at least one layer of cells on each side) lies on the sphere of
+    that radius, and the grading bisects the cells before they are mapped onto the ball, so that the
+    nodes it adds on that sphere lie on it too (`vpcontact.ball.coated_tetrahedra`). Measured for R/h
+    in [4, 16] and h ≤ c ≤ R − h: smallest dihedral angle ≥ 24°, largest ≤ 117°, longest edge ≤ 1.08 h;
+    graded (R/h in [1, 4], h_bottom = h/5 ≤ c ≤ R/2): smallest ≥ 14°, largest ≤ 160°. A coating thinner
+    than the elements is one layer of flat tetrahedra; one that folds them (thinner than about h²/(8R),
+    the depth of the facets on the sphere) is refused.
     """
     h = _positive("h", h)
     R = _positive("radius", radius)
@@ -364,15 +459,29 @@ def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None) -
         h_bottom = _positive("h_bottom", h_bottom)
         if h_bottom > h:
             raise CaseError(f"h_bottom = {h_bottom} must not exceed h = {h}: it is the finer size at the bottom")
+    if coating is not None:
+        coating = _coating(coating, R) / R
     radius, h, h_bottom = R, h / R, None if h_bottom is None else h_bottom / R  # built for R = 1, then scaled
     check_memory(ball.estimated_tetrahedra(h, h_bottom), f"mesh.h = {h * radius:g}"
                  + ("" if h_bottom is None else f" and mesh.h_bottom = {h_bottom * radius:g}")
                  + f" on a quarter ball of radius {radius:g}", "use a larger mesh.h", dim=3)
-    p, t = ball.structured_tetrahedra(int(np.ceil(ball.CELLS_PER_RADIUS / h)))
-    if h_bottom is not None and h_bottom < h:
-        p, t = ball.graded_towards_bottom(p, t, h, h_bottom)
+    n = int(np.ceil(ball.CELLS_PER_RADIUS / h))
+    regions = {}
+    if coating is None:
+        p, t = ball.structured_tetrahedra(n)
+        if h_bottom is not None and h_bottom < h:
+            p, t = ball.graded_towards_bottom(p, t, h, h_bottom)
+    else:
+        p, t, side = ball.coated_tetrahedra(n, coating, h, h_bottom)
+        if not np.all(ball.signed_volumes(p, t) > 0.0):
+            raise _too_thin(coating * radius, h * radius, radius, "sphere")
     if not np.all(ball.signed_volumes(p, t) > 0.0):
         raise RuntimeError("quarter_ball: a tetrahedron is flat or inverted")
+    if coating is not None:
+        inside, outside = (side[t] < 0).any(axis=0), (side[t] > 0).any(axis=0)
+        if np.any(inside == outside):
+            raise RuntimeError("quarter_ball: a tetrahedron is on both sides of the coating's interface, or on it")
+        regions = {"core": np.flatnonzero(inside), "coating": np.flatnonzero(outside)}
     p = radius * p
     h, R = h * radius, radius
     center = np.array([0.0, 0.0, R])
@@ -388,7 +497,7 @@ def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None) -
 
     normals = {"sym_x": _constant((-1.0, 0.0, 0.0)), "sym_y": _constant((0.0, -1.0, 0.0)), "top": radial,
                "bottom": radial}
-    return _wrap(p, t, classify, normals)
+    return _wrap(p, t, classify, normals, regions)
 
 
 def block(width: float, depth: float, height: float, h: float) -> Mesh:
@@ -437,8 +546,11 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     named by the tag number (str) and, if the file names that physical group, by its name too (a facet
     may be in several named groups); each such facet must be a boundary facet of the mesh. Two physical
     groups of the parts' dimension with one name are refused. Facet cells without a physical tag (or
-    tag 0, gmsh's "none") are ignored. No exact normals. The orientation of the cells in the file is
-    not used. Any problem raises CaseError naming the file.
+    tag 0, gmsh's "none") are ignored. The physical groups of the body's dimension (physical surfaces in
+    2D, volumes in 3D) are the regions, keyed like the parts (tag number and name; two such groups with
+    one name are refused); an element in several of them is one element of each (`_body_elements`),
+    elements of none are in no region, and a file without them has no regions. No exact normals. The
+    orientation of the cells in the file is not used. Any problem raises CaseError naming the file.
     """
     label = os.fspath(path)
     check_regular_file(path, "mesh file")
@@ -459,17 +571,17 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     names = _physical_names(label) or [(int(v[1]), int(v[0]), k) for k, v in data.field_data.items() if np.size(v) == 2]
     dim = 3 if any(block.dim == 3 for block in data.cells) else 2
     _check_cell_types(label, data.cells, dim)
-    _check_unique_names(label, names, dim - 1)
-    element, facet = CELLS[dim]
-    elements = [block.data for block in data.cells if block.type == element]
-    if not elements:
+    _check_unique_names(label, names, dim, body=False)
+    _check_unique_names(label, names, dim, body=True)
+    facet = CELLS[dim][1]
+    t, position, members = _body_elements(data, names, dim)
+    if not t.size:
         raise CaseError(_no_triangles(label, data, names))
-    t = np.vstack(elements).T.astype(np.int64)
     check_memory(t.shape[1], f"mesh file '{label}'", "use a coarser mesh", dim=dim)
     outside = (t < 0) | (t >= len(data.points))
     if outside.any():
         k = np.flatnonzero(outside.any(axis=0))[0]
-        raise CaseError(f"mesh file '{label}': {ELEMENT_NAMES[dim][0]} {k + 1} refers to node "
+        raise CaseError(f"mesh file '{label}': {ELEMENT_NAMES[dim][0]} {position[k]} refers to node "
                         f"{t[outside[:, k], k][0] + 1}, but the file has nodes 1 to {len(data.points)}: the file is "
                         f"damaged")
     used, t = np.unique(t, return_inverse=True)
@@ -481,9 +593,9 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     check_finite(label, points, used + 1)
     if dim == 2:
         points = _plane(label, data, names, points)
-        check_triangles(label, points, t, used + 1)
+        check_triangles(label, points, t, used + 1, position)
     else:
-        check_tetrahedra(label, points, t, used + 1)
+        check_tetrahedra(label, points, t, used + 1, position)
 
     mesh = SKFEM_MESH[dim](np.ascontiguousarray(points), np.ascontiguousarray(t))
     facet_nodes, facet_tags = _physical_facets(data, names, facet, dim - 1)
@@ -512,7 +624,22 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
                     f"mesh file '{label}': physical name '{name}' (group {tag}) clashes with physical group {name}"
                 )
             parts[name] = parts[str(tag)]
-    return Mesh(mesh.with_boundaries(parts), parts, {}, label)
+    return Mesh(mesh.with_boundaries(parts), parts, {}, label, _regions(label, names, dim, members))
+
+
+def _regions(label: str, names: list[tuple[int, int, str]], dim: int, members: np.ndarray) -> dict[str, np.ndarray]:
+    """Region name -> sorted element indices, from the distinct (element, physical tag) pairs `members` (2, k),
+    sorted by element: one region per tag (named by its number) and, if the file names the group, by its
+    name too."""
+    regions = {str(tag): members[0, members[1] == tag] for tag in _distinct(members[1])}
+    for group_dim, tag, name in names:
+        if group_dim != dim or str(tag) not in regions:
+            continue
+        if name in regions and not np.array_equal(regions[name], regions[str(tag)]):
+            raise CaseError(f"mesh file '{label}': physical name '{name}' (group {tag}) clashes with physical group "
+                            f"{name}")
+        regions[name] = regions[str(tag)]
+    return regions
 
 
 #: The meshio cell types of each dimension: (the body's, the parts').
@@ -623,17 +750,76 @@ def _physical_names(path: str) -> list[tuple[int, int, str]]:
     return found
 
 
-def _check_unique_names(label: str, names: list[tuple[int, int, str]], part_dim: int) -> None:
-    """CaseError if two physical groups of the parts' dimension have one name (meshio would keep only
-    one of them)."""
-    group = PHYSICAL_GROUPS[part_dim + 1][0]
+def _check_unique_names(label: str, names: list[tuple[int, int, str]], dim: int, body: bool) -> None:
+    """CaseError if two physical groups of the parts' dimension (`body` False) or of the body's (`body` True)
+    of a `dim`-dimensional mesh have one name (meshio would keep only one of them)."""
+    group = PHYSICAL_GROUPS[dim][body]
+    what = "region" if body else "part"
     tags: dict[str, int] = {}
-    for dim, tag, name in names:
-        if dim == part_dim and tags.setdefault(name, tag) != tag:
+    for group_dim, tag, name in names:
+        if group_dim == dim - 1 + body and tags.setdefault(name, tag) != tag:
             raise CaseError(f"mesh file '{label}': two physical {group.lower()}s are named '{name}' (groups "
-                            f"{tags[name]} and {tag}); a part of that name would hold only one of them: give each "
+                            f"{tags[name]} and {tag}); a {what} of that name would hold only one of them: give each "
                             f"group its own name, or put all its {group.lower()}s in one Physical {group}(\"{name}\") "
                             f"= {{...}};")
+
+
+def _body_elements(data: meshio.Mesh, names: list[tuple[int, int, str]],
+                   dim: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The nodes (d + 1, m) (file numbering) of the body's elements (triangles in 2D, tetrahedra in 3D) in file
+    order, their positions (m,) among the file's cells of their kind (from 1, for messages), and their physical
+    groups: (element, tag) pairs (2, k), tags > 0.
+
+    An element in several physical groups is one element of each: a gmsh 2.2 file writes it once per group
+    (as cells with the same nodes and different tags, merged here into the first of them); a 4.1 file once,
+    meshio's cell_data keeping its entity's first group and its cell_sets each named group's cells. Cells
+    with the same nodes that are not all in distinct physical groups (a cell written twice in one group, or
+    without a group) are all kept: the mesh checks refuse them as a region covered twice."""
+    kind = CELLS[dim][0]
+    physical = data.cell_data.get("gmsh:physical", [None] * len(data.cells))
+    offset = np.cumsum([0] + [len(block.data) if block.type == kind else 0 for block in data.cells])
+    cells = [block.data.T for block in data.cells if block.type == kind]
+    if not cells:
+        return np.zeros((dim + 1, 0), dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((2, 0), dtype=np.int64)
+    t = np.hstack(cells).astype(np.int64)
+    tags = np.concatenate([np.zeros(len(block.data), dtype=np.int64) if block_tags is None
+                           else np.maximum(np.asarray(block_tags, dtype=np.int64), 0)  # 0: no group
+                           for block, block_tags in zip(data.cells, physical) if block.type == kind])
+    occurrences, groups = [np.arange(tags.size)[tags > 0]], [tags[tags > 0]]
+    for group_dim, tag, name in names:
+        for b, members in enumerate(data.cell_sets.get(name, []) if group_dim == dim else []):
+            if data.cells[b].type == kind and members is not None and len(members):
+                occurrences.append(offset[b] + np.asarray(members, dtype=np.int64))
+                groups.append(np.full(len(members), tag, dtype=np.int64))
+
+    # cells with the same nodes (`same`: one number for each set of nodes), merged when all of them have
+    # distinct tags > 0 (the first kept); one sort, and 1D keys (set · (largest tag + 1) + tag) for pairs
+    nodes = np.sort(t, axis=0)
+    order = np.lexsort(nodes[::-1])
+    starts = np.concatenate(([True], (nodes[:, order[1:]] != nodes[:, order[:-1]]).any(axis=0)))
+    same = np.empty(tags.size, dtype=np.int64)
+    same[order] = np.cumsum(starts) - 1
+    start = np.flatnonzero(starts)
+    count = np.diff(np.append(start, tags.size))
+    scale = int(tags.max(initial=0)) + 1
+    distinct = np.bincount(_distinct(same * scale + tags) // scale, minlength=count.size)
+    merged = (count > 1) & (distinct == count) & (np.minimum.reduceat(tags[order], start) > 0)
+    first = order[start]  # the first cell of each set: the sort is stable
+    keep = ~merged[same] | (np.arange(tags.size) == first[same])
+    new_index = np.cumsum(keep) - 1
+    element = np.where(merged[same], new_index[first[same]], new_index)
+    groups = np.concatenate(groups)
+    scale = int(groups.max(initial=0)) + 1
+    pairs = _distinct(element[np.concatenate(occurrences)] * scale + groups)
+    return t[:, keep], np.flatnonzero(keep) + 1, np.vstack((pairs // scale, pairs % scale))
+
+
+def _distinct(keys: np.ndarray) -> np.ndarray:
+    """The distinct integers of `keys`, sorted (np.unique, without its slower hashing of large arrays)."""
+    keys = np.sort(keys)
+    new = np.ones(keys.size, dtype=bool)
+    new[1:] = keys[1:] != keys[:-1]
+    return keys[new]
 
 
 def _physical_facets(data: meshio.Mesh, names: list[tuple[int, int, str]], kind: str,

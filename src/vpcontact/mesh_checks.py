@@ -57,10 +57,14 @@ FIX_OVERLAP = ("each region must be meshed once: in gmsh, the curves bounding a 
 
 
 class Names:
-    """Message pieces: nodes by their number in the file and coordinates, triangles by position."""
+    """Message pieces: nodes by their number in the file and coordinates, elements by their position among
+    the file's elements (`element_numbers`, from 1; default: their column in t plus 1)."""
 
-    def __init__(self, label: str, p: np.ndarray, node_numbers: np.ndarray):
-        self.label, self.p, self.numbers = label, p, node_numbers
+    def __init__(self, label: str, p: np.ndarray, node_numbers: np.ndarray, element_numbers: np.ndarray | None = None):
+        self.label, self.p, self.numbers, self.element_numbers = label, p, node_numbers, element_numbers
+
+    def element(self, k: int) -> int:
+        return k + 1 if self.element_numbers is None else int(self.element_numbers[k])
 
     def at(self, point) -> str:
         return f"({', '.join(f'{x:.6g}' for x in point)})"
@@ -69,7 +73,7 @@ class Names:
         return f"node {self.numbers[i]} at {self.at(self.p[:, i])}"
 
     def triangle(self, k: int, t: np.ndarray) -> str:
-        return f"triangle {k + 1} (nodes {', '.join(str(self.numbers[i]) for i in t[:, k])})"
+        return f"triangle {self.element(k)} (nodes {', '.join(str(self.numbers[i]) for i in t[:, k])})"
 
     def error(self, text: str) -> CaseError:
         return CaseError(f"mesh file '{self.label}': {text}")
@@ -91,11 +95,13 @@ def check_finite(label: str, points: np.ndarray, node_numbers: np.ndarray) -> No
                         f"edit that wrote the file")
 
 
-def check_triangles(label: str, p: np.ndarray, t: np.ndarray, node_numbers: np.ndarray) -> None:
+def check_triangles(label: str, p: np.ndarray, t: np.ndarray, node_numbers: np.ndarray,
+                    element_numbers: np.ndarray | None = None) -> None:
     """Raise CaseError unless the triangles `t` (3, m) on the finite nodes `p` (2, n), every node
     used, cover a plane region once (see the module docstring). `node_numbers` (n,): the nodes'
-    numbers in the file; triangles are named by their position among the file's triangles (from 1)."""
-    names = Names(label, p, node_numbers)
+    numbers in the file; triangles are named by their position among the file's triangles (from 1;
+    `element_numbers` (m,), default: their column in t plus 1)."""
+    names = Names(label, p, node_numbers, element_numbers)
     p = in_unit_box(names, p)
     twice_area = _check_areas(names, p, t)
     start, end = _boundary_edges(names, p, t, twice_area)

@@ -42,11 +42,13 @@ FACES = np.array([[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]])
 FACE_SIDE = np.array([-1.0, 1.0, -1.0, 1.0])
 
 
-def check_tetrahedra(label: str, p: np.ndarray, t: np.ndarray, node_numbers: np.ndarray) -> None:
+def check_tetrahedra(label: str, p: np.ndarray, t: np.ndarray, node_numbers: np.ndarray,
+                     element_numbers: np.ndarray | None = None) -> None:
     """Raise CaseError unless the tetrahedra `t` (4, m) on the finite nodes `p` (3, n), every node used,
     cover a body once (see the module docstring). `node_numbers` (n,): the nodes' numbers in the file;
-    tetrahedra are named by their position among the file's tetrahedra (from 1)."""
-    names = Names(label, p, node_numbers)
+    tetrahedra are named by their position among the file's tetrahedra (from 1; `element_numbers` (m,),
+    default: their column in t plus 1)."""
+    names = Names(label, p, node_numbers, element_numbers)
     p = in_unit_box(names, p)
     six_volume = _check_volumes(names, p, t)
     faces = _boundary_faces(names, t, six_volume)
@@ -56,7 +58,7 @@ def check_tetrahedra(label: str, p: np.ndarray, t: np.ndarray, node_numbers: np.
 
 
 def _tetrahedron(names: Names, k: int, t: np.ndarray) -> str:
-    return f"tetrahedron {k + 1} (nodes {', '.join(str(names.numbers[i]) for i in t[:, k])})"
+    return f"tetrahedron {names.element(k)} (nodes {', '.join(str(names.numbers[i]) for i in t[:, k])})"
 
 
 def _check_volumes(names: Names, p: np.ndarray, t: np.ndarray) -> np.ndarray:

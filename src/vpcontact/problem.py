@@ -174,9 +174,9 @@ def _make_mesh(case: Case) -> meshes.Mesh:
     if m.file is not None:
         return meshes.read_mesh(case.mesh_path)
     if m.shape == "half_disc":
-        return meshes.half_disc(m.h, m.radius)
+        return meshes.half_disc(m.h, m.radius, m.coating)
     if m.shape == "quarter_ball":
-        return meshes.quarter_ball(m.h, m.radius, m.h_bottom)
+        return meshes.quarter_ball(m.h, m.radius, m.h_bottom, m.coating)
     if m.shape == "block":
         return meshes.block(m.width, m.depth, m.height, m.h)
     return meshes.rectangle(m.width, m.height, m.h)

@@ -23,8 +23,9 @@ def rectangle(x0, y0, x1, y1, size=SIZE):
 
 
 def physical_sides(lines, prefix=""):
-    for tag, name in zip(lines, ["bottom", "right", "top", "left"]):
-        gmsh.model.addPhysicalGroup(1, [tag], name=prefix + name)
+    """Physical curves "bottom", "right", "top", "left" of `lines` (a line tag or a list of them each)."""
+    for tags, name in zip(lines, ["bottom", "right", "top", "left"]):
+        gmsh.model.addPhysicalGroup(1, tags if isinstance(tags, list) else [tags], name=prefix + name)
 
 
 def write(name, build, *, version=4.1, dim=2, order=1):
@@ -122,6 +123,43 @@ def shared_curves():
     gmsh.model.addPhysicalGroup(2, [s], name="body")
 
 
+def regions():
+    """[0, 2] × [0, 1] as two squares sharing x = 1: physical surfaces "core" (x < 1), "shell" (x > 1)
+    and "body" (both: every triangle is in two physical surfaces); sides "bottom" ... "left"."""
+    geo = gmsh.model.geo
+    points = [geo.addPoint(x, y, 0, SIZE) for x, y in [(0, 0), (1, 0), (2, 0), (2, 1), (1, 1), (0, 1)]]
+    b1, b2, r, t2, t1, l, mid = (geo.addLine(points[a], points[b]) for a, b in
+                                 [(0, 1), (1, 2), (2, 3), (3, 4), (4, 5), (5, 0), (1, 4)])
+    core = geo.addPlaneSurface([geo.addCurveLoop([b1, mid, t1, l])])
+    shell = geo.addPlaneSurface([geo.addCurveLoop([b2, r, t2, -mid])])
+    geo.synchronize()
+    physical_sides([[b1, b2], [r], [t1, t2], [l]])
+    gmsh.model.addPhysicalGroup(2, [core], name="core")
+    gmsh.model.addPhysicalGroup(2, [shell], name="shell")
+    gmsh.model.addPhysicalGroup(2, [core, shell], name="body")
+
+
+def edit_elements(source, target, change):
+    """Write `target` as the msh 2.2 file `source` with its element lines replaced by change(lines)."""
+    head, rest = (HERE / f"{source}.msh").read_text().split("$Elements\n", 1)
+    lines, tail = rest.split("$EndElements", 1)
+    lines = change(lines.splitlines()[1:])
+    (HERE / f"{target}.msh").write_text(f"{head}$Elements\n{len(lines)}\n" + "\n".join(lines) + "\n$EndElements"
+                                        + tail)
+
+
+def untagged_shell(lines):
+    """Drop the triangles of "body" (7) and give those of "shell" (6) the physical tag 0 (none)."""
+    kept = [line.split() for line in lines if line.split()[1:4:2] != ["2", "7"]]
+    return [" ".join(f[:3] + (["0"] if f[1:4:2] == ["2", "6"] else f[3:4]) + f[4:]) for f in kept]
+
+
+def triangle_twice(lines):
+    """The first triangle of "core" (5) written once more in "core"."""
+    first = next(line.split() for line in lines if line.split()[1:4:2] == ["2", "5"])
+    return lines + [" ".join([str(len(lines) + 1)] + first[1:])]
+
+
 def cube():
     gmsh.model.geo.synchronize()
     gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
@@ -147,6 +185,13 @@ if __name__ == "__main__":
     write("shared_curves", shared_curves)
     write("shared_curves_msh22", shared_curves, version=2.2)
     write("cube", cube, dim=3)
+    write("regions", regions)
+    write("regions_msh22", regions, version=2.2)
     # gmsh itself does not write two physical curves of one name; other tools and hand edits do
     text = (HERE / "square_msh22.msh").read_text()
     (HERE / "duplicate_names.msh").write_text(text.replace('1 2 "right"', '1 2 "bottom"'))
+    # triangles of no physical group beside tagged ones (gmsh's Mesh.SaveAll drops all tags in msh 2.2)
+    edit_elements("regions_msh22", "regions_untagged_shell", untagged_shell)
+    edit_elements("regions_msh22", "regions_triangle_twice", triangle_twice)
+    (HERE / "regions_duplicate_names.msh").write_text(
+        (HERE / "regions_msh22.msh").read_text().replace('2 6 "shell"', '2 6 "core"'))

@@ -118,6 +118,22 @@ def split_cube():
     gmsh.model.addPhysicalGroup(3, [1, 2], name="body")
 
 
+def regions():
+    """The box [0, 2] × [0, 1] × [0, 1] as two unit cubes sharing x = 1 (fragmented): physical volumes
+    "core" (x < 1), "shell" (x > 1) and "body" (both: every tetrahedron is in two physical volumes);
+    physical surfaces "left" and "bottom"."""
+    occ = gmsh.model.occ
+    occ.fragment([(3, occ.addBox(0, 0, 0, 1, 1, 1))], [(3, occ.addBox(1, 0, 0, 1, 1, 1))])
+    occ.synchronize()
+    faces = box_faces(high=(2, 1, 1))
+    for name in ("left", "bottom"):
+        gmsh.model.addPhysicalGroup(2, faces[name], name=name)
+    volumes = {round(occ.getCenterOfMass(3, tag)[0]): tag for _, tag in gmsh.model.getEntities(3)}
+    gmsh.model.addPhysicalGroup(3, [volumes[0]], name="core")
+    gmsh.model.addPhysicalGroup(3, [volumes[2]], name="shell")
+    gmsh.model.addPhysicalGroup(3, [volumes[0], volumes[2]], name="body")
+
+
 def hexahedra():
     """The unit cube meshed with transfinite hexahedra."""
     gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
@@ -232,6 +248,8 @@ if __name__ == "__main__":
     write("no_physical_volume", cube(volume=False))
     write("no_physical_groups", cube(volume=False, surfaces=False))
     write("second_order", cube(), order=2)
+    write("regions", regions)
+    write("regions_msh22", regions, version=2.2)
     write("hexahedra", hexahedra)
     write("prisms", prisms)
     write("pyramids", pyramids)
