@@ -6,9 +6,13 @@ and the same in both (σ_xx = f), the strain f/E_i in material i, so u_x is piec
 kink at the interface and u_y (u_z) = 0: P1 represents it exactly when the interface is a mesh line.
 """
 
+from pathlib import Path
+
 import meshio
 import numpy as np
 import pytest
+
+from conftest import assert_refused, run_cli
 
 from vpcontact import build_problem, load_case, solve_problem
 from vpcontact.errors import CaseError
@@ -134,3 +138,92 @@ def test_the_time_loop_uses_the_stress_of_each_element():
     result = TimeLoop(problem).run()
     strain_xx = result.fields[2].stress[:, 0, 0] / problem.materials.E
     assert np.isclose(strain_xx.max() / strain_xx.min(), E1 / E2, rtol=1e-12)
+
+
+# --- materials by region -------------------------------------------------------------------------
+MESHES = Path(__file__).parent / "meshes"
+
+
+def regions_case(dim: int, materials) -> dict:
+    """The gmsh meshes of two regions side by side, 'core' (x < 1) and 'shell' (x > 1), each element also in
+    'body': 2D [0, 2] × [0, 1] pulled by F·t along x on its right side, on rollers at x = 0 and y = 0;
+    3D [0, 2] × [0, 1]², clamped on its bottom, under a body force."""
+    if dim == 2:
+        boundary = {"dirichlet": [{"part": "left", "components": ["x"]}, {"part": "bottom", "components": ["y"]}],
+                    "traction": [{"part": "right", "value": [f"{F}*t", "0"]}]}
+    else:
+        boundary = {"dirichlet": [{"part": "bottom"}], "body_force": [{"value": ["10*t", "0", "-20*t*x"]}]}
+    return {"mesh": {"file": str(MESHES / ("3d" if dim == 3 else "") / "regions.msh")}, "material": materials,
+            "boundary": boundary, "time": {"T": 1.0, "steps": 2}, "output": {"field_steps": "all"}}
+
+
+def test_two_regions_in_series_are_exact():
+    """The same bar as above, stated as two regions of a gmsh file (its interface x = 1 a mesh line of an
+    unstructured mesh): the P1 solution is the exact piecewise-linear displacement."""
+    materials = [{"region": "core", "E": E1, "nu": 0.0}, {"region": "shell", "E": E2, "nu": 0.0}]
+    problem = build_problem(load_case(regions_case(2, materials)))
+    result = solve_problem(problem)
+    x = problem.mesh.mesh.p[0]
+    for step, fields in result.fields.items():
+        stress = F * problem.times[step - 1]
+        expected = np.where(x <= 1.0, stress * x / E1, stress / E1 + stress * (x - 1.0) / E2)
+        assert np.abs(fields.displacement[:, 0] - expected).max() < 1e-12 * expected.max()
+        assert np.abs(fields.displacement[:, 1]).max() < 1e-12 * expected.max()
+    assert set(np.unique(problem.materials.E[problem.mesh.regions["core"]])) == {E1}
+    assert set(np.unique(problem.materials.E[problem.mesh.regions["shell"]])) == {E2}
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_one_material_in_every_region_is_the_single_material(dim):
+    """Two entries with the same data on 'core' and 'shell' (a viscoplastic law in both) give the run of one
+    [material] table, to rounding; naming a region by its number is naming it by its name."""
+    law = {"law": "perzyna", "eta": 0.5, "yield_stress": 1.0}
+    single = solve_problem(build_problem(load_case(regions_case(dim, {"E": 800.0, "nu": 0.3, "viscoplastic": law}))))
+    tags = {2: "6", 3: "4"}
+    regional = solve_problem(build_problem(load_case(regions_case(dim, [
+        {"region": "core", "E": 800.0, "nu": 0.3, "viscoplastic": law},
+        {"region": int(tags[dim]), "E": 800.0, "nu": 0.3, "viscoplastic": law}]))))
+    for step in single.fields:
+        scale = np.abs(single.fields[step].stress).max()
+        assert np.abs(regional.fields[step].stress - single.fields[step].stress).max() < 1e-12 * scale
+        assert np.abs(regional.fields[step].z - single.fields[step].z).max() < 1e-12 * scale
+    assert np.abs(single.fields[2].z).max() > 1e-2 * np.abs(single.fields[2].stress).max()  # the law acts
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_region_without_a_law_stays_elastic(dim):
+    """Perzyna in the core only: the history z stays exactly 0 in the shell (𝒢 = 0 there, σ_0 = 0), not in
+    the core."""
+    law = {"law": "perzyna", "eta": 0.5, "yield_stress": 0.0}
+    problem = build_problem(load_case(regions_case(dim, [{"region": "core", "E": 800.0, "nu": 0.3, "viscoplastic": law},
+                                                         {"region": "shell", "E": 300.0, "nu": 0.2}])))
+    result = solve_problem(problem)
+    z = result.fields[2].z
+    assert not np.any(z[problem.mesh.regions["shell"]])
+    assert np.all(np.abs(z[problem.mesh.regions["core"]]).max(axis=(1, 2)) > 0)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("materials, words", [
+    ([{"region": "core", "E": 1.0, "nu": 0.3}], ["elements have no material (in the mesh's regions 'shell', 'body'; one is at"]),
+    ([{"region": "core", "E": 1.0, "nu": 0.3}, {"region": "body", "E": 2.0, "nu": 0.3}],
+     ["material[1].region 'body' overlaps material[0].region (core)", "two materials"]),
+    ([{"region": ["core", "shell"], "E": 1.0, "nu": 0.3}, {"region": "skin", "E": 2.0, "nu": 0.3}],
+     ["material[1].region = 'skin': unknown region", "core", "shell"]),
+])
+def test_gaps_overlaps_and_unknown_regions_are_refused(dim, materials, words):
+    with pytest.raises(CaseError) as refused:
+        build_problem(load_case(regions_case(dim, materials)))
+    for word in words:
+        assert word in str(refused.value), (word, str(refused.value))
+
+
+def test_a_mesh_region_in_no_material_is_named_through_the_cli(tmp_path):
+    """The exit-code contract: exit 2, one line naming the region left without a material, nothing written."""
+    import tomli_w
+
+    case = regions_case(2, [{"region": "core", "E": 1.0, "nu": 0.3}, {"region": "5", "E": 2.0, "nu": 0.3}])
+    (tmp_path / "case.toml").write_text(tomli_w.dumps(case))
+    status, _, stderr = run_cli("run", tmp_path / "case.toml", "--out", tmp_path / "run", "--quiet")
+    assert_refused(status, stderr, "material[1].region '5' overlaps material[0].region (core)")
+    assert not (tmp_path / "run").exists()

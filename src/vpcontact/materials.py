@@ -117,15 +117,23 @@ def _owners(entries: list[tuple[str, MaterialSection]], mesh: Mesh) -> np.ndarra
             owner[claimed] = i
     orphans = np.flatnonzero(owner < 0)
     if orphans.size:
-        named = {name for _, entry in entries for name in entry.regions}
-        unnamed = [name for name, found in mesh.regions.items() if name not in named and np.any(owner[found] < 0)]
         at = ", ".join(f"{c:.6g}" for c in mesh.mesh.p[:, mesh.mesh.t[:, orphans[0]]].mean(axis=1))
-        where = (f"the mesh's region{'s' if len(unnamed) > 1 else ''} {', '.join(repr(n) for n in unnamed)} "
-                 f"{'have' if len(unnamed) > 1 else 'has'} no material" if unnamed else
-                 "they are in no region of the mesh")
-        raise CaseError(f"material: {orphans.size} of {elements} elements have no material ({where}; one is at "
-                        f"({', '.join(coordinates(mesh.dim))}) = ({at})): add a material entry for them")
+        raise CaseError(f"material: {orphans.size} of {elements} elements have no material ({_where(owner, mesh)}; "
+                        f"one is at ({', '.join(coordinates(mesh.dim))}) = ({at})): add a material entry for them")
     return owner
+
+
+def _where(owner: np.ndarray, mesh: Mesh) -> str:
+    """Where elements without a material are: the regions holding some, each once (a gmsh group known by its
+    number and by its name is named by its name), or in no region."""
+    regions = [name for name, elements in mesh.regions.items() if np.any(owner[elements] < 0)]
+    named = [name for name in regions
+             if not (name.isdigit() and any(not other.isdigit() and np.array_equal(mesh.regions[other],
+                                                                                mesh.regions[name])
+                                            for other in regions))]
+    if not named:
+        return "they are in no region of the mesh"
+    return f"in the mesh's region{'s' * (len(named) > 1)} {', '.join(repr(name) for name in named)}"
 
 
 def _unknown_region(key: str, name: str, mesh: Mesh) -> str:
