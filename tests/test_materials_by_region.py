@@ -227,3 +227,25 @@ def test_a_mesh_region_in_no_material_is_named_through_the_cli(tmp_path):
     status, _, stderr = run_cli("run", tmp_path / "case.toml", "--out", tmp_path / "run", "--quiet")
     assert_refused(status, stderr, "material[1].region '5' overlaps material[0].region (core)")
     assert not (tmp_path / "run").exists()
+
+
+def test_a_python_viscoplastic_law_of_the_centroids_is_the_regional_law():
+    """𝒢(σ, ε, x) of the API (x the element centroids): Perzyna where x < 1, 0 elsewhere, equals the case's
+    Perzyna on the region 'core' (x < 1) and an elastic 'shell', to rounding."""
+    perzyna = Perzyna(0.5, 0.0)
+
+    def G(sigma, strain, x):
+        return np.where(x[0] < 1.0, perzyna(sigma, strain), 0.0)
+
+    materials = [{"region": "core", "E": 800.0, "nu": 0.3}, {"region": "shell", "E": 300.0, "nu": 0.2}]
+    by_python = solve_problem(build_problem(load_case(regions_case(2, materials)), viscoplastic=G))
+    materials[0]["viscoplastic"] = {"law": "perzyna", "eta": 0.5, "yield_stress": 0.0}
+    by_case = solve_problem(build_problem(load_case(regions_case(2, materials))))
+    scale = np.abs(by_case.fields[2].stress).max()
+    assert np.abs(by_python.fields[2].stress - by_case.fields[2].stress).max() < 1e-12 * scale
+    assert np.abs(by_case.fields[2].z).max() > 1e-2 * scale
+
+
+def test_a_python_viscoplastic_law_of_four_arguments_is_refused():
+    with pytest.raises(CaseError, match=r"viscoplastic takes 4 arguments \(a, b, c, d\)"):
+        build_problem(load_case(regions_case(2, {"E": 1.0, "nu": 0.3})), viscoplastic=lambda a, b, c, d: a)

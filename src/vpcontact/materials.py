@@ -12,7 +12,7 @@ claiming one element are refused before any computation.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -36,6 +36,18 @@ class RegionalViscoplastic:
         for elements, law in self.laws:
             rate[..., elements] = law(sigma[..., elements], strain[..., elements])
         return rate
+
+
+@dataclass(frozen=True, eq=False)
+class AtCentroids:
+    """A law 𝒢(σ, ε, x) of the API with x bound to the element centroids (d, nelements): 𝒢(x, σ, ε) of
+    (2.17) as a law of (σ, ε) over the elements."""
+
+    law: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+    centroids: np.ndarray = field(repr=False)
+
+    def __call__(self, sigma: np.ndarray, strain: np.ndarray) -> np.ndarray:
+        return self.law(sigma, strain, self.centroids)
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ from .errors import CaseError, quoted
 from .expressions import parse_expression
 from .initial import InitialState, initial_state
 from .material import Elasticity
-from .materials import Materials, body_materials
+from .materials import AtCentroids, Materials, body_materials
 from .results import check_memory
 from .rigid_modes import RigidModes
 from .space import CELLS, component, coordinates
@@ -93,8 +93,9 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
       case's traction on that part (the case's tractions on other parts stay);
     - ``body_force``: f(x, y, t) -> (fx, fy) (in 3D f(x, y, z, t) -> (fx, fy, fz)) replaces the case's
       body forces;
-    - ``viscoplastic``: 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (d, d, nelements) (it
-      replaces ``material.viscoplastic``);
+    - ``viscoplastic``: 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (d, d, nelements), or
+      𝒢(σ, ε, x) with x the element centroids (d, nelements) (𝒢(x, σ, ε) of (2.17)); it replaces the
+      viscoplastic laws of the case's materials, in every region;
     - ``initial_displacement`` (nodes, d), ``initial_stress`` (elements, d, d) or (d, d) (uniform),
       ``initial_xi`` (contact nodes,): arrays of the initial state u_0, σ_0, ξ_0 that replace the case's
       (``initial.*``, see :mod:`vpcontact.initial`; checked alike: shapes, finite, u_0 in V and admissible
@@ -155,9 +156,8 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     law_name = "material.viscoplastic" if viscoplastic is None else "viscoplastic"
     if viscoplastic is None:
         viscoplastic = materials.viscoplastic
-    elif not callable(viscoplastic):
-        raise CaseError(f"viscoplastic = {_brief(viscoplastic)}: expected a function G(sigma, strain) of arrays of "
-                        f"shape (d, d, elements)")
+    else:
+        viscoplastic = _api_viscoplastic(viscoplastic, mesh)
     check_memory(case, mesh.mesh.p.shape[1], elements, surface.size,
                  history=viscoplastic is not None or bool(np.any(z0 != 0.0)), dim=dim)
     grid = TimeGrid(case.time.T, case.time.steps, initial.start)
@@ -167,6 +167,21 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
     return Problem(case, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic, timings,
                    initial=initial)
+
+
+def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:
+    """𝒢 of the API: G(sigma, strain) of arrays (d, d, elements), or G(sigma, strain, x) of the element
+    centroids x (d, elements) too (𝒢(x, σ, ε) of (2.17)), bound to the mesh's centroids; else CaseError."""
+    if not callable(G):
+        raise CaseError(f"viscoplastic = {_brief(G)}: expected a function G(sigma, strain) of arrays of shape "
+                        f"(d, d, elements), or G(sigma, strain, x) with x the element centroids (d, elements)")
+    required = _required_arguments(G)
+    if len(required) > 3:
+        raise CaseError(f"viscoplastic takes {len(required)} arguments ({', '.join(required)}): expected "
+                        f"G(sigma, strain) or G(sigma, strain, x)")
+    if len(required) == 3:
+        return AtCentroids(G, mesh.mesh.p[:, mesh.mesh.t].mean(axis=1))
+    return G
 
 
 def _make_mesh(case: Case) -> meshes.Mesh:
@@ -277,20 +292,26 @@ def _api_law(law, name: str):
 
 
 def _arguments(law: Callable, name: str) -> int:
-    """The arguments ``law`` takes, from its signature: 1 (r), or 2 (r, x); 1 when Python cannot tell
-    (a NumPy ufunc) or when it takes any number (*args); CaseError for more."""
-    try:
-        parameters = list(inspect.signature(law).parameters.values())
-    except (TypeError, ValueError):
-        return 1
-    required = [p.name for p in parameters
-                if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is p.empty]
-    if len(required) <= 1 or any(p.kind == p.VAR_POSITIONAL for p in parameters):
+    """The arguments ``law`` takes, from its signature: 1 (r), or 2 (r, x); CaseError for more."""
+    required = _required_arguments(law)
+    if len(required) <= 1:
         return 1
     if len(required) > 2:
         raise CaseError(f"{name} takes {len(required)} arguments ({', '.join(required)}): expected f(r), or f(r, x) "
                         f"with x the coordinates of the contact nodes")
     return 2
+
+
+def _required_arguments(function: Callable) -> list[str]:
+    """The names of the positional arguments ``function`` requires, from its signature; none when Python
+    cannot tell (a NumPy ufunc) or when it takes any number (*args)."""
+    try:
+        parameters = list(inspect.signature(function).parameters.values())
+    except (TypeError, ValueError):
+        return []
+    if any(p.kind == p.VAR_POSITIONAL for p in parameters):
+        return []
+    return [p.name for p in parameters if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is p.empty]
 
 
 @dataclass(frozen=True)
