@@ -76,3 +76,18 @@ def test_the_example_runs_and_writes_the_layer_per_node(tmp_path):
     assert np.array_equal(c_v, np.where((x > 0.1) & (x < 0.2), 300.0, 100.0))
     body = meshio.read(out / "fields" / "body_00011.vtu")
     assert set(np.unique(body.cell_data["material"][0])) == {0, 1}
+
+
+def test_the_paper_figures_refuse_a_thickness_that_varies():
+    """The paper's figures draw one foundation thickness: a run whose g varies is refused in one line (the
+    run's own figures, vpcontact.plots, draw it)."""
+    import pytest
+
+    from vpcontact.errors import CaseError
+    from vpcontact.figures import Frame
+
+    case = vpcontact.load_case(EXAMPLES / "coated_ball.toml", [*COARSE, 'contact.g="0.2 - 0.1*x"', "time.steps=1",
+                                                                'output.field_steps="final"',
+                                                                "time.T=0.1"])
+    with pytest.raises(CaseError, match="one thickness g; this run's g varies along Γ3"):
+        Frame.from_result(vpcontact.solve(case), 1, "varying g")

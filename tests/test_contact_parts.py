@@ -301,18 +301,23 @@ BEFORE = ["step", "t", "node", "x", "y", "normal_x", "normal_y", "weight", "pene
           "pressure_compliance", "pressure_rigid", "status", "substep"]
 
 
+def run_with_final_fields(tmp_path, case: dict) -> tuple[list, list]:
+    """Run ``case`` with its final fields through the CLI into tmp_path/out: the header and rows of contact.csv."""
+    case["output"]["field_steps"] = "final"
+    path = tmp_path / "case.toml"
+    path.write_text(tomli_w.dumps(case))
+    status, _, err = run_cli("run", path, "--out", tmp_path / "out", "--quiet")
+    assert status == 0, err
+    return read_contact(tmp_path / "out" / "contact.csv")
+
+
 def test_contact_csv_and_vtu_carry_the_local_layer_parameters(tmp_path):
     """The columns g, c_v, alpha, beta, exponent of contact.csv (after the former ones, in their order)
     equal the case's expressions evaluated at the coordinates x, y of the same rows; the contact VTU
     has them as point data."""
     case = half_disc_case(h=0.1, load=60.0, p="power", exponent=EXPONENT, g="0.2 - 0.1*x*y",
                           stiffness={"law": "power", "c_v": C_V, "alpha": ALPHA, "beta": -1.0})
-    case["output"]["field_steps"] = "final"
-    path = tmp_path / "case.toml"
-    path.write_text(tomli_w.dumps(case))
-    status, _, err = run_cli("run", path, "--out", tmp_path / "out", "--quiet")
-    assert status == 0, err
-    header, rows = read_contact(tmp_path / "out" / "contact.csv")
+    header, rows = run_with_final_fields(tmp_path, case)
     assert header == BEFORE + ["g", "c_v", "alpha", "beta", "exponent"]
     column = {name: np.array([float(row[i]) for row in rows]) for i, name in enumerate(header) if name != "status"}
     x, y = column["x"], column["y"]
@@ -334,12 +339,7 @@ def test_contact_csv_names_the_part_and_leaves_a_parameter_its_law_has_not_empty
     part's index in contact.parts and NaN."""
     case, part, a = split_case(tmp_path, 2)
     case = two_parts_form(case, part, LAYERS["two families"])
-    case["output"]["field_steps"] = "final"
-    path = tmp_path / "case.toml"
-    path.write_text(tomli_w.dumps(case))
-    status, _, err = run_cli("run", path, "--out", tmp_path / "out", "--quiet")
-    assert status == 0, err
-    header, rows = read_contact(tmp_path / "out" / "contact.csv")
+    header, rows = run_with_final_fields(tmp_path, case)
     assert header == BEFORE + ["g", "c_v", "alpha", "beta", "value", "exponent", "part"]
     cell = {name: [row[i] for row in rows] for i, name in enumerate(header)}
     x = np.array([float(v) for v in cell["x"]])

@@ -29,6 +29,7 @@ from matplotlib.tri import Triangulation
 from scipy.sparse.csgraph import connected_components, depth_first_order
 
 from .contact import AT_LIMIT, STATUS_NAMES
+from .errors import CaseError
 from .plots import STATE_COLORS, STATE_LABELS  # Γ3 coloured by the state of its nodes, as in a run's figures
 
 MAGNIFICATION = 1.0
@@ -80,6 +81,9 @@ class Frame:
         if fields is None:
             raise KeyError(f"step {step} has no fields (field steps: {sorted(result.fields)})")
         problem = result.problem
+        if np.ndim(problem.law.g):
+            raise CaseError("the paper's figures draw its foundation, a layer of one thickness g; this run's g varies "
+                            "along Γ3 (contact.g an expression or contact.parts): draw it with vpcontact.plots")
         i = step_rows(result)[step - 1]
         pressure = result.contact_history("pressure_compliance")[i] + result.contact_history("pressure_rigid")[i]
         return cls(
