@@ -255,6 +255,32 @@ def test_what_cannot_be_drawn_is_a_one_line_error(run_2d):
         plots.deformed_body(run_2d, scale=0.0)
 
 
+def test_along_contact_draws_each_run_at_its_nodes(run_2d, run_3d):
+    """One curve per run and panel, its points the contact nodes (2D: ordered by arc length, 3D: by the
+    distance from the probe node) and their values at the step asked for."""
+    figure = plots.along_contact({"a": run_2d, "b": run_2d}, ("pressure", "xi"), step=5)
+    pressure, xi = (ax.get_lines()[0].get_ydata() for ax in figure.axes)
+    row = step_row(run_2d, 5)
+    assert np.allclose(np.sort(pressure[np.isfinite(pressure)]), np.sort(pressures(run_2d)[row]))
+    assert np.allclose(np.sort(xi[np.isfinite(xi)]), np.sort(run_2d.contact_history("xi")[row]))
+    assert [len(ax.get_lines()) for ax in figure.axes] == [2, 2]
+    figure = plots.along_contact({"3D": run_3d}, "K")
+    line = figure.axes[0].get_lines()[0]
+    surface = run_3d.problem.surface
+    distance = np.linalg.norm(surface.coordinates - surface.coordinates[:, [run_3d.problem.probe]], axis=0)
+    assert np.allclose(line.get_xdata(), np.sort(distance))
+    assert np.allclose(np.sort(line.get_ydata()), np.sort(run_3d.contact_history("K")[-1]))
+
+
+def test_along_contact_refuses_what_it_cannot_draw(run_2d, run_3d):
+    with pytest.raises(CaseError, match="mix 2D and 3D"):
+        plots.along_contact({"a": run_2d, "b": run_3d})
+    with pytest.raises(CaseError, match="give at least one run"):
+        plots.along_contact({})
+    with pytest.raises(KeyError, match="pressur"):
+        plots.along_contact({"a": run_2d}, "pressur")
+
+
 def test_importing_vpcontact_does_not_load_matplotlib():
     code = ("import sys, vpcontact, vpcontact.plots, vpcontact.writers, vpcontact.rundir; "
             "assert 'matplotlib' not in sys.modules, 'matplotlib loaded'")
