@@ -881,7 +881,9 @@ def _describe(error: dict) -> str:
         bound = next(iter(ctx.values()))
         return f"{key} = {_show(value)}: must be {limits[kind]} {bound}"
     if kind in ("too_short", "too_long"):
-        return f"{key} = {_show(value)}: expected {ctx.get('min_length', ctx.get('max_length'))} values"
+        bound = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
+        return (f"{key} = {_show(value)}: expected {'at least' if kind == 'too_short' else 'at most'} {bound} "
+                f"value{'s' * (bound != 1)}")
     return f"{key} = {_show(value)}: {_TYPE_WORDS.get(kind, error['msg'])}"
 
 
