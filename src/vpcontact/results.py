@@ -112,6 +112,7 @@ class Result:
     wall_time_s: float = 0.0
     timings: dict = field(default_factory=dict)
     method: str = ""
+    method_reason: str = ""  # why that step method runs (solver.method, or what "auto" weighed)
     linear_solves: int = 0  # solves with a factored matrix in the time loop
     problem: object = None  # the Problem solved: mesh, contact surface, operators
     completed_steps: int = 0  # time steps t_n reached
@@ -123,7 +124,7 @@ class Result:
         wanted = field_step_numbers(problem.case.output.field_steps, len(problem.times))
         return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
                    contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
-                   augmentation=solver.r, method=solver.name, problem=problem)
+                   augmentation=solver.r, method=solver.name, method_reason=solver.reason, problem=problem)
 
     # --- filling in ------------------------------------------------------------------------------
     def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status, substep: int = 1,
@@ -241,7 +242,8 @@ class Result:
             "status": self.status, "message": self.message, "dofs": self.dofs, "elements": self.elements,
             "nodes": self.nodes, "contact_nodes": self.contact_nodes, "steps": self.steps,
             "newton_iterations": int(sum(r["newton_iterations"] for r in self.rows)),
-            "solver_method": self.method, "linear_solves": self.linear_solves, "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s,
+            "solver_method": self.method, "solver_reason": self.method_reason, "linear_solves": self.linear_solves,
+            "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s,
             "timings_s": self.timings, "final": final,
             "history_rows": len(self.rows), "step_cuts": self.step_cuts, "resumed_at_steps": list(self.resumed_at),
         }

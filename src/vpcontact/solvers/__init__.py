@@ -5,13 +5,14 @@
     displacement(step, solution) -> u            (at the free dofs)
     r, name, timings
 Methods: "full" (Newton on the whole system, the reference), "condensed" (factor once, Newton on
-the contact nodes), "auto" (condensed when its dense contact operator fits in memory, else full).
+the contact nodes), "auto" (condensed when its dense contact operator fits in memory, else full);
+``solver.reason`` says which method runs and why.
 """
 
 from __future__ import annotations
 
 from .base import StepData, StepSolution, default_augmentation
-from .condensed import CondensedNewton, check_condensed_memory
+from .condensed import CondensedNewton, condensed_fits
 from .full import FullNewton
 from ..errors import CaseError
 from .errors import SingularMatrixError, SolverMemoryError
@@ -31,15 +32,18 @@ def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float 
             raise CaseError(f"solver.augmentation = {augmentation:g} is {augmentation / r:.1e} times the normal "
                             f"stiffness at the contact nodes ({r:.3g}): use \"auto\" or a value near it")
         r = augmentation
-    if method == "auto":
-        try:
-            check_condensed_memory(N, A.shape[0])
-            method = CondensedNewton.name
-        except CaseError:
-            method = FullNewton.name
+    method, reason = _chosen(method, A, N)
     common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale, rigid)
     if method != CondensedNewton.name:
-        return FullNewton(*common)
+        solver = FullNewton(*common)
+    else:
+        solver = _condensed(common, factorization, A)
+    solver.reason = reason
+    return solver
+
+
+def _condensed(common: tuple, factorization: str, A) -> CondensedNewton:
+    """The condensed solver, its failures to factor A as one-line CaseErrors."""
     try:
         return CondensedNewton(*common, factorization=factorization)
     except SingularMatrixError as error:
@@ -50,6 +54,17 @@ def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float 
         other = "" if used == "pardiso" else ", or solver.factorization = \"pardiso\" (MKL: smaller factors)"
         raise CaseError(f"not enough memory to factor the stiffness matrix ({A.shape[0]} dofs): {error}; use a "
                         f"coarser mesh{other}") from None
+
+
+def _chosen(method: str, A, N) -> tuple[str, str]:
+    """The step method to run for ``solver.method`` and why, in words (summary.json's solver_reason)."""
+    if method != "auto":
+        return method, f"solver.method = \"{method}\""
+    fits, needed, available = condensed_fits(N, A.shape[0])
+    return (CondensedNewton.name if fits else FullNewton.name,
+            f"solver.method = \"auto\": the condensed method's dense algebra for {N.shape[0]} contact nodes "
+            f"({needed / 2**30:.3g} GiB) {'fits in' if fits else 'exceeds'} half the {available / 2**30:.1f} GiB "
+            f"available")
 
 
 __all__ = ["METHODS", "SOLVERS", "StepData", "StepSolution", "make_solver"]

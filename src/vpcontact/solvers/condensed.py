@@ -215,10 +215,21 @@ def condensed_memory(N: sp.csr_matrix, n: int) -> int:
     return 8 * (2 * c * c + 3 * m * m + 2 * 64 * n)
 
 
+#: The share of the available memory the condensed method's dense algebra may take.
+CONDENSED_SHARE = 0.5
+
+
+def condensed_fits(N: sp.csr_matrix, n: int) -> tuple[bool, int, int]:
+    """Does the condensed method's dense algebra fit in CONDENSED_SHARE of the available memory? With the
+    bytes it needs and those available."""
+    needed, available = condensed_memory(N, n), available_memory()
+    return needed <= CONDENSED_SHARE * available, needed, available
+
+
 def check_condensed_memory(N: sp.csr_matrix, n: int) -> None:
     """Refuse, before allocating, a condensed operator that would not fit in memory."""
-    needed, available = condensed_memory(N, n), available_memory()
-    if needed > 0.5 * available:
+    fits, needed, available = condensed_fits(N, n)
+    if not fits:
         m, c = N.shape[0], np.unique(sp.csr_matrix(N).indices).size
         raise CaseError(f"solver.method = \"condensed\" needs about {needed / 2**30:.1f} GiB for its dense "
                         f"{m} x {m} contact operator (and the {c} x {c} Schur complement on the contact dofs), more "

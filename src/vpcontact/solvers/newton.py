@@ -61,6 +61,8 @@ class Evaluation:
 class SemismoothNewton:
     """The iteration; subclasses define ``initial``, ``evaluate``, ``direction`` and ``solution``."""
 
+    reason = ""  # why this method runs: the case's solver.method, or what "auto" weighed (set by make_solver)
+
     def __init__(self, weights: np.ndarray, r: float, tolerance: float, max_iterations: int, length_scale: float):
         self.weights, self.r = weights, r
         self.tolerance, self.max_iterations, self.length_scale = tolerance, max_iterations, length_scale
