@@ -1,0 +1,138 @@
+"""P1 elasticity on triangles and tetrahedra in vectorized NumPy: the kernels behind assembly.py.
+
+On a simplex T with vertices x_0, …, x_d the barycentric coordinates are affine, so their gradients
+∇λ_a are constant on T: with the Jacobian J = [x_1 − x_0, …, x_d − x_0], ∇λ_a (a ≥ 1) is row a of
+J⁻¹ and ∇λ_0 = −Σ_a ∇λ_a; |T| = |det J| / d!. The displacement dof (a, c) of T is
+``nodal_dofs[c, t[a]]`` of the basis, its shape function φ_(a,c) = λ_a e_c, and
+
+    ε(u)|_T = sym(Σ_a u_(a,·) ⊗ ∇λ_a),        (Bᵀz)_(a,c) = Σ_T |T| Σ_j z_cj^sym ∂_j λ_a,
+    K_T[(a,c), (b,e)] = |T| (λ ∂_c λ_a ∂_e λ_b + μ ∂_e λ_a ∂_c λ_b + μ δ_ce ∇λ_a·∇λ_b).
+
+The stiffness is summed in chunks of elements into a pattern of d × d node blocks built once, so the
+memory it needs beyond the matrix itself is bounded by the chunk, not by the 144 entries of every
+tetrahedron at once.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+#: Elements whose stiffness blocks are computed at once (about 40 MB of blocks per chunk in 3D).
+CHUNK = 2**15
+
+
+@dataclass(frozen=True)
+class SimplexGeometry:
+    """The constant gradients of the P1 shape functions and the volumes of a mesh's simplices, with the
+    dofs of each element in the numbering of the displacement basis."""
+
+    gradients: np.ndarray  # (elements, d + 1, d): ∇λ_a on each element
+    volumes: np.ndarray  # (elements,): |T|
+    cells: np.ndarray  # (elements, d + 1): the nodes of each element
+    dofs: np.ndarray  # (elements, d + 1, d): nodal_dofs[c, cells[:, a]]
+    ndofs: int
+
+    @property
+    def dim(self) -> int:
+        return self.gradients.shape[2]
+
+
+def barycentric_gradients(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """∇λ_a (elements, d + 1, d) and |T| (elements,) of the simplices ``cells`` (d + 1, elements) of the
+    nodes ``points`` (d, nodes); a degenerate element (det J = 0) gets infinite or NaN gradients."""
+    d = points.shape[0]
+    x = points[:, cells]  # (d, d + 1, elements)
+    edges = np.moveaxis(x[:, 1:] - x[:, :1], -1, 0)  # (elements, d, d): column k is x_(k+1) − x_0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if d == 2:
+            det = edges[:, 0, 0] * edges[:, 1, 1] - edges[:, 0, 1] * edges[:, 1, 0]
+            rows = np.stack([np.stack([edges[:, 1, 1], -edges[:, 0, 1]], axis=1),
+                             np.stack([-edges[:, 1, 0], edges[:, 0, 0]], axis=1)], axis=1)
+        else:  # the rows of J⁻¹ are the cross products of the other two columns over det J
+            a, b, c = edges[:, :, 0], edges[:, :, 1], edges[:, :, 2]
+            rows = np.stack([np.cross(b, c), np.cross(c, a), np.cross(a, b)], axis=1)
+            det = np.einsum("ni,ni->n", a, rows[:, 0])
+        inverse = rows / det[:, None, None]
+        gradients = np.concatenate([-inverse.sum(axis=1, keepdims=True), inverse], axis=1)
+    return gradients, np.abs(det) / math.factorial(d)
+
+
+_GEOMETRIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def geometry(basis) -> SimplexGeometry:
+    """The SimplexGeometry of a P1 vector basis (scikit-fem's), computed once per basis."""
+    found = _GEOMETRIES.get(basis)
+    if found is None:
+        mesh = basis.mesh
+        cells = np.ascontiguousarray(mesh.t.T, dtype=np.int64)
+        gradients, volumes = barycentric_gradients(mesh.p, mesh.t)
+        dofs = np.ascontiguousarray(np.moveaxis(basis.nodal_dofs[:, cells], 0, -1), dtype=np.int64)
+        found = _GEOMETRIES[basis] = SimplexGeometry(gradients, volumes, cells, dofs, int(basis.N))
+    return found
+
+
+def strains(g: SimplexGeometry, u: np.ndarray) -> np.ndarray:
+    """ε(u) on each element, shape (d, d, elements)."""
+    gradient = np.einsum("nac,naj->cjn", u[g.dofs], g.gradients)  # ∂_j u_c
+    return 0.5 * (gradient + gradient.transpose(1, 0, 2))
+
+
+def stress_work(g: SimplexGeometry, z: np.ndarray) -> np.ndarray:
+    """Bᵀz = ∫_Ω z : ε(v) dx for a stress z (d, d, elements) constant on each element."""
+    weighted = 0.5 * (z + z.transpose(1, 0, 2)) * g.volumes
+    forces = np.einsum("cjn,naj->nac", weighted, g.gradients)
+    return np.bincount(g.dofs.ravel(), forces.ravel(), minlength=g.ndofs)
+
+
+def node_pattern(cells: np.ndarray, nodes: int) -> sp.csr_matrix:
+    """The pattern (sorted, no duplicates) of node pairs sharing an element, summed over chunks."""
+    pattern = sp.csr_matrix((nodes, nodes), dtype=np.int8)
+    corners = cells.shape[1]
+    for start in range(0, cells.shape[0], CHUNK):
+        chunk = cells[start:start + CHUNK]
+        rows, cols = np.repeat(chunk, corners, axis=1).ravel(), np.tile(chunk, corners).ravel()
+        ones = np.ones(rows.size, dtype=np.int8)
+        pattern = pattern + sp.csr_matrix((ones, (rows, cols)), shape=(nodes, nodes))
+        pattern.data[:] = 1
+    pattern.sort_indices()
+    return pattern
+
+
+def elastic_stiffness(g: SimplexGeometry, lam, mu, nodes: int, nodal_dofs: np.ndarray) -> sp.csr_matrix:
+    """The stiffness A = Σ_T K_T of Lamé parameters λ, μ (numbers, or one value per element), in the
+    dof numbering ``nodal_dofs`` (d, nodes)."""
+    d = g.dim
+    pattern = node_pattern(g.cells, nodes)
+    keys = np.repeat(np.arange(nodes, dtype=np.int64), np.diff(pattern.indptr)) * nodes + pattern.indices
+    blocks = np.zeros((pattern.nnz, d, d))
+    lam = np.broadcast_to(np.asarray(lam, dtype=float), g.volumes.shape)
+    mu = np.broadcast_to(np.asarray(mu, dtype=float), g.volumes.shape)
+    for start in range(0, g.volumes.size, CHUNK):  # arrays (…, elements): the long axis last is the fast one
+        part = slice(start, start + CHUNK)
+        G = np.ascontiguousarray(g.gradients[part].transpose(2, 1, 0))  # (c, a, elements): ∂_c λ_a
+        cells = g.cells[part].T
+        lam_G, mu_G = lam[part] * g.volumes[part] * G, mu[part] * g.volumes[part] * G
+        K = lam_G[:, None, :, None] * G[None, :, None, :]  # [c, e, a, b]: λ|T| ∂_c λ_a ∂_e λ_b
+        K += mu_G[None, :, :, None] * G[:, None, None, :]  # μ|T| ∂_e λ_a ∂_c λ_b
+        dot = np.einsum("ian,ibn->abn", mu_G, G)
+        for c in range(d):
+            K[c, c] += dot  # μ|T| δ_ce ∇λ_a·∇λ_b
+        where = np.searchsorted(keys, (cells[:, None] * nodes + cells[None, :]).ravel())  # [a, b, elements]
+        first, last = where.min(), where.max() + 1
+        for c, e in np.ndindex(d, d):
+            blocks[first:last, c, e] += np.bincount(where - first, K[c, e].ravel(), minlength=last - first)
+    A = sp.bsr_matrix((blocks, pattern.indices, pattern.indptr),
+                      shape=(d * nodes, d * nodes)).tocsr()
+    A.eliminate_zeros()  # as scikit-fem did: entries that cancel exactly (e.g. on axis-aligned elements)
+    interleaved = np.arange(d * nodes).reshape(nodes, d).T
+    if not np.array_equal(nodal_dofs, interleaved):  # A is numbered d·node + c: renumber it as the basis
+        position = np.empty(d * nodes, dtype=np.int64)
+        position[nodal_dofs.ravel()] = interleaved.ravel()
+        A = A[position][:, position]
+    return A
