@@ -60,7 +60,6 @@ def test_the_stiffness_is_scikit_fems_to_rounding(name, hypothesis, varying):
     assert isinstance(A, sp.csr_matrix) and A.shape == old.shape == (basis.N, basis.N)
     assert relative(A, old) <= 1e-13
     assert abs(A - A.T).max() <= 1e-13 * abs(A).max()
-    assert A.nnz <= old.nnz  # the same pattern, without the entries that cancel exactly
 
 
 def test_the_plane_hypothesis_changes_the_stiffness():
@@ -163,5 +162,5 @@ def test_a_flat_element_gives_gradients_that_are_not_finite():
     gradients, volumes = simplex.barycentric_gradients(points, np.array([[0], [1], [2], [3]]))
     assert volumes[0] == 0.0 and not np.isfinite(gradients).all()
     gradients, volumes = simplex.barycentric_gradients(points[:2, :3] * 2.0, np.array([[0], [1], [2]]))
-    np.testing.assert_allclose(gradients[0], [[-0.5, -0.5], [0.5, 0.0], [0.0, 0.5]])
+    np.testing.assert_allclose(gradients[:, :, 0], [[-0.5, -0.5], [0.5, 0.0], [0.0, 0.5]])
     assert volumes[0] == pytest.approx(2.0)
