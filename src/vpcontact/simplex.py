@@ -137,11 +137,12 @@ def elastic_stiffness(g: SimplexGeometry, lam, mu, nodes: int, nodal_dofs: np.nd
         for c in range(d):
             K[c, c] += dot  # μ|T| δ_ce ∇λ_a·∇λ_b
         cells = g.cells[:, part]
-        where = np.searchsorted(keys, (cells[:, None] * nodes + cells[None, :]).ravel())  # [a, b, elements]
+        low, high = pattern.indptr[cells.min()], pattern.indptr[cells.max() + 1]  # the node rows it adds to
+        where = np.searchsorted(keys[low:high], (cells[:, None] * nodes + cells[None, :]).ravel())  # [a, b, elements]
         first, last = where.min(), where.max() + 1
         where -= first
         for c, e in np.ndindex(d, d):
-            blocks[first:last, c, e] += np.bincount(where, K[c, e].ravel(), minlength=last - first)
+            blocks[low + first:low + last, c, e] += np.bincount(where, K[c, e].ravel(), minlength=last - first)
     A = sp.bsr_matrix((blocks, pattern.indices, pattern.indptr),
                       shape=(d * nodes, d * nodes)).tocsr()
     A.eliminate_zeros()  # as scikit-fem did: entries that cancel exactly (e.g. on axis-aligned elements)
