@@ -24,6 +24,9 @@ import scipy.sparse as sp
 
 #: Elements whose stiffness blocks are computed at once (about 40 MB of blocks per chunk in 3D).
 CHUNK = 2**15
+#: Elements whose node pairs are added to the pattern at once (about 70 MB of pairs in 3D): each
+#: addition costs the size of the pattern, so fewer, larger chunks.
+PATTERN_CHUNK = 8 * CHUNK
 
 
 @dataclass(frozen=True)
@@ -76,7 +79,11 @@ def geometry(basis) -> SimplexGeometry:
     if found is None:
         mesh = basis.mesh
         cells = np.ascontiguousarray(mesh.t, dtype=np.int64)
-        gradients, volumes = barycentric_gradients(mesh.p, cells)
+        d, elements = mesh.p.shape[0], cells.shape[1]
+        gradients, volumes = np.empty((d + 1, d, elements)), np.empty(elements)
+        for start in range(0, elements, CHUNK):  # chunks: the temporaries stay small
+            part = slice(start, start + CHUNK)
+            gradients[:, :, part], volumes[part] = barycentric_gradients(mesh.p, cells[:, part])
         dofs = np.ascontiguousarray(basis.nodal_dofs[:, cells].transpose(1, 0, 2), dtype=np.int64)
         found = _GEOMETRIES[basis] = SimplexGeometry(gradients, volumes, cells, dofs, int(basis.N))
     return found
@@ -102,8 +109,8 @@ def node_pattern(cells: np.ndarray, nodes: int) -> sp.csr_matrix:
     """The pattern (sorted, no duplicates) of node pairs sharing an element of ``cells`` (d + 1,
     elements), summed over chunks."""
     pattern = sp.csr_matrix((nodes, nodes), dtype=np.int8)
-    for start in range(0, cells.shape[1], CHUNK):
-        chunk = cells[:, start:start + CHUNK]
+    for start in range(0, cells.shape[1], PATTERN_CHUNK):
+        chunk = cells[:, start:start + PATTERN_CHUNK]
         rows, cols = np.broadcast_arrays(chunk[:, None], chunk[None, :])
         rows, cols = rows.ravel(), cols.ravel()
         ones = np.ones(rows.size, dtype=np.int8)
