@@ -26,3 +26,21 @@ def test_the_3d_scaling_ladder_reports_each_method_on_its_quickest_level():
     condensed, full = records
     assert condensed["dofs"] == full["dofs"] and condensed["contact_nodes"] == full["contact_nodes"]
     assert full["setup_s"]["factorization"] == 0.0 < condensed["setup_s"]["factorization"]
+
+
+def test_the_assembly_benchmark_times_both_implementations_and_compares_them():
+    done = subprocess.run([sys.executable, str(BENCHMARKS / "assembly.py"), "--quick", "--steps", "2"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    old, new = json.loads(done.stdout)
+    assert (old["implementation"], new["implementation"]) == ("skfem", "numpy")
+    stages = ("stiffness_s", "load_setup_s", "load_step_s", "strain_s", "stress_force_s")
+    for record in (old, new):
+        assert record["status"] == "complete", record
+        assert record["tetrahedra"] == 12 * 3**3 and record["dofs"] % 3 == 0  # h = 0.5: n = 3
+        assert all(0 < record[stage] < record["process_s"] for stage in stages)
+        assert 0 < record["rss_before_mb"] <= record["peak_rss_mb"]
+    # the same pattern but for entries that cancel: exactly 0 one way, of the order of rounding the other
+    assert abs(new["nonzeros"] - old["nonzeros"]) < 0.01 * old["nonzeros"]
+    assert set(new["speedup"]) == set(stages) and new["peak_rss_ratio"] > 0
+    assert all(difference <= 1e-13 for difference in new["relative_difference"].values()), new

@@ -1,10 +1,14 @@
-"""Finite element operators on P1 displacements and P0 stresses (scikit-fem forms).
+"""Finite element operators on P1 displacements and P0 stresses.
 
 - the elastic stiffness A: (ℰε(u), ε(v))_Q, the bulk term of (3.3);
 - the load vector F(t) of (2.24): ∫_Ω f0·v dx + ∫_Γ2 f2·v da;
 - element strains ε(u) (constant on each element) and the nodal force Bᵀz of a P0 stress z.
 
 Triangles in 2D, tetrahedra in 3D: the element comes from the mesh, everything else is the same.
+scikit-fem gives the basis (the dof numbering) and the quadrature of the loads; the bulk operators
+are the vectorized kernels of simplex.py (the same matrices as scikit-fem's forms, to rounding, in a
+fraction of the time and memory), and each load term is one sparse map, built once, from the density
+at its quadrature points to the nodal loads.
 """
 
 from __future__ import annotations
@@ -14,15 +18,14 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import (Basis, BilinearForm, ElementTetP1, ElementTriP1, ElementVector, FacetBasis, LinearForm, MeshTet1,
-                   asm)
-from skfem.helpers import ddot, eye, sym_grad, trace
-from skfem.models.elasticity import linear_elasticity
+from skfem import Basis, ElementTetP1, ElementTriP1, ElementVector, FacetBasis, MeshTet1
+from skfem.assembly.basis import AbstractBasis
 
 from .errors import CaseError, quoted
 from .expressions import Expression
 from .material import Elasticity
 from .mesh import Mesh
+from .simplex import elastic_stiffness, geometry, strains, stress_work
 from .space import coordinates
 
 #: A load density: f(x, y, t) -> (fx, fy) in 2D, f(x, y, z, t) -> (fx, fy, fz) in 3D, each an array
@@ -42,27 +45,11 @@ def displacement_basis(mesh: Mesh) -> Basis:
     return Basis(mesh.mesh, ElementVector(element), quadrature=_centroid_rule(mesh.dim))
 
 
-@BilinearForm
-def _elastic_form(u, v, w):
-    strain = sym_grad(u)
-    return ddot(2.0 * w["mu"] * strain + w["lam"] * eye(trace(strain), strain.shape[0]), sym_grad(v))
-
-
 def stiffness(basis: Basis, elasticity: Elasticity) -> sp.csr_matrix:
     """The elastic stiffness matrix A_ij = (ℰε(φ_j), ε(φ_i))_Q; the Lamé parameters are numbers (one
     material) or arrays with one value per element (ℰ(x) of (2.16), constant on each element)."""
     lam, mu = elasticity.lame
-    if np.ndim(lam) == 0 and np.ndim(mu) == 0:
-        return asm(linear_elasticity(lam, mu), basis).tocsr()
-    points = basis.X.shape[-1]
-    per_element = {name: np.repeat(np.broadcast_to(value, (basis.nelems,))[:, None], points, axis=1)
-                   for name, value in (("lam", lam), ("mu", mu))}
-    return asm(_elastic_form, basis, **per_element).tocsr()
-
-
-@LinearForm
-def _density_form(v, w):
-    return sum(w["f"][i] * v[i] for i in range(v.shape[0]))
+    return elastic_stiffness(geometry(basis), lam, mu, basis.mesh.p.shape[1], basis.nodal_dofs)
 
 
 class ExpressionDensity:
@@ -86,17 +73,30 @@ class NonFiniteLoad(CaseError):
 CHECK_CHUNK = 2**20
 
 
-class _Term:
-    """One load density and where it is applied: the quadrature points of its facets or elements."""
+def _load_map(basis: AbstractBasis) -> sp.csr_matrix:
+    """M (nodes × cells·points) with (M f)_i = Σ_q φ_i(x_q) f(x_q) w_q of a scalar P1 ``basis`` (of facets
+    or elements): the integral ∫ f φ_i of a density known at the quadrature points x_q."""
+    cells, points = basis.dx.shape
+    values = np.stack([basis.basis[i][0].value * basis.dx for i in range(basis.Nbfun)])  # (functions, cells, points)
+    nodes = np.broadcast_to(basis.element_dofs[:, :, None], values.shape)
+    columns = np.broadcast_to(np.arange(cells * points).reshape(cells, points), values.shape)
+    return sp.csr_matrix((values.ravel(), (nodes.ravel(), columns.ravel())), shape=(basis.mesh.p.shape[1], cells * points))
 
-    def __init__(self, name: str, basis: Basis, density: Density):
+
+class _Term:
+    """One load density and where it is applied: the quadrature points of its facets or elements, and
+    the map from the density's values there to the nodal loads of one component."""
+
+    def __init__(self, name: str, basis: AbstractBasis, density: Density):
+        """``basis``: the scalar P1 basis of the facets or elements with the load's quadrature."""
         self.points = np.asarray(basis.global_coordinates())  # (d, cells, points of a cell)
         self.names = coordinates(self.points.shape[0])
         self.signature = f"f({', '.join(self.names)}, t)"
         self.returns = f"({', '.join('f' + n for n in self.names)})"
         if not callable(density):
             raise CaseError(f"{name} = {type(density).__name__}: expected a function {self.signature} -> {self.returns}")
-        self.name, self.basis, self.density = name, basis, density
+        self.name, self.density = name, density
+        self.map = _load_map(basis)
 
     def values(self, t: float, step: int | None = None) -> np.ndarray:
         """The density's components at the quadrature points at time t (of time step ``step``, if
@@ -194,16 +194,18 @@ class LoadVector:
                  body_forces: list[tuple[str, Density]]):
         """``tractions``: (name, part, density); ``body_forces``: (name, density); a name is the key of
         the density in messages, e.g. ``boundary.traction[0].value``."""
-        self._ndofs = basis.N
-        self._terms = [_Term(name, FacetBasis(mesh.mesh, basis.elem, facets=mesh.facets(part), intorder=4), f)
+        self._ndofs, self._nodal_dofs = basis.N, basis.nodal_dofs
+        scalar = basis.elem.elem
+        self._terms = [_Term(name, FacetBasis(mesh.mesh, scalar, facets=mesh.facets(part), intorder=4), f)
                        for name, part, f in tractions]
-        self._terms += [_Term(name, Basis(mesh.mesh, basis.elem, intorder=4), f) for name, f in body_forces]
+        self._terms += [_Term(name, Basis(mesh.mesh, scalar, intorder=4), f) for name, f in body_forces]
 
     def __call__(self, t: float) -> np.ndarray:
         F = np.zeros(self._ndofs)
         with np.errstate(all="ignore"):  # an overflow is reported below
             for term in self._terms:
-                F += asm(_density_form, term.basis, f=term.values(t))
+                for dofs, f in zip(self._nodal_dofs, term.values(t)):
+                    F[dofs] += term.map @ f.ravel()
         if not np.all(np.isfinite(F)):
             raise NonFiniteLoad(f"the load vector F(t) at t = {t:.10g} is not finite: its densities are finite but "
                                 f"too large for float64 once integrated")
@@ -219,14 +221,9 @@ class LoadVector:
 
 def element_strain(basis: Basis, u: np.ndarray) -> np.ndarray:
     """ε(u) on each element, shape (d, d, nelements) (constant for P1)."""
-    return sym_grad(basis.interpolate(u))[:, :, :, 0]
-
-
-@LinearForm
-def _stress_work(v, w):
-    return ddot(w["z"], sym_grad(v))
+    return strains(geometry(basis), u)
 
 
 def stress_force(basis: Basis, z: np.ndarray) -> np.ndarray:
     """The nodal force Bᵀz = ∫_Ω z : ε(v) dx of a P0 stress field z of shape (d, d, nelements)."""
-    return asm(_stress_work, basis, z=np.repeat(z[..., None], basis.X.shape[-1], axis=-1))
+    return stress_work(geometry(basis), z)
