@@ -343,11 +343,14 @@ def _stop_workers(executor: ProcessPoolExecutor) -> None:
     """Kill the pool's worker processes and wait until they are gone: the runs they were doing are
     lost (their directories hold no summary.json of them) and nothing is written after this."""
     processes = list((executor._processes or {}).values())  # no public way before Python 3.14's kill_workers()
-    executor.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         process.kill()
     for process in processes:
         process.join()
+    # Only then shut the pool down, waiting for its management thread: shut down first, without waiting,
+    # the thread could still be reading from a worker's pipe the shutdown closes, and print
+    # "OSError: [Errno 9] Bad file descriptor" on the study's stderr.
+    executor.shutdown(wait=True, cancel_futures=True)
 
 
 def _check_run_directories(study: Study, out: Path) -> None:
