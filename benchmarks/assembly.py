@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import resource
 import statistics
 import subprocess
@@ -30,6 +29,8 @@ import sys
 import time
 
 import numpy as np
+
+from watched import watched  # noqa: E402 - this folder's module (the script runs from here)
 
 LEVELS = (0.1, 0.058, 0.0406)
 QUICK = 0.5
@@ -161,36 +162,6 @@ def differences(h: float) -> dict:
             "load": relative(LoadVector(basis, mesh, [("top", "top", traction)], [])(0.7), old_F),
             "strain": relative(element_strain(basis, u), skfem_strain(basis, u)),
             "stress_force": relative(stress_force(basis, z), skfem_stress_force(basis, z))}
-
-
-def resident_mb(pid: int) -> float:
-    """Resident memory of process ``pid`` in MB (Linux: /proc/PID/statm), 0 where it cannot be read."""
-    try:
-        with open(f"/proc/{pid}/statm") as statm:
-            return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
-    except (OSError, ValueError, IndexError):
-        return 0.0
-
-
-def watched(command: list[str], memory_limit_mb: float, time_limit_s: float) -> tuple[int, str, str, str, float, float]:
-    """Run ``command``, sampling its resident memory every 0.1 s; stop it past the limits. Returns (exit
-    status, stdout, stderr, why it was stopped or "", wall time in seconds, largest sample in MB)."""
-    started = time.perf_counter()
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    stopped, largest = "", 0.0
-    while process.poll() is None:
-        largest = max(largest, resident_mb(process.pid))
-        elapsed = time.perf_counter() - started
-        if largest > memory_limit_mb:
-            stopped = f"stopped at {largest:,.0f} MB resident, over the limit of {memory_limit_mb:,.0f} MB"
-        elif elapsed > time_limit_s:
-            stopped = f"stopped after {elapsed:.0f} s, over the limit of {time_limit_s:.0f} s"
-        if stopped:
-            process.kill()
-            break
-        time.sleep(0.1)
-    stdout, stderr = process.communicate()
-    return process.returncode, stdout, stderr, stopped, time.perf_counter() - started, largest
 
 
 def in_subprocess(h: float, implementation: str, steps: int, memory_limit_mb: float, time_limit_s: float) -> dict:

@@ -27,10 +27,10 @@ import json
 import os
 import resource
 import statistics
-import subprocess
 import sys
-import time
 from pathlib import Path
+
+from watched import watched  # noqa: E402 - this folder's module (the script runs from here)
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
 #: Element edges of the ladder: 12 n³ tetrahedra with n = ceil(1.5 / h) (7.6k DOFs at 0.15, 1.5M at 0.025).
@@ -99,41 +99,11 @@ def factor_size(solver, A, N, method: str) -> dict:
             "fill": nonzeros / A.nnz, "factor_mb": 8 * nonzeros / 2**20}
 
 
-def resident_mb(pid: int) -> float:
-    """Resident memory of process ``pid`` in MB (Linux: /proc/PID/statm), 0 where it cannot be read."""
-    try:
-        with open(f"/proc/{pid}/statm") as statm:
-            return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
-    except (OSError, ValueError, IndexError):
-        return 0.0
-
-
-def watched(command: list[str], memory_limit_mb: float, time_limit_s: float) -> tuple[int, str, str, str, float]:
-    """Run ``command``; stop it when its resident memory or wall time passes the limits. Returns
-    (exit status, stdout, stderr, why it was stopped or "", wall time in seconds)."""
-    started = time.perf_counter()
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    stopped, largest = "", 0.0
-    while process.poll() is None:
-        largest = max(largest, resident_mb(process.pid))
-        elapsed = time.perf_counter() - started
-        if largest > memory_limit_mb:
-            stopped = f"stopped at {largest:,.0f} MB resident, over the limit of {memory_limit_mb:,.0f} MB"
-        elif elapsed > time_limit_s:
-            stopped = f"stopped after {elapsed:.0f} s, over the limit of {time_limit_s:.0f} s"
-        if stopped:
-            process.kill()
-            break
-        time.sleep(0.2)
-    stdout, stderr = process.communicate()
-    return process.returncode, stdout, stderr, stopped, time.perf_counter() - started
-
-
 def in_subprocess(h: float, method: str, memory_limit_mb: float, time_limit_s: float, profile: str | None) -> dict:
     """One run of a level in a fresh process, with the whole process's wall time."""
     command = [sys.executable, __file__, "--h", str(h), "--method", method, "--inline"]
     command += ["--profile", profile] if profile else []
-    status, stdout, stderr, stopped, wall = watched(command, memory_limit_mb, time_limit_s)
+    status, stdout, stderr, stopped, wall, _ = watched(command, memory_limit_mb, time_limit_s, interval_s=0.2)
     if stopped:
         return {"h": h, "method": method, "status": "stopped", "message": stopped, "process_s": wall}
     if status != 0:

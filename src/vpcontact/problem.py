@@ -473,7 +473,7 @@ def _check_rigid_motions(mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surf
     loose = np.flatnonzero(free_motions)
     if loose.size == 0:
         return
-    b, count, d = loose[0], modes.count, mesh.dim
+    b, count = loose[0], modes.count
     where = "the Dirichlet conditions and the contact part" if surface.size else "the Dirichlet conditions"
     if free_motions[b] > 1:
         words = ("", "one", "two", "three", "four", "five", "six")
