@@ -8,6 +8,7 @@ one chunk, and the memory it needs stays below the entries of all elements at on
 """
 
 import importlib.util
+import sys
 import tracemalloc
 from pathlib import Path
 
@@ -21,9 +22,10 @@ from vpcontact.assembly import LoadVector, displacement_basis, element_strain, s
 from vpcontact.material import Elasticity
 from vpcontact.mesh import block, half_disc, quarter_ball
 
-_spec = importlib.util.spec_from_file_location(
-    "assembly_benchmark", Path(__file__).resolve().parents[1] / "benchmarks" / "assembly.py")
-reference = importlib.util.module_from_spec(_spec)
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+sys.path.insert(0, str(BENCHMARKS))  # the benchmark imports its folder's modules, as when it runs as a script
+_spec = importlib.util.spec_from_file_location("assembly_benchmark", BENCHMARKS / "assembly.py")
+reference = importlib.util.module_from_spec(_spec)  # the scikit-fem forms vpcontact used before: the reference
 _spec.loader.exec_module(reference)
 
 MESHES = {"half disc": lambda: half_disc(0.15), "quarter ball": lambda: quarter_ball(0.35),

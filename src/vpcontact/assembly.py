@@ -77,7 +77,7 @@ def _load_map(basis: AbstractBasis) -> sp.csr_matrix:
     """M (nodes × cells·points) with (M f)_i = Σ_q φ_i(x_q) f(x_q) w_q of a scalar P1 ``basis`` (of facets
     or elements): the integral ∫ f φ_i of a density known at the quadrature points x_q."""
     cells, points = basis.dx.shape
-    values = np.stack([basis.basis[i][0].value * basis.dx for i in range(basis.Nbfun)])  # (functions, cells, points)
+    values = np.stack([np.asarray(basis.basis[i][0]) * basis.dx for i in range(basis.Nbfun)])  # (functions, cells, points)
     nodes = np.broadcast_to(basis.element_dofs[:, :, None], values.shape)
     columns = np.broadcast_to(np.arange(cells * points).reshape(cells, points), values.shape)
     return sp.csr_matrix((values.ravel(), (nodes.ravel(), columns.ravel())), shape=(basis.mesh.p.shape[1], cells * points))
