@@ -55,7 +55,6 @@ class Materials:
     """The body's materials on the elements: which entry each element has, ℰ per element and 𝒢."""
 
     owner: np.ndarray  # the index of each element's entry in ``case.materials`` (nelements,)
-    names: tuple[str, ...]  # the entry of each index, as messages and outputs name it: "material[i]: core, ..."
     elasticity: Elasticity  # E, ν floats for one homogeneous material, else arrays over the elements
     viscoplastic: Callable | None  # 𝒢(σ, ε) over arrays (d, d, nelements); None: 𝒢 = 0 everywhere
 
@@ -96,8 +95,7 @@ def body_materials(case: Case, mesh: Mesh) -> Materials:
         viscoplastic = laws[0][1]
     else:
         viscoplastic = RegionalViscoplastic(tuple(laws))
-    names = tuple(key + (f": {', '.join(entry.regions)}" if entry.regions else "") for key, entry in entries)
-    return Materials(owner, names, elasticity, viscoplastic)
+    return Materials(owner, elasticity, viscoplastic)
 
 
 def _viscoplastic_law(entry: MaterialSection, hypothesis: str | None) -> Callable:
