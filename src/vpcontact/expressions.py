@@ -38,6 +38,7 @@ from typing import NamedTuple
 import numpy as np
 
 from vpcontact.errors import CaseError, quoted, shown
+from vpcontact.space import coordinates
 
 __all__ = [
     "CONSTANT_NAMES",
@@ -273,6 +274,15 @@ def parse_expression(
     compiler = _Compiler(text, variables, where)
     evaluate, depends_on = compiler.compile_source()
     return Expression(text, variables, where, evaluate, depends_on)
+
+
+def values_at(source, where: str, points: np.ndarray) -> np.ndarray:
+    """The expression (or number) ``source`` of the case key ``where`` in the coordinates x, y[, z] at
+    ``points`` (d, k): k floats, not checked (a value that is not finite is for the caller to report)."""
+    names = coordinates(points.shape[0])
+    expression = parse_expression(source, names, where=where)
+    with np.errstate(all="ignore"):
+        return np.broadcast_to(expression(**dict(zip(names, points))), points.shape[1:]).astype(float)
 
 
 def _check_variables(variables: Iterable[str]) -> tuple[str, ...]:

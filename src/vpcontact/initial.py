@@ -29,7 +29,7 @@ from skfem import Basis
 from .case import Case, _brief, check_time_span
 from .contact import ContactLaw, ContactSurface
 from .errors import CaseError, quoted
-from .expressions import parse_expression
+from .expressions import values_at
 from .inputs import check_regular_file
 from .mesh import Mesh
 from .space import CELLS, component, coordinates
@@ -135,21 +135,12 @@ def initial_state(case: Case, mesh: Mesh, basis: Basis, surface: ContactSurface,
 
 
 # --- the case's expressions ------------------------------------------------------------------------
-def _values(source, where: str, points: np.ndarray, count: int) -> np.ndarray:
-    """An expression (or number) in the coordinates at ``points`` (d, count), as ``count`` floats."""
-    names = coordinates(points.shape[0])
-    expression = parse_expression(source, names, where=where)
-    with np.errstate(all="ignore"):  # values that are not finite are reported by the checks
-        return np.broadcast_to(expression(**dict(zip(names, points))), (count,)).astype(float)
-
-
 def _at_nodes(sources, mesh: Mesh) -> np.ndarray:
     """u_0 of initial.displacement at the nodes (nnodes, d); 0 when not given."""
     p = mesh.mesh.p
     if sources is None:
         return np.zeros((p.shape[1], mesh.dim))
-    return np.column_stack([_values(source, f"initial.displacement[{i}]", p, p.shape[1])
-                            for i, source in enumerate(sources)])
+    return np.column_stack([values_at(source, f"initial.displacement[{i}]", p) for i, source in enumerate(sources)])
 
 
 def _at_centroids(sources, mesh: Mesh) -> np.ndarray:
@@ -159,10 +150,9 @@ def _at_centroids(sources, mesh: Mesh) -> np.ndarray:
     sigma = np.zeros((d, d, elements))
     if sources is None:
         return sigma
-    centroids = mesh.mesh.p[:, mesh.mesh.t].mean(axis=1)
     for i, row in enumerate(sources):
         for j, source in enumerate(row):
-            sigma[i, j] = _values(source, f"initial.stress[{i}][{j}]", centroids, elements)
+            sigma[i, j] = values_at(source, f"initial.stress[{i}][{j}]", mesh.centroids)
     return sigma
 
 
@@ -170,7 +160,7 @@ def _at_contact_nodes(source, surface: ContactSurface) -> np.ndarray:
     """ξ_0 of initial.xi at the contact nodes (m,); 0 when not given."""
     if source is None or surface.size == 0:
         return np.zeros(surface.size)
-    return _values(source, "initial.xi", surface.coordinates, surface.size)
+    return values_at(source, "initial.xi", surface.coordinates)
 
 
 # --- the arrays of the API -------------------------------------------------------------------------
@@ -204,11 +194,9 @@ def _point(x: np.ndarray) -> str:
 
 
 def _check_finite(state: InitialState, mesh: Mesh, surface: ContactSurface) -> None:
-    p = mesh.mesh.p
-    centroids = p[:, mesh.mesh.t].mean(axis=1)
     for key, values, points, where in (
-            ("displacement", state.displacement.T, p, "node"),
-            ("stress", state.stress.reshape(-1, state.stress.shape[-1]), centroids, "element centroid"),
+            ("displacement", state.displacement.T, mesh.mesh.p, "node"),
+            ("stress", state.stress.reshape(-1, state.stress.shape[-1]), mesh.centroids, "element centroid"),
             ("xi", state.xi[None, :], surface.coordinates, "contact node")):
         wrong = ~np.isfinite(values)
         if wrong.any():

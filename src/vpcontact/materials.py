@@ -18,7 +18,7 @@ import numpy as np
 
 from .case import Case, MaterialSection, _material_keys
 from .errors import CaseError, quoted
-from .expressions import parse_expression
+from .expressions import values_at
 from .material import Elasticity, Perzyna, Relaxation
 from .mesh import Mesh
 from .space import coordinates
@@ -80,7 +80,7 @@ def body_materials(case: Case, mesh: Mesh) -> Materials:
         entry = case.materials[0]
         elasticity = Elasticity(float(entry.E), float(entry.nu), hypothesis)  # homogeneous: the scalar form
     else:
-        centroids = mesh.mesh.p[:, mesh.mesh.t].mean(axis=1)
+        centroids = mesh.centroids
         E, nu = np.empty(owner.size), np.empty(owner.size)
         for i, (key, entry) in enumerate(entries):
             mine = owner == i
@@ -127,7 +127,7 @@ def _owners(entries: list[tuple[str, MaterialSection]], mesh: Mesh) -> np.ndarra
             owner[claimed] = i
     orphans = np.flatnonzero(owner < 0)
     if orphans.size:
-        at = ", ".join(f"{c:.6g}" for c in mesh.mesh.p[:, mesh.mesh.t[:, orphans[0]]].mean(axis=1))
+        at = ", ".join(f"{c:.6g}" for c in mesh.centroids[:, orphans[0]])
         raise CaseError(f"material: {orphans.size} of {elements} elements have no material ({_where(owner, mesh)}; "
                         f"one is at ({', '.join(coordinates(mesh.dim))}) = ({at})): add a material entry for them")
     return owner
@@ -161,12 +161,7 @@ def _coefficient(key: str, value, centroids: np.ndarray, *, minimum: float | Non
     refused (naming the element's centroid) where not finite, not > ``minimum``, or (ν) not admissible
     for ``hypothesis``."""
     names = coordinates(centroids.shape[0])
-    if isinstance(value, str):
-        expression = parse_expression(value, names, where=key)
-        with np.errstate(all="ignore"):  # values that are not finite are reported below
-            values = np.broadcast_to(expression(**dict(zip(names, centroids))), centroids.shape[1:]).astype(float)
-    else:
-        values = np.full(centroids.shape[1], float(value))
+    values = values_at(value, key, centroids)
     if minimum is not None:
         wrong, expected = ~(values > minimum), f"a finite number > {minimum:g}"
     else:

@@ -94,6 +94,11 @@ class Mesh:
         return float(max(np.sqrt(((p[:, t[i]] - p[:, t[j]]) ** 2).sum(axis=0)).max()
                          for i, j in itertools.combinations(range(t.shape[0]), 2)))
 
+    @cached_property
+    def centroids(self) -> np.ndarray:
+        """The element centroids (d, nelements): where P0 data given as expressions are evaluated."""
+        return self.mesh.p[:, self.mesh.t].mean(axis=1)
+
     @property
     def diameter(self) -> float:
         """The diameter (diagonal length) of the bounding box of the nodes."""

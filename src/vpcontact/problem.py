@@ -25,7 +25,7 @@ from .case import Case, _brief, _material_keys
 from .contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
                       PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
 from .errors import CaseError, quoted
-from .expressions import parse_expression
+from .expressions import parse_expression, values_at
 from .initial import InitialState, initial_state
 from .material import Elasticity
 from .materials import AtCentroids, Materials, body_materials
@@ -54,6 +54,8 @@ class Problem:
     viscoplastic: Callable | None = None  # 𝒢(σ, ε) over arrays (d, d, nelements); None: 𝒢 = 0
     timings: dict = field(default_factory=dict)  # seconds: mesh, assembly, build
     initial: InitialState | None = None  # u_0, σ_0, ξ_0 and t_0 (build_problem sets it)
+    initial_strain: np.ndarray | None = None  # ε(u_0) per element (d, d, nelements)
+    initial_history: np.ndarray | None = None  # z_0 = σ_0 − ℰε(u_0) of (2.28) per element (d, d, nelements)
     times: TimeGrid = field(init=False)  # t_1, …, t_steps
 
     def __post_init__(self):
@@ -166,7 +168,7 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     done = time.perf_counter()
     timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
     return Problem(case, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic, timings,
-                   initial=initial)
+                   initial=initial, initial_strain=strain0, initial_history=z0)
 
 
 def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:
@@ -180,7 +182,7 @@ def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:
         raise CaseError(f"viscoplastic takes {len(required)} arguments ({', '.join(required)}): expected "
                         f"G(sigma, strain) or G(sigma, strain, x)")
     if len(required) == 3:
-        return AtCentroids(G, mesh.mesh.p[:, mesh.mesh.t].mean(axis=1))
+        return AtCentroids(G, mesh.centroids)
     return G
 
 
@@ -417,11 +419,8 @@ def _layer_parameter(where: str, value, minimum: float | None = None, *, points:
     ``minimum`` (or equal to it, when ``strict``)."""
     if not isinstance(value, str):
         return float(value)
-    names = coordinates(points.shape[0])
-    count = points.shape[1]
-    expression = parse_expression(value, names, where=where)
-    with np.errstate(all="ignore"):  # values that are not finite are reported below
-        values = np.broadcast_to(expression(**dict(zip(names, points))), (count,)).astype(float)
+    names, count = coordinates(points.shape[0]), points.shape[1]
+    values = values_at(value, where, points)
     if minimum is None:
         wrong = ~np.isfinite(values)
     else:

@@ -99,8 +99,7 @@ class TimeLoop:
         problem = self.problem
         initial = problem.initial
         u0 = initial.dofs(problem.basis)
-        strain0 = element_strain(problem.basis, u0)
-        z0 = initial.stress - problem.elasticity.stress(strain0)
+        strain0, z0 = problem.initial_strain, problem.initial_history
         G = problem.viscoplastic
         history = G is not None or np.any(z0 != 0.0)  # z ≠ 0 possible: the right-hand side carries Bᵀz
         rate = viscoplastic_rate(G, initial.stress, strain0) if G is not None else None  # the j = 0 term
