@@ -9,6 +9,7 @@ peak RSS, and the full/condensed time ratio where both ran.
 
     python benchmarks/scaling.py                      # every level, condensed; full up to 1/128
     python benchmarks/scaling.py --level 512 --beta -1 --method condensed
+    python benchmarks/scaling.py --dim 3 [options]    # the 3D quarter-ball ladder: scaling_3d.py's options
 """
 
 from __future__ import annotations
@@ -60,9 +61,20 @@ def in_subprocess(level: int, method: str, beta: float) -> dict:
 
 
 def main() -> None:
+    dimension = argparse.ArgumentParser(add_help=False)
+    dimension.add_argument("--dim", type=int, choices=(2, 3), default=2)
+    known, rest = dimension.parse_known_args()
+    if known.dim == 3:
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        import scaling_3d
+
+        sys.argv = [scaling_3d.__file__, *rest]
+        scaling_3d.main()
+        return
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--dim", type=int, choices=(2,), default=2, help="2 (this ladder) or 3 (scaling_3d.py's)")
     parser.add_argument("--level", type=int, choices=LEVELS, help="one level 1/LEVEL (default: all)")
-    parser.add_argument("--method", choices=("condensed", "full", "both"), default="both")
+    parser.add_argument("--method", choices=("condensed", "full", "iterative", "both"), default="both")
     parser.add_argument("--beta", type=float, default=1.0)
     parser.add_argument("--full-up-to", type=int, default=FULL_UP_TO, help="finest level for the full method")
     parser.add_argument("--inline", action="store_true", help=argparse.SUPPRESS)

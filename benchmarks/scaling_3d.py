@@ -36,7 +36,7 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
 #: Element edges of the ladder: 12 n³ tetrahedra with n = ceil(1.5 / h) (7.6k DOFs at 0.15, 1.5M at 0.025).
 LEVELS = (0.15, 0.1, 0.07, 0.05, 0.035, 0.025)
 QUICK = 0.3
-METHODS = ("condensed", "full")
+METHODS = ("condensed", "iterative", "full")
 STAGES = ("mesh", "assembly", "factorization", "condensation")
 
 
@@ -44,20 +44,22 @@ def peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def run_level(h: float, method: str) -> dict:
-    """Solve the example on the mesh of edge h with ``method`` in this process and return its record."""
+def run_level(h: float, method: str, steps: int | None = None, beta: float = 1.0) -> dict:
+    """Solve the example on the mesh of edge h with ``method`` (``steps`` steps over its time span, the
+    layer's β) in this process and return its record."""
     import vpcontact
     from vpcontact.problem import build_problem
     from vpcontact.solvers.condensed import condensed_memory
     from vpcontact.stepping import TimeLoop
 
-    case = vpcontact.load_case(EXAMPLE, {"mesh.h": h, "solver.method": method, "output.field_steps": "none",
-                                         "output.figures": False})
+    overrides = {"mesh.h": h, "solver.method": method, "output.field_steps": "none", "output.figures": False,
+                 "contact.stiffness.beta": beta}
+    case = vpcontact.load_case(EXAMPLE, {**overrides, **({"time.steps": steps} if steps else {})})
     problem = build_problem(case)
     rss_problem = peak_rss_mb()
     free = problem.free
     A, N = problem.A[free][:, free].tocsr(), problem.surface.operator[:, free].tocsr()
-    record = {"h": h, "method": method, "dofs": int(problem.basis.N), "free_dofs": int(free.size),
+    record = {"h": h, "method": method, "beta": beta, "dofs": int(problem.basis.N), "free_dofs": int(free.size),
               "tetrahedra": int(problem.mesh.mesh.t.shape[1]), "contact_nodes": int(N.shape[0]),
               "contact_dofs": len(set(N.indices)), "steps": case.time.steps,
               "condensed_memory_mb": condensed_memory(N, A.shape[0]) / 2**20}
@@ -73,35 +75,37 @@ def run_level(h: float, method: str) -> dict:
         "setup_s": {k: timings.get(k, 0.0) for k in STAGES},
         "setup_total_s": timings["total"] - timings["time_loop"], "time_loop_s": timings["time_loop"],
         "total_s": timings["total"], "newton_iterations": int(result.series("newton_iterations").sum()),
+        "linear_solves": int(result.linear_solves), "krylov_iterations": int(getattr(loop.solver, "krylov_iterations", 0)),
         "peak_rss_mb": peak_rss_mb(), "rss_after_problem_mb": rss_problem, "rss_after_setup_mb": rss_setup,
     })
-    record["factor"] = factor_size(loop.solver, A, N, method)
+    record["factor"] = factor_size(loop.solver, A)
     return record
 
 
-def factor_size(solver, A, N, method: str) -> dict:
-    """Entries of the sparse factor the method makes: the condensed method's factor of A0 = A + Nᵀ r N
-    in Schur mode on the contact dofs (PARDISO's supernodal storage, or SuperLU's L + U), or SuperLU's
-    L + U of A + NᵀN for the full method (the pattern of its Newton matrix with every contact node in
-    compliance; with nodes on the base it factors a larger saddle-point matrix, each Newton iteration)."""
-    from vpcontact.solvers.factorization import splu
-
-    if method == "condensed":
-        factorization = solver.factorization
-        nonzeros, backend = factorization.factor_nonzeros, factorization.name
+def factor_size(solver, A) -> dict:
+    """What the method's linear algebra holds: the condensed method's factor of A0 = A + Nᵀ r N in
+    Schur mode on the contact dofs (PARDISO's supernodal storage, or SuperLU's L + U), the full
+    method's factor of its Newton matrix (PARDISO's storage), or the iterative method's multigrid
+    hierarchy (levels, operator complexity, hierarchies built)."""
+    if solver.name == "iterative":
+        amg = solver.linear
+        return {"backend": amg.name, "matrix_nonzeros": int(A.nnz), "levels": amg.levels,
+                "operator_complexity": amg.operator_complexity, "setups": amg.setups, "setup_s": amg.setup_time}
+    if solver.name == "condensed":
+        nonzeros, backend = solver.factorization.factor_nonzeros, solver.factorization.name
     else:
-        import scipy.sparse as sp
-
-        lu = splu(sp.csc_matrix(A + N.T @ N), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                  options={"SymmetricMode": True})
-        nonzeros, backend = lu.L.nnz + lu.U.nnz, "superlu"
+        backend = solver.linear.name
+        nonzeros = solver.linear._pardiso.factor_nonzeros if backend == "pardiso" else \
+            solver.linear._lu.L.nnz + solver.linear._lu.U.nnz
     return {"backend": backend, "matrix_nonzeros": int(A.nnz), "factor_nonzeros": int(nonzeros),
             "fill": nonzeros / A.nnz, "factor_mb": 8 * nonzeros / 2**20}
 
 
-def in_subprocess(h: float, method: str, memory_limit_mb: float, time_limit_s: float, profile: str | None) -> dict:
+def in_subprocess(h: float, method: str, memory_limit_mb: float, time_limit_s: float, profile: str | None,
+                  steps: int | None = None, beta: float = 1.0) -> dict:
     """One run of a level in a fresh process, with the whole process's wall time."""
-    command = [sys.executable, __file__, "--h", str(h), "--method", method, "--inline"]
+    command = [sys.executable, __file__, "--h", str(h), "--method", method, "--beta", str(beta), "--inline"]
+    command += ["--steps", str(steps)] if steps else []
     command += ["--profile", profile] if profile else []
     status, stdout, stderr, stopped, wall, _ = watched(command, memory_limit_mb, time_limit_s, interval_s=0.2)
     if stopped:
@@ -126,7 +130,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--h", type=float, help="one level: the element edge h (default: the ladder)")
     parser.add_argument("--quick", action="store_true", help=f"the level h = {QUICK} only (about 1,000 DOFs)")
-    parser.add_argument("--method", choices=(*METHODS, "both"), default="both")
+    parser.add_argument("--method", choices=(*METHODS, "all"), default="all")
+    parser.add_argument("--steps", type=int, help="time steps over the example's time span (default: its 11)")
+    parser.add_argument("--beta", type=float, default=1.0, help="the layer's beta (default 1)")
     parser.add_argument("--full-up-to", type=float, default=0.0, help="coarsest h not run with the full method "
                         "(default 0: run it until a level does not complete)")
     parser.add_argument("--repeat", type=int, default=1, help="runs of each completed level (medians reported)")
@@ -141,16 +147,16 @@ def main() -> None:
             import cProfile
 
             profiler = cProfile.Profile()
-            record = profiler.runcall(run_level, args.h, args.method)
+            record = profiler.runcall(run_level, args.h, args.method, args.steps, args.beta)
             profiler.dump_stats(args.profile)
         else:
-            record = run_level(args.h, args.method)
+            record = run_level(args.h, args.method, args.steps, args.beta)
         print(json.dumps(record))
         return
     from vpcontact.memory import available_memory
 
     levels = [QUICK] if args.quick else [args.h] if args.h else list(LEVELS)
-    methods = list(METHODS) if args.method == "both" else [args.method]
+    methods = list(METHODS) if args.method == "all" else [args.method]
     given_up: dict[str, str] = {}
     records = []
     for h in levels:
@@ -161,9 +167,10 @@ def main() -> None:
                 records.append({"h": h, "method": method, "status": "skipped", "message": given_up[method]})
                 continue
             limit = args.memory_limit or 0.8 * available_memory() / 2**20
-            runs = [in_subprocess(h, method, limit, args.time_limit, args.profile)]
+            run = (h, method, limit, args.time_limit)
+            runs = [in_subprocess(*run, args.profile, args.steps, args.beta)]
             if runs[0]["status"] == "complete":
-                runs += [in_subprocess(h, method, limit, args.time_limit, None) for _ in range(args.repeat - 1)]
+                runs += [in_subprocess(*run, None, args.steps, args.beta) for _ in range(args.repeat - 1)]
                 runs = [r for r in runs if r["status"] == "complete"]
                 record = median_of(runs)
             else:

@@ -9,23 +9,31 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
 def test_the_3d_scaling_ladder_reports_each_method_on_its_quickest_level():
-    done = subprocess.run([sys.executable, str(BENCHMARKS / "scaling_3d.py"), "--quick"], capture_output=True,
+    done = subprocess.run([sys.executable, str(BENCHMARKS / "scaling.py"), "--dim", "3", "--quick"], capture_output=True,
                           text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     records = json.loads(done.stdout)
-    assert [r["method"] for r in records] == ["condensed", "full"]
+    assert [r["method"] for r in records] == ["condensed", "iterative", "full"]
     for record in records:
         assert record["status"] == "complete", record
         # the quarter ball at h = 0.3: 12 n³ tetrahedra with n = ceil(1.5 / 0.3) = 5
         assert record["tetrahedra"] == 12 * 5**3 and record["dofs"] % 3 == 0
         assert 0 < record["contact_dofs"] <= 3 * record["contact_nodes"] < record["dofs"]
-        assert record["factor"]["factor_nonzeros"] >= record["factor"]["matrix_nonzeros"] / 2  # a triangle at least
         assert 0 < record["rss_after_problem_mb"] <= record["rss_after_setup_mb"] <= record["peak_rss_mb"]
         assert record["condensed_memory_mb"] > 8 * record["contact_nodes"] ** 2 / 2**20  # holds S (m × m) at least
         assert 0 < record["time_loop_s"] < record["total_s"] < record["process_s"]
-    condensed, full = records
-    assert condensed["dofs"] == full["dofs"] and condensed["contact_nodes"] == full["contact_nodes"]
+        assert record["linear_solves"] > 0
+    condensed, iterative, full = records
+    assert condensed["dofs"] == full["dofs"] == iterative["dofs"]
+    assert condensed["contact_nodes"] == full["contact_nodes"] == iterative["contact_nodes"]
+    for direct in (condensed, full):
+        assert direct["factor"]["factor_nonzeros"] >= direct["factor"]["matrix_nonzeros"] / 2  # a triangle at least
+        assert direct["krylov_iterations"] == 0
     assert full["setup_s"]["factorization"] == 0.0 < condensed["setup_s"]["factorization"]
+    assert full["linear_solves"] == full["newton_iterations"] == iterative["linear_solves"]
+    # the iterative method: one hierarchy, a few CG iterations per Newton iteration
+    assert iterative["factor"]["setups"] == 1 and iterative["factor"]["levels"] >= 2
+    assert iterative["linear_solves"] <= iterative["krylov_iterations"] <= 40 * iterative["linear_solves"]
 
 
 def test_the_assembly_benchmark_times_both_implementations_and_compares_them():

@@ -42,10 +42,10 @@ def test_condensed_refuses_an_operator_that_does_not_fit(tmp_path, capsys, monke
     path.write_text(tomli_w.dumps(case))
     assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert 'solver.method = "full"' in err and "GiB" in err and err.count("\n") == 1
+    assert 'solver.method = "iterative"' in err and "GiB" in err and err.count("\n") == 1
     assert not (tmp_path / "out").exists()
-    case["solver"]["method"] = "auto"  # the default falls back to the full method
-    assert vpcontact.solve(case).method == "full"
+    case["solver"]["method"] = "auto"  # the default falls back to the iterative method
+    assert vpcontact.solve(case).method == "iterative"
 
 
 @pytest.mark.parametrize("backend", __import__("vpcontact.solvers.factorization", fromlist=["x"]).installed_backends())

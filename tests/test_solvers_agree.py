@@ -34,8 +34,24 @@ def relative(a, b):
     return np.abs(a - b).max() / scale
 
 
-#: the full method, and the condensed one with every factorization installed here
-METHODS = [("full", "auto")] + [("condensed", backend) for backend in installed_backends()]
+def assert_same_states(result, reference):
+    """The nodes' states agree, except at weakly active nodes: at the limit with no force from the rigid
+    base (to 1e-8 of the largest pressure), where "in compliance" and "at the limit" are both right
+    and the rounding of λ decides (the iterative method's is its CG tolerance)."""
+    status, expected = result.contact_history("status"), reference.contact_history("status")
+    differ = status != expected
+    pressure = np.abs(reference.contact_history("pressure_compliance")).max() + \
+        np.abs(reference.contact_history("pressure_rigid")).max()
+    weak = np.maximum(np.abs(result.contact_history("pressure_rigid")),
+                      np.abs(reference.contact_history("pressure_rigid"))) <= 1e-8 * pressure
+    assert np.all(np.isin(status[differ], (1, 2)) & np.isin(expected[differ], (1, 2)) & weak[differ]), \
+        (np.argwhere(differ), status[differ], expected[differ])
+
+
+#: the full and the condensed method with every factorization installed here, and the iterative one
+METHODS = [("full", "superlu")] + [(method, backend) for backend in installed_backends()
+                                   for method in ("condensed", "full") if (method, backend) != ("full", "superlu")] \
+    + [("iterative", "auto")]
 
 
 @pytest.mark.parametrize("name", CASES)
@@ -46,7 +62,7 @@ def test_methods_agree(name):
         results[method, backend] = vpcontact.solve({**CASES[name], "solver": solver, "output": {"field_steps": "all"}})
         assert results[method, backend].status == "complete", results[method, backend].message
         assert results[method, backend].method == method
-    reference = results.pop(("full", "auto"))
+    reference = results.pop(("full", "superlu"))
     if name in ALL_THREE_STATES:
         assert np.all(states(reference) > 0, axis=1).any(), states(reference)
     for method, result in results.items():
@@ -55,7 +71,7 @@ def test_methods_agree(name):
             assert relative(result.fields[step].stress, fields.stress) < 1e-8, (method, step)
         for quantity in ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid"):
             assert relative(result.contact_history(quantity), reference.contact_history(quantity)) < 1e-8, quantity
-        np.testing.assert_array_equal(result.contact_history("status"), reference.contact_history("status"))
+        assert_same_states(result, reference)
         forces = [column for column in reference.columns if column.startswith("contact_force_")]
         assert len(forces) == reference.dim
         for column in forces:

@@ -510,7 +510,7 @@ class SolverSection(_Section):
     """The step solver: "full" (Newton on the whole system), "condensed" (factor once, Newton on the
     contact nodes) or "auto" (condensed when its dense contact operator fits in memory)."""
 
-    method: Literal["auto", "condensed", "full"] = "auto"
+    method: Literal["auto", "condensed", "full", "iterative"] = "auto"
     factorization: str = "auto"  # sparse direct backend of "condensed"
     tolerance: Annotated[float, Field(gt=0, lt=1)] = 1e-10
     max_iterations: Annotated[int, Field(ge=1)] = 50

@@ -35,8 +35,8 @@ from .material import von_mises
 from .problem import Problem
 from .results import Fields, Result
 from .rigid_modes import RigidModes
-from .solvers import StepData, StepSolution, make_solver
-from .solvers.errors import SingularMatrixError
+from .solvers import DofLayout, StepData, StepSolution, make_solver
+from .solvers.errors import NotConvergedError, SingularMatrixError
 
 
 @dataclass
@@ -79,12 +79,13 @@ class TimeLoop:
         case, free, surface = problem.case, problem.free, problem.surface
         options = case.solver
         mesh = problem.mesh.mesh
-        held_by_contact = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs).free_basis(free)
+        modes = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs)
+        layout = DofLayout(free, mesh.dim(), mesh.nvertices, modes.matrix[free].toarray())
         self.solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
-                                  surface.weights, surface.gap0, rigid=held_by_contact,
+                                  surface.weights, surface.gap0, rigid=modes.free_basis(free),
                                   augmentation=options.augmentation, tolerance=options.tolerance,
                                   max_iterations=options.max_iterations, length_scale=problem.mesh.diameter,
-                                  factorization=options.factorization)
+                                  factorization=options.factorization, layout=layout)
         self.max_cuts = options.max_step_cuts
         self.result = Result.start(problem, self.solver)
         self._created = started
@@ -187,12 +188,19 @@ class TimeLoop:
                 step = StepData(b[problem.free], problem.law, state.xi, h)
                 solution = self.solver.solve(step, state.previous)
         except SingularMatrixError as error:
-            m = problem.surface.size
-            solution = StepSolution(None, np.zeros(m), np.full(m, np.nan), np.zeros(m, dtype=bool), 0, np.nan, np.nan,
-                                    False, f"the Newton matrix is singular ({error})",
+            solution = self._failed(f"the Newton matrix is singular ({error})",
                                     "a part of the body held only by contact may have lost it: hold it with "
                                     "boundary.dirichlet entries, or try smaller time steps (time.steps)")
+        except NotConvergedError as error:
+            solution = self._failed(f"the Newton system was not solved ({error})",
+                                    "try smaller time steps (time.steps), or solver.method = \"full\" (a direct solver)")
         return _Attempt(t, h, step, z, solution)
+
+    def _failed(self, message: str, advice: str) -> StepSolution:
+        """The record of a step whose Newton iteration stopped on a failed linear solve."""
+        m = self.problem.surface.size
+        return StepSolution(None, np.zeros(m), np.full(m, np.nan), np.zeros(m, dtype=bool), 0, np.nan, np.nan, False,
+                            message, advice)
 
     def _accept(self, n: int, ends_step: bool, attempt: _Attempt) -> str | None:
         """Make a converged attempt the new level: ξ, fields, z and 𝒢 there; record it. Values that are

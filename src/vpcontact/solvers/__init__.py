@@ -4,48 +4,71 @@
     solve(step, previous) -> StepSolution        (previous: the last step's solution or None)
     displacement(step, solution) -> u            (at the free dofs)
     r, name, timings
-Methods: "full" (Newton on the whole system, the reference), "condensed" (factor once, Newton on
-the contact nodes), "auto" (condensed when its dense contact operator fits in memory, else full);
+Methods: "full" (Newton on the whole system, its SPD systems by a sparse direct solver),
+"iterative" (the same Newton iteration, its systems by AMG-preconditioned CG), "condensed" (factor
+once, Newton on the contact nodes), "auto" (a choice from the sizes and the memory available);
 ``solver.reason`` says which method runs and why.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
+import numpy as np
+
 from .base import StepData, StepSolution, default_augmentation
-from .condensed import CondensedNewton, condensed_fits
-from .full import FullNewton
+from .choice import check_iterative_memory, chosen_method
+from .condensed import CondensedNewton
+from .full import FullNewton, IterativeNewton
 from ..errors import CaseError
 from .errors import SingularMatrixError, SolverMemoryError
 from .factorization import installed_backends
 
-SOLVERS = {FullNewton.name: FullNewton, CondensedNewton.name: CondensedNewton}
+SOLVERS = {solver.name: solver for solver in (FullNewton, IterativeNewton, CondensedNewton)}
 METHODS = ("auto", *SOLVERS)
 
 
+@dataclass(frozen=True)
+class DofLayout:
+    """Where the free dofs sit among the d · nodes nodal dofs (dof d · node + component), and the
+    rigid-body motions on them (free dofs, k): what the iterative method's multigrid needs."""
+
+    free: np.ndarray
+    dim: int
+    nodes: int
+    rigid_motions: np.ndarray
+
+
 def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float | None, tolerance: float,
-                max_iterations: int, length_scale: float, factorization: str = "auto"):
+                max_iterations: int, length_scale: float, factorization: str = "auto",
+                layout: DofLayout):
     """The step solver ``method`` for stiffness A and contact operator N (both on the free dofs);
-    ``rigid``: an orthonormal basis of the rigid motions held only by contact, (free dofs, k)."""
+    ``rigid``: an orthonormal basis of the rigid motions held only by contact, (free dofs, k);
+    ``layout``: the dofs' nodal layout."""
     r = default_augmentation(A, N)
     if augmentation is not None:
         if not 1e-12 <= augmentation / r <= 1e12:
             raise CaseError(f"solver.augmentation = {augmentation:g} is {augmentation / r:.1e} times the normal "
                             f"stiffness at the contact nodes ({r:.3g}): use \"auto\" or a value near it")
         r = augmentation
-    method, reason = _chosen(method, A, N)
+    method, reason = chosen_method(method, A, N, layout.dim)
     common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale, rigid)
-    if method != CondensedNewton.name:
-        solver = FullNewton(*common)
+    if method == CondensedNewton.name:
+        solver = _built(lambda: CondensedNewton(*common, factorization=factorization), factorization, A)
+    elif method == IterativeNewton.name:
+        check_iterative_memory(A)
+        solver = IterativeNewton(*common, near_nullspace=layout.rigid_motions, free=layout.free, dim=layout.dim,
+                                 nodes=layout.nodes)
     else:
-        solver = _condensed(common, factorization, A)
+        solver = _built(lambda: FullNewton(*common, factorization), factorization, A)
     solver.reason = reason
     return solver
 
 
-def _condensed(common: tuple, factorization: str, A) -> CondensedNewton:
-    """The condensed solver, its failures to factor A as one-line CaseErrors."""
+def _built(make, factorization: str, A):
+    """The solver ``make()`` returns, its failures to factor (or analyse) A as one-line CaseErrors."""
     try:
-        return CondensedNewton(*common, factorization=factorization)
+        return make()
     except SingularMatrixError as error:
         raise CaseError(f"the stiffness matrix cannot be factored ({error}): the mesh has degenerate elements, or "
                         f"a part of the body is held by nothing") from None
@@ -56,15 +79,4 @@ def _condensed(common: tuple, factorization: str, A) -> CondensedNewton:
                         f"coarser mesh{other}") from None
 
 
-def _chosen(method: str, A, N) -> tuple[str, str]:
-    """The step method to run for ``solver.method`` and why, in words (summary.json's solver_reason)."""
-    if method != "auto":
-        return method, f"solver.method = \"{method}\""
-    fits, needed, available = condensed_fits(N, A.shape[0])
-    return (CondensedNewton.name if fits else FullNewton.name,
-            f"solver.method = \"auto\": the condensed method's dense algebra for {N.shape[0]} contact nodes "
-            f"({needed / 2**30:.3g} GiB) {'fits in' if fits else 'exceeds'} half the {available / 2**30:.1f} GiB "
-            f"available")
-
-
-__all__ = ["METHODS", "SOLVERS", "StepData", "StepSolution", "make_solver"]
+__all__ = ["METHODS", "SOLVERS", "DofLayout", "StepData", "StepSolution", "make_solver"]

@@ -233,4 +233,4 @@ def check_condensed_memory(N: sp.csr_matrix, n: int) -> None:
         m, c = N.shape[0], np.unique(sp.csr_matrix(N).indices).size
         raise CaseError(f"solver.method = \"condensed\" needs about {needed / 2**30:.1f} GiB for its dense "
                         f"{m} x {m} contact operator (and the {c} x {c} Schur complement on the contact dofs), more "
-                        f"than half the {available / 2**30:.1f} GiB available; use solver.method = \"full\"")
+                        f"than half the {available / 2**30:.1f} GiB available; use solver.method = \"iterative\"")

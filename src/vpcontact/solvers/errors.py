@@ -5,6 +5,7 @@
                            working precision: a Newton matrix (the step is cut) or the stiffness
                            itself (a degenerate mesh: bad input)
     SolverMemoryError      a factorization ran out of memory
+    NotConvergedError      an iterative solver did not reach its tolerance (the step is cut)
 """
 
 
@@ -18,3 +19,7 @@ class SingularMatrixError(SolverError):
 
 class SolverMemoryError(SolverError, MemoryError):
     """A factorization ran out of memory."""
+
+
+class NotConvergedError(SolverError):
+    """An iterative linear solver did not reach its tolerance."""

@@ -1,0 +1,78 @@
+"""The linear-solver layer: one small protocol for the symmetric positive definite Newton systems of
+the full-system methods.
+
+    solver.analyse(A)             the work that depends on A's sparsity pattern (or, for the
+                                  iterative backend, on a reference operator): an ordering and
+                                  symbolic factorization, or an AMG hierarchy
+    solver.factor(A)              the work that depends on A's values (A has the analysed pattern)
+    x = solver.solve(b, rtol)     A x = b; iterative backends stop at ‖A x − b‖ ≤ rtol ‖b‖
+    solver.iterations             Krylov iterations of all solves so far (0 for a direct backend)
+
+Backends: "pardiso" (MKL PARDISO: analysis once, a numeric refactorisation per matrix), "superlu"
+(SciPy's LU, always installed) and "amg-cg" (:mod:`.amg`: conjugate gradients preconditioned by
+smoothed aggregation, its hierarchy built once). Failures are typed (:mod:`.errors`). The Schur
+complement the condensed method needs is PARDISO's too; it lives in :mod:`.factorization`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from .factorization import PardisoFactorization, installed_backends, splu
+
+
+class PardisoSolver:
+    """MKL PARDISO, SPD: METIS ordering and symbolic factorization once, numeric factorization per
+    matrix (on one thread: see :class:`.pardiso.Pardiso`)."""
+
+    name = "pardiso"
+    available = staticmethod(PardisoFactorization.available)
+
+    def __init__(self):
+        self._pardiso = None
+        self.iterations = 0
+
+    def analyse(self, A: sp.spmatrix) -> None:
+        """Order A and analyse its factor's structure (and memory: SolverMemoryError if it will not fit)."""
+        from .pardiso import Pardiso
+
+        self._pardiso = None  # release an earlier factor first
+        self._pardiso = Pardiso(A, refactorable=True)
+
+    def factor(self, A: sp.spmatrix) -> None:
+        self._pardiso.refactor(A)
+
+    def solve(self, b: np.ndarray, rtol: float = 0.0) -> np.ndarray:
+        return self._pardiso.solve(b)
+
+
+class SuperLUSolver:
+    """SciPy's SuperLU in its symmetric mode (minimum degree on A + Aᵀ, diagonal pivots); it has no
+    separate symbolic phase, so each matrix is ordered and factored anew."""
+
+    name = "superlu"
+    available = staticmethod(lambda: True)
+
+    def __init__(self):
+        self._lu = None
+        self.iterations = 0
+
+    def analyse(self, A: sp.spmatrix) -> None:
+        pass
+
+    def factor(self, A: sp.spmatrix) -> None:
+        self._lu = None
+        self._lu = splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                        options={"SymmetricMode": True})
+
+    def solve(self, b: np.ndarray, rtol: float = 0.0) -> np.ndarray:
+        return self._lu.solve(b)
+
+
+DIRECT = {backend.name: backend for backend in (PardisoSolver, SuperLUSolver)}
+
+
+def direct_solver(backend: str = "auto"):
+    """The direct backend ``backend`` ("auto": the fastest one installed)."""
+    return DIRECT[installed_backends()[0] if backend == "auto" else backend]()
