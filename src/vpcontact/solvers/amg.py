@@ -32,6 +32,13 @@ import scipy.sparse.linalg as spla
 
 from .errors import NotConvergedError
 
+#: The prolongation smoothed by energy minimization, and one block Gauss–Seidel sweep before (forward)
+#: and after (backward) each coarse correction: a symmetric V-cycle, as CG needs. Against pyamg's
+#: default (Jacobi-smoothed prolongation, a symmetric sweep each side), on a 24k-dof Newton matrix of
+#: the quarter ball: 11 CG iterations to 1e-8 either way, 17 ms each instead of 24 (the sweeps are
+#: most of a V-cycle's time); setup 0.76 s instead of 0.44 s, once.
+SMOOTHING = {"smooth": "energy", "presmoother": ("block_gauss_seidel", {"sweep": "forward"}),
+             "postsmoother": ("block_gauss_seidel", {"sweep": "backward"})}
 #: CG iterations at most per solve (a NotConvergedError beyond).
 MAX_ITERATIONS = 500
 #: A solve that needed more CG iterations than this has the hierarchy rebuilt on the next matrix.
@@ -75,7 +82,7 @@ class AMGConjugateGradient:
         B = np.zeros((self.size, self.near_nullspace.shape[1]))
         B[self.free] = self.near_nullspace
         self.hierarchy = None  # release the earlier one first
-        self.hierarchy = pyamg.smoothed_aggregation_solver(blocked, B=B, coarse_solver="splu")
+        self.hierarchy = pyamg.smoothed_aggregation_solver(blocked, B=B, coarse_solver="splu", **SMOOTHING)
         self.levels = len(self.hierarchy.levels)
         self.operator_complexity = float(self.hierarchy.operator_complexity())
         self._cycle = self.hierarchy.aspreconditioner(cycle="V")
