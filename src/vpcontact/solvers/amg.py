@@ -96,10 +96,11 @@ class AMGConjugateGradient:
         if self._stale:
             self.analyse(A)
         self._A = sp.csr_matrix(A)
-        nonzero = self._A.copy()
-        nonzero.data = (nonzero.data != 0.0).astype(np.int8)
+        stored = np.diff(self._A.indptr)
+        nonzeros = np.zeros(stored.size, dtype=np.int64)
+        nonzeros[stored > 0] = np.add.reduceat(self._A.data != 0.0, self._A.indptr[:-1][stored > 0])
         diagonal = self._A.diagonal()
-        self._decoupled = (np.asarray(nonzero.sum(axis=1)).ravel() == (diagonal != 0.0)) & (diagonal > 0.0)
+        self._decoupled = (nonzeros == 1) & (diagonal > 0.0)
         self._decoupled_inverse = np.where(self._decoupled, 1.0 / np.where(self._decoupled, diagonal, 1.0), 0.0)
 
     def _precondition(self, r: np.ndarray) -> np.ndarray:

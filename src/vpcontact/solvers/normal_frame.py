@@ -74,8 +74,8 @@ class NormalFrame:
         rotated = rotated + sp.diags(np.zeros(A.shape[0]), format="csr")  # the diagonal stored, even a zero
         rotated.sort_indices()
         self._pattern = rotated
-        self._rows = np.repeat(np.arange(A.shape[0]), np.diff(rotated.indptr))
-        self._diagonal_entry = rotated.indices == self._rows
+        rows = np.repeat(np.arange(A.shape[0], dtype=rotated.indices.dtype), np.diff(rotated.indptr))
+        self._diagonal_position = np.flatnonzero(rotated.indices == rows)  # one per row
         return rotated
 
     def tangent_diagonal(self, T: np.ndarray) -> np.ndarray:
@@ -88,9 +88,12 @@ class NormalFrame:
     def constrained(self, diagonal: np.ndarray, fixed: np.ndarray) -> sp.csr_matrix:
         """Q A Q + diag(``diagonal``) with the rows and columns of the ``fixed`` dofs (a boolean
         mask) reduced to their diagonal entry: the same stored pattern for every mask."""
-        pattern = self._pattern
-        data = pattern.data + np.where(self._diagonal_entry, diagonal[self._rows], 0.0)
-        data[(fixed[self._rows] | fixed[pattern.indices]) & ~self._diagonal_entry] = 0.0
+        pattern, on_diagonal = self._pattern, self._diagonal_position
+        data = pattern.data.copy()
+        data[on_diagonal] += diagonal
+        kept = data[on_diagonal]
+        data[np.repeat(fixed, np.diff(pattern.indptr)) | fixed[pattern.indices]] = 0.0
+        data[on_diagonal] = kept
         return sp.csr_matrix((data, pattern.indices, pattern.indptr), shape=pattern.shape)
 
     def normal_dofs(self, nodes: np.ndarray) -> np.ndarray:
