@@ -90,6 +90,7 @@ def factor_size(solver, A) -> dict:
     if solver.name == "iterative":
         amg = solver.linear
         return {"backend": amg.name, "matrix_nonzeros": int(A.nnz), "levels": amg.levels,
+                "most_cg_iterations_per_solve": amg.most_iterations,
                 "operator_complexity": amg.operator_complexity, "setups": amg.setups, "setup_s": amg.setup_time}
     if solver.name == "condensed":
         nonzeros, backend = solver.factorization.factor_nonzeros, solver.factorization.name

@@ -34,6 +34,7 @@ def test_the_3d_scaling_ladder_reports_each_method_on_its_quickest_level():
     # the iterative method: one hierarchy, a few CG iterations per Newton iteration
     assert iterative["factor"]["setups"] == 1 and iterative["factor"]["levels"] >= 2
     assert iterative["linear_solves"] <= iterative["krylov_iterations"] <= 40 * iterative["linear_solves"]
+    assert 1 <= iterative["factor"]["most_cg_iterations_per_solve"] <= 40
 
 
 def test_the_assembly_benchmark_times_both_implementations_and_compares_them():

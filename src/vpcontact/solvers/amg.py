@@ -62,6 +62,7 @@ class AMGConjugateGradient:
         self.near_nullspace = near_nullspace
         self.hierarchy = None
         self.iterations = 0  # CG iterations of all solves
+        self.most_iterations = 0  # of one solve
         self.setups = 0  # hierarchies built
         self.setup_time = 0.0
         self.levels = 0
@@ -120,6 +121,7 @@ class AMGConjugateGradient:
         preconditioner = spla.LinearOperator((n, n), matvec=self._precondition, dtype=float)
         x, info = spla.cg(self._A, b, rtol=rtol, atol=0.0, M=preconditioner, maxiter=MAX_ITERATIONS, callback=counted)
         self.iterations += count[0]
+        self.most_iterations = max(self.most_iterations, count[0])
         self._stale = count[0] > REBUILD_AFTER
         if info != 0 or not np.all(np.isfinite(x)):
             reached = np.linalg.norm(self._A @ x - b) / (np.linalg.norm(b) or 1.0)
