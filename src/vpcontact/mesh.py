@@ -119,11 +119,12 @@ def _positive(name: str, value: float) -> float:
 #: triangles 0.53 GB, with 580k triangles 1.79 GB, i.e. 3.1 kB per triangle; SuperLU (no MKL) needs
 #: about twice as much. A run is refused when even this estimate exceeds the available memory.
 BYTES_PER_TRIANGLE = 4000
-#: The same per tetrahedron. Measured (peak resident memory of building a quarter ball, assembling its
-#: P1 elasticity matrix with the centroid rule and factoring it): 40k tetrahedra 0.40 GB, 324k
-#: tetrahedra 2.6 GB with PARDISO (8 kB each) and 4.1 GB with SuperLU; the factor's fill grows faster
-#: than the number of tetrahedra in 3D, so larger meshes need more per tetrahedron.
-BYTES_PER_TETRAHEDRON = 8000
+#: The same per tetrahedron, for the method that needs least, the iterative one (no factor: the
+#: factorizations of the direct methods are checked before they are made, by PARDISO's analysis and
+#: the condensed method's guard). Measured (peak resident memory of the quarter ball's 11 steps,
+#: ``python benchmarks/scaling.py --dim 3 --method iterative``): 324k tetrahedra 1.73 GB, 954k
+#: tetrahedra 4.16 GB, i.e. 4.4–5.3 kB each.
+BYTES_PER_TETRAHEDRON = 5500
 
 
 def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
@@ -136,7 +137,7 @@ def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
     if not needed <= available:
         count, size = (f"about {elements:.2g}", f"about {needed / 2**30:.3g}") if math.isfinite(needed) else \
             ("more than 1e+300", "more than 1e+290")
-        raise CaseError(f"{what}: {count} {kind}, whose mesh, stiffness matrix and factorization need {size} GiB, "
+        raise CaseError(f"{what}: {count} {kind}, whose mesh, stiffness matrix and solver need {size} GiB, "
                         f"more than the {available / 2**30:.3g} GiB of memory available here: {fix}")
 
 
