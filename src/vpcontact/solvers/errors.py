@@ -5,6 +5,9 @@
                            working precision: a Newton matrix (the step is cut) or the stiffness
                            itself (a degenerate mesh: bad input)
     SolverMemoryError      a factorization ran out of memory
+    NotConvergedError      an iterative solver did not reach its tolerance within its iterations: a
+                           Newton system so ill-conditioned that even the factor of its own matrix
+                           does not precondition it (the step is cut, as for a singular matrix)
 """
 
 
@@ -18,3 +21,7 @@ class SingularMatrixError(SolverError):
 
 class SolverMemoryError(SolverError, MemoryError):
     """A factorization ran out of memory."""
+
+
+class NotConvergedError(SolverError):
+    """An iterative solver did not reach its tolerance within its iterations."""

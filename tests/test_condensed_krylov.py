@@ -1,0 +1,175 @@
+"""The condensed method's Newton systems solved by GMRES (preconditioned by the LU factors of an earlier
+Newton matrix) against the dense LU of each: the same results to 1e-8, the same Newton iterations, few
+factorizations; GMRES itself; the failures typed."""
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import vpcontact
+from vpcontact.solvers import condensed
+from vpcontact.solvers.condensed import KRYLOV_TOLERANCE, NewtonSystems
+from vpcontact.solvers.errors import NotConvergedError, SingularMatrixError, SolverError
+from vpcontact.solvers.gmres import gmres
+from vpcontact.stepping import TimeLoop
+from conftest import half_disc_case
+from test_3d import ball_case, block_case, states
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
+
+
+def power_law(beta):
+    return {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": beta}
+
+
+def quarter_ball(h: float) -> dict:
+    """examples/quarter_ball.toml at the element edge h, no figures."""
+    case = tomllib.loads(EXAMPLE.read_text())
+    case["mesh"]["h"], case["output"]["figures"] = h, False
+    return case
+
+
+CASES = {
+    "2D half disc beta=1": half_disc_case(h=0.1, load=20.0, g=0.1, stiffness=power_law(1.0)),
+    "2D half disc beta=-1": half_disc_case(h=0.1, load=20.0, g=0.1, stiffness=power_law(-1.0)),
+    "3D quarter ball (the example)": quarter_ball(h=0.2),
+    "3D ball on a flat foundation": ball_case(h=0.35, g=0.05, normal=[0, 0, -1], gap="z"),
+    "3D block with a curved gap": block_case(g=0.02, gap="0.1*(x*x + y*y)"),
+}
+#: the layer holds the example's ball: no node reaches the limit
+NOTHING_AT_THE_LIMIT = {"3D quarter ball (the example)"}
+#: the cases with a step where nodes are separated, in compliance and at the limit
+ALL_THREE_STATES = {"3D ball on a flat foundation", "3D block with a curved gap"}
+
+
+def condensed_run(case, krylov_from: int | None = None):
+    """The case by the condensed method, fields at every step; with ``krylov_from``: its Newton systems by
+    GMRES from that many contact nodes on (0: always)."""
+    case = vpcontact.load_case(case, {"solver.method": "condensed", "output.field_steps": "all"})
+    loop = TimeLoop(vpcontact.build_problem(case))
+    if krylov_from is not None:
+        loop.solver.krylov_from = krylov_from
+    result = loop.run()
+    assert result.status == "complete", result.message
+    return result
+
+
+def relative(a, b):
+    return np.abs(a - b).max() / max(np.abs(a).max(), np.abs(b).max(), 1e-300)
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_gmres_agrees_with_the_dense_newton_systems(name):
+    dense, krylov = condensed_run(CASES[name]), condensed_run(CASES[name], krylov_from=0)
+    assert dense.contact_nodes < condensed.KRYLOV_FROM  # the default: dense LU at these sizes
+    assert dense.krylov_iterations == 0 and dense.newton_factorizations == dense.series("newton_iterations").sum()
+    assert krylov.krylov_iterations > 0
+    assert (states(dense)[:, 2].max() > 0) == (name not in NOTHING_AT_THE_LIMIT)  # the active set is exercised
+    if name in ALL_THREE_STATES:
+        assert np.all(states(dense) > 0, axis=1).any(), states(dense)
+    for step, fields in dense.fields.items():
+        assert relative(krylov.fields[step].displacement, fields.displacement) < 1e-8, step
+        assert relative(krylov.fields[step].stress, fields.stress) < 1e-8, step
+    for quantity in ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid"):
+        assert relative(krylov.contact_history(quantity), dense.contact_history(quantity)) < 1e-8, quantity
+    np.testing.assert_array_equal(krylov.contact_history("status"), dense.contact_history("status"))
+    iterations, dense_iterations = krylov.series("newton_iterations"), dense.series("newton_iterations")
+    assert np.abs(iterations - dense_iterations).max() <= 1
+    assert abs(iterations.sum() - dense_iterations.sum()) <= 1
+    assert krylov.step_cuts == dense.step_cuts == 0
+
+
+def test_the_factor_of_one_newton_matrix_serves_many_iterations_and_steps():
+    """The quarter ball, 11 steps: one LU for the whole run's Newton systems (a factor kept across
+    iterations and steps, while the active set grows from nothing to the contact patch), a few GMRES
+    iterations each; summary.json counts both."""
+    result = condensed_run(CASES["3D quarter ball (the example)"], krylov_from=0)
+    newton = int(result.series("newton_iterations").sum())
+    assert newton >= 30 and result.steps == 11
+    assert result.newton_factorizations <= newton // 10
+    assert newton <= result.krylov_iterations <= condensed.MAX_KRYLOV_ITERATIONS * newton // 2
+    summary = result.summary()
+    assert summary["krylov_iterations"] == result.krylov_iterations
+    assert summary["newton_factorizations"] == result.newton_factorizations
+
+
+# --- GMRES and the Newton systems on their own --------------------------------------------------------------
+def test_gmres_preconditioned_by_a_stale_factor_converges_in_rank_plus_one_iterations():
+    """K = K₀ + U Vᵀ with k = 4 columns in U: GMRES preconditioned by K₀'s LU needs at most k + 1
+    iterations and reaches the tolerance on the true residual; with too few iterations it says so."""
+    import scipy.linalg as la
+
+    rng = np.random.default_rng(3)
+    m, k = 200, 4
+    K0 = rng.standard_normal((m, m)) + m ** 0.5 * np.eye(m)
+    K = K0 + rng.standard_normal((m, k)) @ rng.standard_normal((k, m))
+    factor = la.lu_factor(K0)
+    b = rng.standard_normal(m)
+    solution = gmres(lambda x: K @ x, lambda v: la.lu_solve(factor, v), b, 1e-12, 20)
+    assert solution.converged and solution.iterations <= k + 1
+    assert np.linalg.norm(b - K @ solution.x) <= 1e-12 * np.linalg.norm(b)
+    short = gmres(lambda x: K @ x, lambda v: la.lu_solve(factor, v), b, 1e-12, k - 1)
+    assert not short.converged and short.iterations == k - 1
+    assert gmres(lambda x: K @ x, lambda v: v, np.zeros(m), 1e-12, 5).converged  # b = 0: x = 0, no iteration
+
+
+def newton_systems(m=60, seed=4):
+    """NewtonSystems of an S like the condensed operator's (symmetric positive definite)."""
+    rng = np.random.default_rng(seed)
+    B = rng.standard_normal((m, m))
+    return NewtonSystems(B @ B.T / m + 0.1 * np.eye(m)), rng
+
+
+def test_newton_systems_in_node_order_match_the_dense_solve_whatever_the_active_set():
+    """One factor, made for the first active set, preconditions the systems of other active sets and
+    tangents (the node-ordered layout: a change of state or of a tangent changes a column, 2k columns
+    here: at most 2k + 1 iterations); every solution is the dense one."""
+    systems, rng = newton_systems()
+    m = systems.S.shape[0]
+    tangent = -1.0 + 0.1 * rng.random(m)  # T − c0 < 0, as for a soft layer
+    for changed in (0, 2, 5, 9):
+        active = np.zeros(m, dtype=bool)
+        active[:changed] = True
+        drifted = tangent.copy()
+        drifted[m - changed:] *= 1.1  # and the tangents of as many others change
+        w = np.where(active, 1.0, drifted)
+        rhs = rng.standard_normal(m)
+        z = systems.solve_iterative(~active, w, rhs)
+        np.testing.assert_allclose(z, systems.solve_direct(~active, w, rhs), rtol=1e-9, atol=0)
+        K = systems.matrix(~active, w)
+        assert np.linalg.norm(rhs - K @ z) <= KRYLOV_TOLERANCE * np.linalg.norm(rhs)
+    assert systems.factorizations == 1 + 4  # one factor for GMRES, and the four dense solves
+    assert systems.iterations <= sum(2 * changed + 1 for changed in (0, 2, 5, 9))
+
+
+def test_a_newton_matrix_its_own_factor_cannot_solve_is_not_converged_and_a_zero_pivot_is_singular():
+    systems, rng = newton_systems()
+    m = systems.S.shape[0]
+    u = rng.standard_normal((m, 1))
+    systems.S = u @ u.T  # rank 1: LU pivots of rounding size, not zero
+    active = np.ones(m, dtype=bool)
+    with pytest.raises(NotConvergedError, match="nearly singular") as error:
+        systems.solve_iterative(~active, np.ones(m), rng.standard_normal(m))
+    assert isinstance(error.value, SolverError)
+    systems.S = np.zeros((m, m))
+    with pytest.raises(SingularMatrixError):
+        systems.solve_iterative(~active, np.ones(m), rng.standard_normal(m))
+
+
+def test_a_newton_system_gmres_cannot_solve_is_a_step_cut(monkeypatch):
+    """NotConvergedError from a Newton system is handled as a singular Newton matrix: the step is cut in
+    two halves and the run goes on."""
+    solve_iterative = NewtonSystems.solve_iterative
+    calls = []
+
+    def fails_at_the_fifth_system(self, inactive, w, rhs):
+        calls.append(rhs.size)
+        if len(calls) == 5:
+            raise NotConvergedError("GMRES did not converge (the fifth Newton system)")
+        return solve_iterative(self, inactive, w, rhs)
+
+    monkeypatch.setattr(NewtonSystems, "solve_iterative", fails_at_the_fifth_system)
+    result = condensed_run(CASES["2D half disc beta=1"], krylov_from=0)
+    assert result.step_cuts == 1 and result.steps == 11 and len(result.rows) == 12
