@@ -89,6 +89,10 @@ MAX_KRYLOV_ITERATIONS = 20
 #: the dense LU to about this relative accuracy, far below what changes a Newton iteration (the
 #: condensed results agree with the dense path's to 1e-10, tests/test_condensed_krylov.py).
 KRYLOV_TOLERANCE = 1e-12
+#: ... or ‖r − K z‖ ≤ KRYLOV_ROUNDING ‖K‖ ‖z‖, the rounding level of K z (m-term sums, 64 ε): the stop of
+#: a nearly singular K (a body held only by contact, its separated nodes held by the Jacobian's
+#: regularization only: cond(K) ≈ 1e12, where the dense LU's own relative residual is 3e-5).
+KRYLOV_ROUNDING = 64 * np.finfo(float).eps
 
 
 class NewtonSystems:
@@ -113,8 +117,9 @@ class NewtonSystems:
     (docs/performance.md).
     """
 
-    def __init__(self, S: np.ndarray):
-        self.S = S
+    def __init__(self, S: np.ndarray, S_row_sums: np.ndarray, max_iterations: int = MAX_KRYLOV_ITERATIONS):
+        self.S, self._S_row_sum = S, S_row_sums.max(initial=0.0)  # the largest row sum of |S|
+        self.max_iterations = max_iterations
         self._factor = None  # (lu, piv) of the K of an earlier iteration
         self.iterations = 0  # GMRES iterations, in total
         self.factorizations = 0  # LU factorizations of Newton matrices (dense solves included)
@@ -134,22 +139,26 @@ class NewtonSystems:
             raise SingularMatrixError(f"the condensed Newton matrix is singular ({error})") from None
 
     def solve_iterative(self, inactive: np.ndarray, w: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        """z with ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ by GMRES, preconditioned by the kept factor, or by the
-        factor of this K when the kept one needs more than MAX_KRYLOV_ITERATIONS (or there is none).
-        NotConvergedError when even that one does not reach the tolerance."""
+        """z with ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ (or KRYLOV_ROUNDING ‖K‖ ‖z‖) by GMRES, preconditioned by the kept factor, or by the
+        factor of this K when the kept one needs more than ``max_iterations`` (or there is none).
+        NotConvergedError when even that one does not reach the tolerance (an LU too unstable for GMRES to
+        correct in so few iterations); a K or r that is not finite: z is not finite."""
         def K(z):
             return inactive * z + self.S @ (w * z)
 
+        if not (np.all(np.isfinite(w)) and np.all(np.isfinite(rhs))):
+            return np.full_like(rhs, np.nan)  # as the dense solve: the Newton iteration reports iterates not finite
+        floor = KRYLOV_ROUNDING * (1.0 + np.abs(w).max(initial=0.0) * self._S_row_sum)  # ‖K‖₁, ‖K‖∞ ≤ 1 + max|w| ‖S‖∞
         if self._factor is not None:
-            solution = self._gmres(K, rhs)
+            solution = self._gmres(K, rhs, floor)
             if solution.converged:
                 return solution.x
         self._factorize(inactive, w)
-        solution = self._gmres(K, rhs)
+        solution = self._gmres(K, rhs, floor)
         if not solution.converged:
             raise NotConvergedError(f"GMRES preconditioned by the LU factors of the condensed Newton matrix itself "
-                                    f"did not reach the relative residual {KRYLOV_TOLERANCE:g} in "
-                                    f"{MAX_KRYLOV_ITERATIONS} iterations: the matrix is nearly singular")
+                                    f"did not reach the relative residual {KRYLOV_TOLERANCE:g} (nor the rounding "
+                                    f"level of the matrix) in {self.max_iterations} iterations")
         return solution.x
 
     def _factorize(self, inactive: np.ndarray, w: np.ndarray) -> None:
@@ -163,11 +172,11 @@ class NewtonSystems:
             raise SingularMatrixError("the condensed Newton matrix is singular (an exactly zero pivot)")
         self._factor = lu, piv
 
-    def _gmres(self, K, rhs: np.ndarray):
-        """GMRES preconditioned by the kept factor, at most MAX_KRYLOV_ITERATIONS iterations (counted)."""
+    def _gmres(self, K, rhs: np.ndarray, floor: float):
+        """GMRES preconditioned by the kept factor, at most ``max_iterations`` iterations (counted)."""
         factor = self._factor
         solution = gmres(K, lambda v: la.lu_solve(factor, v, check_finite=False), rhs, KRYLOV_TOLERANCE,
-                         MAX_KRYLOV_ITERATIONS)
+                         self.max_iterations, floor)
         self.iterations += solution.iterations
         return solution
 
@@ -197,7 +206,7 @@ class CondensedNewton(SemismoothNewton):
         self.S = self.factorization.condensed_operator()
         self._S_row_sums = np.abs(self.S).sum(axis=1)  # bounds |S| |q| by its rows' sums times max |q|
         self.timings = {"factorization": factored - started, "condensation": time.perf_counter() - factored}
-        self.systems, self.krylov_from = NewtonSystems(self.S), krylov_from
+        self.systems, self.krylov_from = NewtonSystems(self.S, self._S_row_sums), krylov_from
         self.span = SolvedSpan(self.factorization.solve)
         self.recoveries = self.refinements = 0
         self._step, self._load_vector, self._d_free, self._b_norm = None, None, None, 0.0

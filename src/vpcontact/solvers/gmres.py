@@ -10,6 +10,11 @@ and one cycle is the whole solve. Orthogonalization: classical Gram–Schmidt do
 matrix–vector products with the basis per iteration, orthogonal to working precision); the
 least-squares problem by Givens rotations. After the cycle the true residual is computed again: the
 solution is accepted only on it.
+
+The stopping test is ‖b − K x‖ ≤ tolerance ‖b‖ + floor ‖x‖: a relative residual, or, with
+floor = c ε ‖K‖, the rounding level of the product K x itself (a normwise backward error of c ε) for a
+system too ill-conditioned for the relative residual to reach the tolerance in floating point (where a
+direct solve stops too).
 """
 
 from __future__ import annotations
@@ -32,9 +37,10 @@ class KrylovSolution:
     converged: bool
 
 
-def gmres(K: Operator, P_inverse: Operator, b: np.ndarray, tolerance: float, max_iterations: int) -> KrylovSolution:
+def gmres(K: Operator, P_inverse: Operator, b: np.ndarray, tolerance: float, max_iterations: int,
+          floor: float = 0.0) -> KrylovSolution:
     """Solve K x = b by GMRES on K P⁻¹ y = b, x = P⁻¹ y, from x = 0, until the residual is at most
-    ``tolerance`` ‖b‖ or after ``max_iterations`` iterations."""
+    ``tolerance`` ‖b‖ + ``floor`` ‖x‖ or after ``max_iterations`` iterations."""
     norm_b = np.linalg.norm(b)
     if norm_b == 0.0 or not np.isfinite(norm_b):
         return KrylovSolution(np.zeros_like(b), 0, bool(norm_b == 0.0))
@@ -63,12 +69,19 @@ def gmres(K: Operator, P_inverse: Operator, b: np.ndarray, tolerance: float, max
         H[j, j], H[j + 1, j] = radius, 0.0
         g[j], g[j + 1] = c * g[j], -s * g[j]
         iterations = j + 1
-        if abs(g[j + 1]) <= tolerance * norm_b or norm_w == 0.0:  # converged, or the exact solution
+        if norm_w == 0.0 or abs(g[j + 1]) <= tolerance * norm_b:  # the exact solution, or converged
+            break
+        if floor > 0.0 and abs(g[j + 1]) <= tolerance * norm_b + floor * np.linalg.norm(_iterate(H, g, Z, iterations)):
             break
         V[j + 1] = w / norm_w
     if iterations == 0:
         return KrylovSolution(np.zeros_like(b), 0, False)
-    y = la.solve_triangular(H[:iterations, :iterations], g[:iterations], check_finite=False)
-    x = y @ Z[:iterations]
+    x = _iterate(H, g, Z, iterations)
     residual = np.linalg.norm(b - K(x))
-    return KrylovSolution(x, iterations, bool(residual <= tolerance * norm_b))
+    return KrylovSolution(x, iterations, bool(residual <= tolerance * norm_b + floor * np.linalg.norm(x)))
+
+
+def _iterate(H: np.ndarray, g: np.ndarray, Z: np.ndarray, iterations: int) -> np.ndarray:
+    """x = P⁻¹ V y after ``iterations`` iterations, y minimizing the residual (the rotated triangular system)."""
+    y = la.solve_triangular(H[:iterations, :iterations], g[:iterations], check_finite=False)
+    return y @ Z[:iterations]
