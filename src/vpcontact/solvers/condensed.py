@@ -76,22 +76,25 @@ class SolvedSpan:
 MAX_REFINEMENTS = 4
 
 
-#: Contact nodes from which the Newton systems are solved by GMRES rather than by a dense LU each. Measured
-#: on one BLAS thread (docs/performance.md, "3D: the quarter ball"): one LU of the m × m Newton matrix
-#: costs as much as 20 iterations of SciPy's GMRES preconditioned by an LU factor at m ≈ 700–1,000
-#: (LU 1.1 ms against 7.3 ms for the 20 iterations at m = 300, 26 against 24 ms at 1,000, 576 against
-#: 191 ms at 3,000): the paper's 2D half disc (at most 570 contact nodes) keeps the dense path.
-KRYLOV_FROM = 1000
+#: Contact nodes from which the Newton systems are solved by GMRES rather than by a dense LU each: the
+#: size from which one LU of the m × m Newton matrix costs more than 20 GMRES iterations (each a product
+#: with S and a solve with the kept factor). Measured on one BLAS thread (docs/performance.md, "3D: the
+#: quarter ball"), LU against 20 iterations: 2.8 against 5.5 ms at m = 500, 6.5 against 6.6 ms at 600,
+#: 10 against 8.8 ms at 800, 24 against 14 ms at 1,000, 453 against 165 ms at 3,000 (a run needs about
+#: 6 per Newton iteration). The paper's 2D half disc (at most 570 contact nodes) keeps the dense path.
+KRYLOV_FROM = 800
 #: GMRES iterations at most with the factor of an earlier Newton matrix; a system that needs more is
 #: solved again with the factor of its own matrix (which then serves the next systems).
 MAX_KRYLOV_ITERATIONS = 20
 #: Relative residual ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ at which GMRES stops: the directions are those of
 #: the dense LU to about this relative accuracy, far below what changes a Newton iteration (the
-#: condensed results agree with the dense path's to 1e-10, tests/test_condensed_krylov.py).
+#: condensed results agree with the dense path's to 1e-12, the Newton iterations are the same:
+#: tests/test_condensed_krylov.py).
 KRYLOV_TOLERANCE = 1e-12
-#: ... or ‖r − K z‖ ≤ KRYLOV_ROUNDING ‖K‖ ‖z‖, the rounding level of K z (m-term sums, 64 ε): the stop of
-#: a nearly singular K (a body held only by contact, its separated nodes held by the Jacobian's
-#: regularization only: cond(K) ≈ 1e12, where the dense LU's own relative residual is 3e-5).
+#: GMRES also stops at ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ + KRYLOV_ROUNDING ‖K‖ ‖z‖: the rounding level of
+#: the product K z (m-term sums; a normwise backward error of 64 ε), where a nearly singular K stops (a
+#: body held only by contact, its separated nodes held by the Jacobian's regularization alone:
+#: cond(K) ≈ 1e12, and the dense LU's own relative residual is 3e-5).
 KRYLOV_ROUNDING = 64 * np.finfo(float).eps
 
 
@@ -113,8 +116,8 @@ class NewtonSystems:
     columns of K and nothing else: K = K₀ + U Vᵀ with U, V of k columns, K₀⁻¹ K = I + K₀⁻¹ U Vᵀ, and
     GMRES preconditioned by K₀ converges in at most k + 1 iterations whatever the layouts of K and K₀
     (fewer when the changes are small: the tangents of nodes in compliance drift from step to step).
-    On the quarter ball the factor of one Newton matrix served a whole run's iterations but a handful
-    (docs/performance.md).
+    On the quarter ball the factor of the first Newton matrix (no node in contact yet) serves every Newton
+    iteration of the run, at about 6 GMRES iterations each (docs/performance.md).
     """
 
     def __init__(self, S: np.ndarray, S_row_sums: np.ndarray, max_iterations: int = MAX_KRYLOV_ITERATIONS):
@@ -139,16 +142,19 @@ class NewtonSystems:
             raise SingularMatrixError(f"the condensed Newton matrix is singular ({error})") from None
 
     def solve_iterative(self, inactive: np.ndarray, w: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        """z with ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ (or KRYLOV_ROUNDING ‖K‖ ‖z‖) by GMRES, preconditioned by the kept factor, or by the
-        factor of this K when the kept one needs more than ``max_iterations`` (or there is none).
-        NotConvergedError when even that one does not reach the tolerance (an LU too unstable for GMRES to
-        correct in so few iterations); a K or r that is not finite: z is not finite."""
+        """z with ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ + KRYLOV_ROUNDING ‖K‖ ‖z‖ by GMRES, preconditioned by the
+        kept factor, or by the factor of this K when the kept one needs more than ``max_iterations`` (or
+        there is none). NotConvergedError when even that one does not reach the tolerance (an LU too
+        unstable for GMRES to correct in so few iterations); a K or r that is not finite: z is not finite,
+        as the dense solve's (the Newton iteration reports iterates that are not finite)."""
+        if not (np.all(np.isfinite(w)) and np.all(np.isfinite(rhs))):
+            return np.full_like(rhs, np.nan)
+
         def K(z):
             return inactive * z + self.S @ (w * z)
 
-        if not (np.all(np.isfinite(w)) and np.all(np.isfinite(rhs))):
-            return np.full_like(rhs, np.nan)  # as the dense solve: the Newton iteration reports iterates not finite
-        floor = KRYLOV_ROUNDING * (1.0 + np.abs(w).max(initial=0.0) * self._S_row_sum)  # ‖K‖₁, ‖K‖∞ ≤ 1 + max|w| ‖S‖∞
+        norm_K = 1.0 + np.abs(w).max(initial=0.0) * self._S_row_sum  # ≥ ‖K‖₁ and ‖K‖∞ (S symmetric), so ≥ ‖K‖₂
+        floor = KRYLOV_ROUNDING * norm_K
         if self._factor is not None:
             solution = self._gmres(K, rhs, floor)
             if solution.converged:

@@ -30,7 +30,7 @@ Operator = Callable[[np.ndarray], np.ndarray]
 
 @dataclass(frozen=True)
 class KrylovSolution:
-    """x, the iterations done, and whether ‖b − K x‖ ≤ tolerance ‖b‖ holds for the x returned."""
+    """x, the iterations done, and whether the stopping test holds for the x returned (its true residual)."""
 
     x: np.ndarray
     iterations: int
