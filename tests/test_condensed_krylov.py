@@ -201,18 +201,36 @@ def test_a_newton_system_that_is_not_finite_has_a_direction_that_is_not_finite()
     assert systems.factorizations == systems.iterations == 0
 
 
-def test_a_newton_system_gmres_cannot_solve_is_a_step_cut(monkeypatch):
-    """NotConvergedError from a Newton system is handled as a singular Newton matrix: the step is cut in
-    two halves and the run goes on."""
+def failing(monkeypatch, fails_at):
+    """NewtonSystems.solve_iterative raises NotConvergedError (the error of a system GMRES cannot solve,
+    see above) at the Newton systems of a run whose numbers (1, 2, ...) ``fails_at`` accepts."""
     solve_iterative = NewtonSystems.solve_iterative
     calls = []
 
-    def fails_at_the_fifth_system(self, inactive, w, rhs):
+    def fails(self, inactive, w, rhs):
         calls.append(rhs.size)
-        if len(calls) == 5:
-            raise NotConvergedError("GMRES did not converge (the fifth Newton system)")
+        if fails_at(len(calls)):
+            raise NotConvergedError(f"GMRES did not converge (Newton system {len(calls)})")
         return solve_iterative(self, inactive, w, rhs)
 
-    monkeypatch.setattr(NewtonSystems, "solve_iterative", fails_at_the_fifth_system)
+    monkeypatch.setattr(NewtonSystems, "solve_iterative", fails)
+
+
+def test_a_newton_system_gmres_cannot_solve_is_a_step_cut(monkeypatch):
+    """NotConvergedError from a Newton system is handled as a singular Newton matrix: the step is cut in
+    two halves and the run goes on."""
+    failing(monkeypatch, lambda call: call == 5)
     result = condensed_run(CASES["2D half disc beta=1"], krylov_from=0)
     assert result.step_cuts == 1 and result.steps == 11 and len(result.rows) == 12
+
+
+def test_newton_systems_gmres_never_solves_fail_the_run_with_one_line(monkeypatch):
+    failing(monkeypatch, lambda call: call >= 5)
+    case = vpcontact.load_case(CASES["2D half disc beta=1"], {"solver.method": "condensed"})
+    loop = TimeLoop(vpcontact.build_problem(case))
+    loop.solver.krylov_from = 0
+    result = loop.run()
+    assert result.status == "failed" and "\n" not in result.message, result.message
+    assert result.message.startswith(f"step {result.steps + 1} (t = ")
+    assert "failed after 4 step cuts" in result.message
+    assert "the Newton system was not solved (GMRES did not converge (Newton system " in result.message

@@ -201,9 +201,9 @@ class TimeLoop:
                 solution = self.solver.solve(step, state.previous)
         except (SingularMatrixError, NotConvergedError) as error:
             m = problem.surface.size
-            what = "singular" if isinstance(error, SingularMatrixError) else "too ill-conditioned to solve"
+            what = "matrix is singular" if isinstance(error, SingularMatrixError) else "system was not solved"
             solution = StepSolution(None, np.zeros(m), np.full(m, np.nan), np.zeros(m, dtype=bool), 0, np.nan, np.nan,
-                                    False, f"the Newton matrix is {what} ({error})",
+                                    False, f"the Newton {what} ({error})",
                                     "a part of the body held only by contact may have lost it: hold it with "
                                     "boundary.dirichlet entries, or try smaller time steps (time.steps)")
         return _Attempt(t, h, step, z, solution)

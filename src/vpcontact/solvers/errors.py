@@ -5,9 +5,9 @@
                            working precision: a Newton matrix (the step is cut) or the stiffness
                            itself (a degenerate mesh: bad input)
     SolverMemoryError      a factorization ran out of memory
-    NotConvergedError      an iterative solver did not reach its tolerance within its iterations: a
-                           Newton system so ill-conditioned that even the factor of its own matrix
-                           does not precondition it (the step is cut, as for a singular matrix)
+    NotConvergedError      an iterative solver did not reach its tolerance within its iterations (a
+                           condensed Newton system: not even preconditioned by the LU factors of its
+                           own matrix); the step is cut, as for a singular Newton matrix
 """
 
 
