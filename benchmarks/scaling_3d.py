@@ -10,7 +10,8 @@ run is stopped when its resident memory passes --memory-limit (default 80 % of t
 when it starts) or its wall time passes --time-limit (default 900 s); a method is not tried on finer
 levels once a level of it did not complete. One record per level and method: DOFs, tetrahedra,
 contact nodes and dofs, the setup stages (mesh, assembly, factorization, condensation), the time
-loop, the solver's total and the whole process's wall time, Newton iterations, the peak RSS (after
+loop, the solver's total and the whole process's wall time, Newton iterations (and the GMRES
+iterations and LU factorizations of their systems), the peak RSS (after
 building the problem, after the solver's setup, at the end), the condensed method's memory estimate
 (``condensed_memory``), the size of the sparse factor (``factor_size``), status and message. With
 --repeat R each completed run is repeated R times and the times and peak RSS are medians.
@@ -75,7 +76,8 @@ def run_level(h: float, method: str, steps: int | None = None, beta: float = 1.0
         "setup_s": {k: timings.get(k, 0.0) for k in STAGES},
         "setup_total_s": timings["total"] - timings["time_loop"], "time_loop_s": timings["time_loop"],
         "total_s": timings["total"], "newton_iterations": int(result.series("newton_iterations").sum()),
-        "linear_solves": int(result.linear_solves), "krylov_iterations": int(getattr(loop.solver, "krylov_iterations", 0)),
+        "linear_solves": int(result.linear_solves), "krylov_iterations": result.krylov_iterations,
+        "newton_factorizations": result.newton_factorizations,
         "peak_rss_mb": peak_rss_mb(), "rss_after_problem_mb": rss_problem, "rss_after_setup_mb": rss_setup,
     })
     record["factor"] = factor_size(loop.solver, A)

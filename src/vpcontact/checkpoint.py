@@ -39,7 +39,7 @@ from .case import _brief
 from .errors import CaseError
 from .results import CONTACT_ARRAYS, INTEGER_COLUMNS, Fields
 from .solvers import StepSolution
-from .stepping import LoopState, TimeLoop
+from .stepping import COUNTERS, LoopState, TimeLoop
 from .writers import OUTPUTS, remove_files, replacing, versions
 
 FOLDER = "checkpoint"
@@ -122,7 +122,7 @@ def save(loop: TimeLoop, out: Path) -> None:
     for name in CONTACT_ARRAYS:
         arrays[f"contact_{name}"] = np.array(result.contact[name]).reshape(rows, result.contact_nodes)
     meta = {"field_steps": saved, "step_cuts": result.step_cuts, "resumed_at": result.resumed_at,
-            "elapsed_s": loop.elapsed(), "linear_solves": loop.earlier_solves + loop.solver.solves,
+            "elapsed_s": loop.elapsed(), **loop.counts(),
             "versions": versions()}
     arrays["meta"] = np.array(json.dumps(meta))
     with replacing(target / STATE) as temporary:
@@ -178,7 +178,8 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
                                   data.get("z"))
     if result.fields:
         result.final = result.fields[max(result.fields)]
-    loop.earlier_time, loop.earlier_solves = float(meta["elapsed_s"]), int(meta["linear_solves"])
+    loop.earlier_time = float(meta["elapsed_s"])
+    loop.earlier_counts = {name: int(meta.get(name, 0)) for name in COUNTERS}
     loop.stored_versions = meta.get("versions", {})
     return step
 

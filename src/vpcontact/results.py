@@ -114,6 +114,8 @@ class Result:
     method: str = ""
     method_reason: str = ""  # why that step method runs (solver.method, or what "auto" weighed)
     linear_solves: int = 0  # solves with a factored matrix in the time loop
+    krylov_iterations: int = 0  # GMRES iterations on Newton systems in the time loop
+    newton_factorizations: int = 0  # LU factorizations of condensed Newton matrices in the time loop
     problem: object = None  # the Problem solved: mesh, contact surface, operators
     completed_steps: int = 0  # time steps t_n reached
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
@@ -243,6 +245,7 @@ class Result:
             "nodes": self.nodes, "contact_nodes": self.contact_nodes, "steps": self.steps,
             "newton_iterations": int(sum(r["newton_iterations"] for r in self.rows)),
             "solver_method": self.method, "solver_reason": self.method_reason, "linear_solves": self.linear_solves,
+            "krylov_iterations": self.krylov_iterations, "newton_factorizations": self.newton_factorizations,
             "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s,
             "timings_s": self.timings, "final": final,
             "history_rows": len(self.rows), "step_cuts": self.step_cuts, "resumed_at_steps": list(self.resumed_at),

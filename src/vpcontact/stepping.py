@@ -38,6 +38,10 @@ from .rigid_modes import RigidModes
 from .solvers import DofLayout, StepData, StepSolution, make_solver
 from .solvers.errors import NotConvergedError, SingularMatrixError
 
+#: The solver's counters of work in the time loop that summary.json reports (summed over the sessions of a
+#: resumed run): solves with a factored matrix, Krylov iterations, Newton matrices factored.
+COUNTERS = ("linear_solves", "krylov_iterations", "newton_factorizations")
+
 
 @dataclass
 class LoopState:
@@ -90,7 +94,8 @@ class TimeLoop:
         self.result = Result.start(problem, self.solver)
         self._created = started
         self.setup_time = clock.perf_counter() - started
-        self.earlier_time, self.earlier_solves = 0.0, 0  # wall time and linear solves of earlier sessions (resumed)
+        self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
+        self.earlier_counts = dict.fromkeys(COUNTERS, 0)  # the counters of earlier sessions (resumed)
         self.state = self._initial_state()
         self._u = np.zeros(problem.basis.N)
 
@@ -147,12 +152,20 @@ class TimeLoop:
                 if after_step is not None:
                     after_step(self)
         now = clock.perf_counter()
-        result.linear_solves = self.earlier_solves + self.solver.solves
+        for name, count in self.counts().items():
+            setattr(result, name, count)
         result.finish({**problem.timings, **self.solver.timings, "time_loop": now - started,
                        "total": problem.timings["build"] + self.setup_time + now - started,
                        **({"earlier_sessions": self.earlier_time} if result.resumed_at else {})})
         result.wall_time_s += self.earlier_time
         return result
+
+    def counts(self) -> dict[str, int]:
+        """The COUNTERS of the run so far, earlier sessions included."""
+        solver = self.solver
+        now = {"linear_solves": solver.solves, "krylov_iterations": solver.krylov_iterations,
+               "newton_factorizations": solver.newton_factorizations}
+        return {name: self.earlier_counts[name] + now[name] for name in COUNTERS}
 
     def elapsed(self) -> float:
         """Wall time of the run so far, earlier sessions included (seconds)."""

@@ -62,6 +62,7 @@ class AMGConjugateGradient:
         self.near_nullspace = near_nullspace
         self.hierarchy = None
         self.iterations = 0  # CG iterations of all solves
+        self.factorizations = 0  # none: the hierarchy is built (``setups``), never a factor
         self.most_iterations = 0  # of one solve
         self.setups = 0  # hierarchies built
         self.setup_time = 0.0

@@ -8,9 +8,11 @@ step problem of ``base`` reduces to the m contact nodes:
 
     d = d_free − S q(d, λ),    q = f(d) + λ − c0 (d + g0),    C(d, λ) = 0,
 
-solved by the same semi-smooth Newton iteration as the full system, now with a dense m × m matrix;
-u = A0⁻¹ (b − Nᵀ q) is recovered by one solve, only when it is asked for. Right-hand sides that are
-combinations of ones already solved (loads proportional to t, for instance) cost no solve at all.
+solved by the same semi-smooth Newton iteration as the full system, now with a dense m × m matrix
+(:class:`NewtonSystems`: a dense LU per iteration for small m, GMRES preconditioned by the LU of an
+earlier iteration's matrix from KRYLOV_FROM contact nodes on); u = A0⁻¹ (b − Nᵀ q) is recovered by
+one solve, only when it is asked for. Right-hand sides that are combinations of ones already solved
+(loads proportional to t, for instance) cost no solve at all.
 
 A stiff body held only by a soft layer (E / K ≳ 1e6) is the one case where that is not enough: A
 annihilates the body's rigid motions only to rounding, and A0's factor carries that rounding into
@@ -25,17 +27,20 @@ or stop decreasing (one or two rounds, two solves each): the body's balance then
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import replace
 
 import numpy as np
+import scipy.linalg as la
 import scipy.sparse as sp
 from threadpoolctl import ThreadpoolController
 
 from ..errors import CaseError
 from .base import ContactState, StepData, StepSolution
-from .errors import SingularMatrixError
+from .errors import NotConvergedError, SingularMatrixError
 from ..memory import available_memory
 from .factorization import factorize
+from .gmres import gmres
 from .newton import ROUNDOFF, STAGNATION, Evaluation, SemismoothNewton
 
 
@@ -71,18 +76,131 @@ class SolvedSpan:
 MAX_REFINEMENTS = 4
 
 
+#: Contact nodes from which the Newton systems are solved by GMRES rather than by a dense LU each: the
+#: size from which one LU of the m × m Newton matrix costs more than 20 GMRES iterations (each a product
+#: with S and a solve with the kept factor). Measured on one BLAS thread (docs/performance.md, "3D: the
+#: quarter ball"), LU against 20 iterations: 2.8 against 5.5 ms at m = 500, 6.5 against 6.6 ms at 600,
+#: 10 against 8.8 ms at 800, 24 against 14 ms at 1,000, 453 against 165 ms at 3,000 (a run needs about
+#: 6 per Newton iteration). The paper's 2D half disc (at most 570 contact nodes) keeps the dense path.
+KRYLOV_FROM = 800
+#: GMRES iterations at most with the factor of an earlier Newton matrix; a system that needs more is
+#: solved again with the factor of its own matrix (which then serves the next systems).
+MAX_KRYLOV_ITERATIONS = 20
+#: Relative residual ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ at which GMRES stops: the directions are those of
+#: the dense LU to about this relative accuracy, far below what changes a Newton iteration (the
+#: condensed results agree with the dense path's to 1e-12, the Newton iterations are the same:
+#: tests/test_condensed_krylov.py).
+KRYLOV_TOLERANCE = 1e-12
+#: GMRES also stops at ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ + KRYLOV_ROUNDING ‖K‖ ‖z‖: the rounding level of
+#: the product K z (m-term sums; a normwise backward error of 64 ε), where a nearly singular K stops (a
+#: body held only by contact, its separated nodes held by the Jacobian's regularization alone:
+#: cond(K) ≈ 1e12, and the dense LU's own relative residual is 3e-5).
+KRYLOV_ROUNDING = 64 * np.finfo(float).eps
+
+
+class NewtonSystems:
+    """The condensed Newton systems K z = r, in node order: node i's unknown z_i is Δd_i when it is
+    inactive and Δλ_i when it is active (at the limit), its column of K is e_i + S_i (T_i − c0) or S_i:
+
+        K = diag(1_ℐ) + S diag(w),    w_i = T_i − c0 (i ∈ ℐ),  w_i = 1 (i ∈ 𝒜).
+
+    ``solve_direct`` factors K (an LU, O(m³)); ``solve_iterative`` runs GMRES on K applied as
+    z ↦ 1_ℐ z + S (w z) (O(m²) per iteration, S being formed), preconditioned by the LU factors of the
+    K of an earlier iteration, kept across Newton iterations and time steps, and made again only when
+    GMRES needed more than MAX_KRYLOV_ITERATIONS with them (the system is then solved with the factor of
+    its own K).
+
+    Why node order: the dense path's layout [inactive columns | active columns] is a permutation that
+    changes with the active set, so a factor made for one layout is no preconditioner for another. In
+    node order a change of state of k nodes, or of the compliance tangent T at k nodes, changes k
+    columns of K and nothing else: K = K₀ + U Vᵀ with U, V of k columns, K₀⁻¹ K = I + K₀⁻¹ U Vᵀ, and
+    GMRES preconditioned by K₀ converges in at most k + 1 iterations whatever the layouts of K and K₀
+    (fewer when the changes are small: the tangents of nodes in compliance drift from step to step).
+    On the quarter ball the factor of the first Newton matrix (no node in contact yet) serves every Newton
+    iteration of the run, at about 6 GMRES iterations each (docs/performance.md).
+    """
+
+    def __init__(self, S: np.ndarray, S_row_sums: np.ndarray, max_iterations: int = MAX_KRYLOV_ITERATIONS):
+        self.S, self._S_row_sum = S, S_row_sums.max(initial=0.0)  # the largest row sum of |S|
+        self.max_iterations = max_iterations
+        self._factor = None  # (lu, piv) of the K of an earlier iteration
+        self.iterations = 0  # GMRES iterations, in total
+        self.factorizations = 0  # LU factorizations of Newton matrices (dense solves included)
+
+    def matrix(self, inactive: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """K = diag(1_ℐ) + S diag(w) (Fortran order: LAPACK factors it in place)."""
+        K = np.multiply(self.S, w[None, :], order="F")
+        K[np.diag_indices_from(K)] += inactive
+        return K
+
+    def solve_direct(self, inactive: np.ndarray, w: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """z = K⁻¹ r by a dense LU of K."""
+        self.factorizations += 1
+        try:
+            return np.linalg.solve(self.matrix(inactive, w), rhs)
+        except np.linalg.LinAlgError as error:
+            raise SingularMatrixError(f"the condensed Newton matrix is singular ({error})") from None
+
+    def solve_iterative(self, inactive: np.ndarray, w: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """z with ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ + KRYLOV_ROUNDING ‖K‖ ‖z‖ by GMRES, preconditioned by the
+        kept factor, or by the factor of this K when the kept one needs more than ``max_iterations`` (or
+        there is none). NotConvergedError when even that one does not reach the tolerance (an LU too
+        unstable for GMRES to correct in so few iterations); a K or r that is not finite: z is not finite,
+        as the dense solve's (the Newton iteration reports iterates that are not finite)."""
+        if not (np.all(np.isfinite(w)) and np.all(np.isfinite(rhs))):
+            return np.full_like(rhs, np.nan)
+
+        def K(z):
+            return inactive * z + self.S @ (w * z)
+
+        norm_K = 1.0 + np.abs(w).max(initial=0.0) * self._S_row_sum  # ≥ ‖K‖₁ and ‖K‖∞ (S symmetric), so ≥ ‖K‖₂
+        floor = KRYLOV_ROUNDING * norm_K
+        if self._factor is not None:
+            solution = self._gmres(K, rhs, floor)
+            if solution.converged:
+                return solution.x
+        self._factorize(inactive, w)
+        solution = self._gmres(K, rhs, floor)
+        if not solution.converged:
+            raise NotConvergedError(f"GMRES preconditioned by the LU factors of the condensed Newton matrix itself "
+                                    f"did not reach the relative residual {KRYLOV_TOLERANCE:g} (nor the rounding "
+                                    f"level of the matrix) in {self.max_iterations} iterations")
+        return solution.x
+
+    def _factorize(self, inactive: np.ndarray, w: np.ndarray) -> None:
+        """Keep the LU factors of K (SingularMatrixError for an exactly zero pivot, as the dense solve)."""
+        self.factorizations += 1
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", la.LinAlgWarning)  # an exactly zero pivot: checked below
+            lu, piv = la.lu_factor(self.matrix(inactive, w), overwrite_a=True, check_finite=False)
+        if np.any(np.diagonal(lu) == 0.0):
+            self._factor = None
+            raise SingularMatrixError("the condensed Newton matrix is singular (an exactly zero pivot)")
+        self._factor = lu, piv
+
+    def _gmres(self, K, rhs: np.ndarray, floor: float):
+        """GMRES preconditioned by the kept factor, at most ``max_iterations`` iterations (counted)."""
+        factor = self._factor
+        solution = gmres(K, lambda v: la.lu_solve(factor, v, check_finite=False), rhs, KRYLOV_TOLERANCE,
+                         self.max_iterations, floor)
+        self.iterations += solution.iterations
+        return solution
+
+
 class CondensedNewton(SemismoothNewton):
     """Semi-smooth Newton on the contact nodes with a once-factored stiffness.
 
     The Newton iterations run their dense m × m algebra on one BLAS thread: at these sizes threads
-    only contend (a 286 × 286 solve took 57 ms on two busy threads, 1 ms on one).
+    only contend (a 286 × 286 solve took 57 ms on two busy threads, 1 ms on one). Their systems are
+    solved by a dense LU each below ``krylov_from`` contact nodes, by preconditioned GMRES from there
+    on (:class:`NewtonSystems`; a parameter so that tests can run either path on any case).
     """
 
     name = "condensed"
     _threads = ThreadpoolController()
 
     def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations,
-                 length_scale, rigid: np.ndarray, factorization: str = "auto"):
+                 length_scale, rigid: np.ndarray, factorization: str = "auto", krylov_from: int = KRYLOV_FROM):
         super().__init__(weights, r, tolerance, max_iterations, length_scale)
         m = N.shape[0]
         check_condensed_memory(N, A.shape[0])
@@ -94,6 +212,7 @@ class CondensedNewton(SemismoothNewton):
         self.S = self.factorization.condensed_operator()
         self._S_row_sums = np.abs(self.S).sum(axis=1)  # bounds |S| |q| by its rows' sums times max |q|
         self.timings = {"factorization": factored - started, "condensation": time.perf_counter() - factored}
+        self.systems, self.krylov_from = NewtonSystems(self.S, self._S_row_sums), krylov_from
         self.span = SolvedSpan(self.factorization.solve)
         self.recoveries = self.refinements = 0
         self._step, self._load_vector, self._d_free, self._b_norm = None, None, None, 0.0
@@ -145,6 +264,14 @@ class CondensedNewton(SemismoothNewton):
         return self.factorization.solve(self._load_vector - self.N.T @ self._load(state, solution.d, solution.lam))
 
     @property
+    def krylov_iterations(self) -> int:
+        return self.systems.iterations
+
+    @property
+    def newton_factorizations(self) -> int:
+        return self.systems.factorizations
+
+    @property
     def solves(self) -> int:
         """Solves with the factored A0 in the time loop: new right-hand sides, recoveries of u and the
         corrections of refinements."""
@@ -179,21 +306,20 @@ class CondensedNewton(SemismoothNewton):
                           floor / scale, d_solution=d_u)
 
     def direction(self, step: StepData, x: tuple, ev: Evaluation) -> tuple:
-        """Solve (I + S diag(T − c0)) Δd + S Δλ = −(d − d_u) with Δd_𝒜 = g − d_𝒜 and Δλ_ℐ = −λ_ℐ."""
+        """Solve (I + S diag(T − c0)) Δd + S Δλ = −(d − d_u) with Δd_𝒜 = g − d_𝒜 and Δλ_ℐ = −λ_ℐ: with s = Δd_𝒜
+        (zero on ℐ), K z = −(d − d_u) − s − S v for the node-ordered unknowns z of :class:`NewtonSystems`,
+        v = (T − c0) s on 𝒜 and −λ on ℐ."""
         d, lam = x
         active = ev.state.active
-        M = np.eye(d.size) + self.S * (self.jacobian_tangent(ev.state) - self.reference)[None, :]
-        step_active = step.law.limit(active) - d[active]
-        rhs = -(d - ev.d_solution) - M[:, active] @ step_active + self.S[:, ~active] @ lam[~active]
-        try:
-            unknowns = np.linalg.solve(np.hstack([M[:, ~active], self.S[:, active]]), rhs)
-        except np.linalg.LinAlgError as error:
-            raise SingularMatrixError(f"the condensed Newton matrix is singular ({error})") from None
-        dd = np.empty_like(d)
-        dd[active], dd[~active] = step_active, unknowns[: (~active).sum()]
-        dlam = -lam.copy()
-        dlam[active] = unknowns[(~active).sum():]
-        return dd, dlam
+        inactive = ~active
+        s = np.zeros_like(d)
+        s[active] = step.law.limit(active) - d[active]
+        tangent = self.jacobian_tangent(ev.state) - self.reference
+        w = np.where(active, 1.0, tangent)
+        rhs = -(d - ev.d_solution) - s - self.S @ np.where(active, tangent * s, -lam)
+        solve = self.systems.solve_direct if d.size < self.krylov_from else self.systems.solve_iterative
+        z = solve(inactive, w, rhs)
+        return np.where(active, s, z), np.where(active, z, -lam)
 
     def solution(self, step, x, ev: Evaluation, iterations, converged, message="", advice="") -> StepSolution:
         return StepSolution(None, x[1], ev.d_solution, ev.state.active, iterations, ev.residual,

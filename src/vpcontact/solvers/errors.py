@@ -5,7 +5,8 @@
                            working precision: a Newton matrix (the step is cut) or the stiffness
                            itself (a degenerate mesh: bad input)
     SolverMemoryError      a factorization ran out of memory
-    NotConvergedError      an iterative solver did not reach its tolerance (the step is cut)
+    NotConvergedError      an iterative solver did not reach its tolerance within its iterations (CG
+                           of the iterative method, GMRES of the condensed one): the step is cut
 """
 
 

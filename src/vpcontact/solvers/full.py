@@ -66,6 +66,11 @@ class FullNewton(SemismoothNewton):
     def krylov_iterations(self) -> int:
         return self.linear.iterations
 
+    @property
+    def newton_factorizations(self) -> int:
+        """Newton matrices factored: every one, by the direct solver (none by the iterative one)."""
+        return self.linear.factorizations
+
     def solve(self, step: StepData, previous: StepSolution | None) -> StepSolution:
         with self._threads.limit(limits=1, user_api="blas"):
             return super().solve(step, previous)

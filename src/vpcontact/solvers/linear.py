@@ -7,6 +7,7 @@ the full-system methods.
     solver.factor(A)              the work that depends on A's values (A has the analysed pattern)
     x = solver.solve(b, rtol)     A x = b; iterative backends stop at ‖A x − b‖ ≤ rtol ‖b‖
     solver.iterations             Krylov iterations of all solves so far (0 for a direct backend)
+    solver.factorizations         numeric factorizations so far (0 for the iterative backend)
 
 Backends: "pardiso" (MKL PARDISO: analysis once, a numeric refactorisation per matrix), "superlu"
 (SciPy's LU, always installed) and "amg-cg" (:mod:`.amg`: conjugate gradients preconditioned by
@@ -32,6 +33,7 @@ class PardisoSolver:
     def __init__(self):
         self._pardiso = None
         self.iterations = 0
+        self.factorizations = 0
 
     def analyse(self, A: sp.spmatrix) -> None:
         """Order A and analyse its factor's structure (and memory: SolverMemoryError if it will not fit)."""
@@ -42,6 +44,7 @@ class PardisoSolver:
 
     def factor(self, A: sp.spmatrix) -> None:
         self._pardiso.refactor(A)
+        self.factorizations += 1
 
     def solve(self, b: np.ndarray, rtol: float = 0.0) -> np.ndarray:
         return self._pardiso.solve(b)
@@ -57,6 +60,7 @@ class SuperLUSolver:
     def __init__(self):
         self._lu = None
         self.iterations = 0
+        self.factorizations = 0
 
     def analyse(self, A: sp.spmatrix) -> None:
         pass
@@ -65,6 +69,7 @@ class SuperLUSolver:
         self._lu = None
         self._lu = splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                         options={"SymmetricMode": True})
+        self.factorizations += 1
 
     def solve(self, b: np.ndarray, rtol: float = 0.0) -> np.ndarray:
         return self._lu.solve(b)

@@ -62,6 +62,9 @@ class SemismoothNewton:
     """The iteration; subclasses define ``initial``, ``evaluate``, ``direction`` and ``solution``."""
 
     reason = ""  # why this method runs: the case's solver.method, or what "auto" weighed (set by make_solver)
+    #: Work on the Newton systems in the time loop (summary.json): Krylov iterations (GMRES, CG), and
+    #: factorizations of Newton matrices; none unless a solver counts them.
+    krylov_iterations = newton_factorizations = 0
 
     def __init__(self, weights: np.ndarray, r: float, tolerance: float, max_iterations: int, length_scale: float):
         self.weights, self.r = weights, r
