@@ -19,12 +19,14 @@ from ..memory import available_memory
 from .condensed import CONDENSED_SHARE, condensed_fits
 
 #: Free dofs beyond which, in 3D, the iterative method is faster than the condensed one (the quarter
-#: ball: docs/performance.md, "Choosing the method").
-DIRECT_LIMIT_3D = 60_000
+#: ball: condensed 68 s against iterative 90 s at 172k free dofs, about 560 s against 185 s at 498k;
+#: docs/performance.md, "Choosing the method").
+DIRECT_LIMIT_3D = 250_000
 #: Bytes per stored entry of the stiffness matrix that the iterative method holds at its peak: the
 #: stiffness, its absolute value, the rotated matrix and the Newton matrix (CSR: 12 bytes an entry
 #: each), the multigrid hierarchy in nodal blocks and its construction's temporaries. Measured peak
-#: resident memory over nnz(A) on the quarter ball (docs/performance.md).
+#: resident memory over nnz(A) on the quarter ball: 114–116 bytes per entry beyond the problem's own
+#: memory at 0.5M–2M dofs (docs/performance.md).
 ITERATIVE_BYTES_PER_ENTRY = 120
 
 
