@@ -53,10 +53,6 @@ class AMGConjugateGradient:
 
     name = "amg-cg"
 
-    @staticmethod
-    def available() -> bool:
-        return True
-
     def __init__(self, free: np.ndarray, dim: int, nodes: int, near_nullspace: np.ndarray):
         self.free, self.dim, self.size = np.asarray(free), dim, dim * nodes
         self.near_nullspace = near_nullspace

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .factorization import PardisoFactorization, installed_backends, splu
+from .factorization import installed_backends, splu
 
 
 class PardisoSolver:
@@ -28,7 +28,6 @@ class PardisoSolver:
     matrix (on one thread: see :class:`.pardiso.Pardiso`)."""
 
     name = "pardiso"
-    available = staticmethod(PardisoFactorization.available)
 
     def __init__(self):
         self._pardiso = None
@@ -55,7 +54,6 @@ class SuperLUSolver:
     separate symbolic phase, so each matrix is ordered and factored anew."""
 
     name = "superlu"
-    available = staticmethod(lambda: True)
 
     def __init__(self):
         self._lu = None
