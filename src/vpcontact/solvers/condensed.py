@@ -33,7 +33,6 @@ from dataclasses import replace
 import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
-from threadpoolctl import ThreadpoolController
 
 from ..errors import CaseError
 from .base import ContactState, StepData, StepSolution
@@ -190,14 +189,12 @@ class NewtonSystems:
 class CondensedNewton(SemismoothNewton):
     """Semi-smooth Newton on the contact nodes with a once-factored stiffness.
 
-    The Newton iterations run their dense m × m algebra on one BLAS thread: at these sizes threads
-    only contend (a 286 × 286 solve took 57 ms on two busy threads, 1 ms on one). Their systems are
-    solved by a dense LU each below ``krylov_from`` contact nodes, by preconditioned GMRES from there
+    The Newton iterations run their dense m × m algebra on one BLAS thread (``SemismoothNewton.solve``).
+    Their systems are solved by a dense LU each below ``krylov_from`` contact nodes, by preconditioned GMRES from there
     on (:class:`NewtonSystems`; a parameter so that tests can run either path on any case).
     """
 
     name = "condensed"
-    _threads = ThreadpoolController()
 
     def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations,
                  length_scale, rigid: np.ndarray, factorization: str = "auto", krylov_from: int = KRYLOV_FROM):
@@ -218,11 +215,10 @@ class CondensedNewton(SemismoothNewton):
         self._step, self._load_vector, self._d_free, self._b_norm = None, None, None, 0.0
 
     def solve(self, step: StepData, previous: StepSolution | None) -> StepSolution:
-        with self._threads.limit(limits=1, user_api="blas"):
-            solution = super().solve(step, previous)
-            if solution.converged and solution.residual > self.tolerance and self.Z.shape[1]:
-                return self._refine(step, solution)
-            return solution
+        solution = super().solve(step, previous)
+        if solution.converged and solution.residual > self.tolerance and self.Z.shape[1]:
+            return self._refine(step, solution)
+        return solution
 
     def _refine(self, step: StepData, solution: StepSolution) -> StepSolution:
         """Iterative refinement of a solution converged to rounding level (see the module's docstring),

@@ -20,7 +20,6 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
-from threadpoolctl import ThreadpoolController
 
 from .amg import AMGConjugateGradient
 from .base import ContactState, StepData, StepSolution
@@ -30,12 +29,9 @@ from .normal_frame import NormalFrame
 
 
 class FullNewton(SemismoothNewton):
-    """Semi-smooth Newton on (u, λ) with the whole stiffness matrix. Its vector algebra runs on one
-    BLAS thread: on two busy cores, threads only contend (a norm of 24k entries took 7 ms on two
-    threads under load, against 10 µs)."""
+    """Semi-smooth Newton on (u, λ) with the whole stiffness matrix."""
 
     name = "full"
-    _threads = ThreadpoolController()
 
     def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations, length_scale,
                  rigid: np.ndarray, factorization: str = "auto"):
@@ -70,10 +66,6 @@ class FullNewton(SemismoothNewton):
     def newton_factorizations(self) -> int:
         """Newton matrices factored: every one, by the direct solver (none by the iterative one)."""
         return self.linear.factorizations
-
-    def solve(self, step: StepData, previous: StepSolution | None) -> StepSolution:
-        with self._threads.limit(limits=1, user_api="blas"):
-            return super().solve(step, previous)
 
     def initial(self, step: StepData, previous: StepSolution | None) -> tuple:
         if previous is None:

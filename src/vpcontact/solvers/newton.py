@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from .base import ContactState, StepData, StepSolution
 
@@ -61,6 +62,7 @@ class Evaluation:
 class SemismoothNewton:
     """The iteration; subclasses define ``initial``, ``evaluate``, ``direction`` and ``solution``."""
 
+    _threads = ThreadpoolController()
     reason = ""  # why this method runs: the case's solver.method, or what "auto" weighed (set by make_solver)
     #: Work on the Newton systems in the time loop (summary.json): Krylov iterations (GMRES, CG), and
     #: factorizations of Newton matrices; none unless a solver counts them.
@@ -90,7 +92,14 @@ class SemismoothNewton:
         return float(np.max(np.abs(state.C), initial=0.0)) / self.r
 
     def solve(self, step: StepData, previous: StepSolution | None) -> StepSolution:
-        """Newton iterations from the previous step's solution (or zero) until the stopping test holds."""
+        """Newton iterations from the previous step's solution (or zero) until the stopping test holds,
+        their dense and vector algebra on one BLAS thread: at these sizes threads only contend on two
+        busy cores (a 286 × 286 solve took 57 ms on two threads, 1 ms on one; a norm of 24k entries
+        7 ms against 10 µs)."""
+        with self._threads.limit(limits=1, user_api="blas"):
+            return self._iterate(step, previous)
+
+    def _iterate(self, step: StepData, previous: StepSolution | None) -> StepSolution:
         x = self.initial(step, previous)
         ev, last_residual = self.evaluate(step, x), None
         for iteration in range(self.max_iterations + 1):
