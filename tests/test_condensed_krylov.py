@@ -87,7 +87,7 @@ def test_the_factor_of_one_newton_matrix_serves_many_iterations_and_steps():
     iterations each; summary.json counts both."""
     result = condensed_run(CASES["3D quarter ball (the example)"], krylov_from=0)
     newton = int(result.series("newton_iterations").sum())
-    assert newton >= 30 and result.steps == 11
+    assert newton >= 2 * result.steps and result.steps == 11
     assert result.newton_factorizations <= newton // 10
     assert newton <= result.krylov_iterations <= condensed.MAX_KRYLOV_ITERATIONS * newton // 2
     summary = result.summary()

@@ -56,3 +56,17 @@ def test_the_recursion_reaches_the_rigid_base_only_where_expected():
     assert hard.series("nodes_at_limit").max() == 0
     assert np.all(np.diff(hard.contact_history("K"), axis=0) > 0)
     assert np.all(np.diff(soft.contact_history("K"), axis=0) < 0)
+
+
+@pytest.mark.parametrize("method", ["condensed", "full", "iterative"])
+def test_a_history_linear_in_time_is_predicted_exactly(method):
+    """K constant, p(d) = d⁺, every node in contact from the first step on, load linear in t: the
+    step problem is linear and u(t) = t u(1). From the third step on the first Newton iterate (the
+    last level's solution extrapolated through the last two) is the solution: zero Newton iterations."""
+    case = rectangle_case(g=math.inf, stiffness={"law": "constant", "value": C_V})
+    case["solver"].update(method=method, tolerance=1e-10)
+    result = vpcontact.solve(case)
+    iterations = result.series("newton_iterations")
+    assert np.all(iterations[:2] >= 1) and np.all(iterations[2:] == 0)
+    d = result.contact_history("penetration")
+    np.testing.assert_allclose(d, np.broadcast_to(Q_RATE * result.times[:, None] / C_V, d.shape), rtol=1e-9)

@@ -14,7 +14,8 @@ moment leaves the previous complete checkpoint. state.npz holds
   mesh, the free dofs and the contact nodes, both checked on resume;
 - the :class:`~vpcontact.stepping.LoopState`: the step reached, ξ, z and 𝒢 there (viscoplastic
   history), and the last StepSolution (u at the free dofs for the full solver, λ, d, the active set,
-  its report): the next Newton iteration starts from it exactly as in an uninterrupted run;
+  its report) and its trend (how u, λ and d changed since the level before): the next Newton
+  iteration starts from the same prediction as in an uninterrupted run;
 - the history rows (one array per column) and the per-node contact arrays so far (rows × m);
 - ``meta`` (JSON): the field steps saved, step cuts, wall time and linear solves so far, the steps
   where the run was resumed before, the versions.
@@ -39,7 +40,7 @@ from .case import _brief
 from .errors import CaseError
 from .results import CONTACT_ARRAYS, INTEGER_COLUMNS, Fields
 from .solvers import StepSolution
-from .stepping import COUNTERS, LoopState, TimeLoop
+from .stepping import COUNTERS, LoopState, TimeLoop, Trend
 from .writers import OUTPUTS, remove_files, replacing, versions
 
 FOLDER = "checkpoint"
@@ -115,6 +116,11 @@ def save(loop: TimeLoop, out: Path) -> None:
             arrays["previous_u"] = previous.u
         arrays.update(previous_lam=previous.lam, previous_d=previous.d, previous_active=previous.active,
                       previous_report=np.array([previous.iterations, previous.residual, previous.complementarity]))
+    trend = state.trend
+    if trend is not None:
+        if trend.u is not None:
+            arrays["trend_u"] = trend.u
+        arrays.update(trend_lam=trend.lam, trend_d=trend.d)
     for column in result.columns:
         arrays[f"row_{column}"] = np.array([row[column] for row in result.rows],
                                            dtype=np.int64 if column in INTEGER_COLUMNS else np.float64)
@@ -161,8 +167,9 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
         previous = StepSolution(arrays.get("previous_u"), arrays["previous_lam"], arrays["previous_d"],
                                 arrays["previous_active"].astype(bool), int(iterations), float(residual),
                                 float(complementarity), True)
+    trend = Trend(arrays.get("trend_u"), arrays["trend_lam"], arrays["trend_d"]) if "trend_lam" in arrays else None
     step = int(arrays["step"])
-    loop.state = LoopState(step, arrays["xi"], arrays.get("z"), arrays.get("rate"), previous)
+    loop.state = LoopState(step, arrays["xi"], arrays.get("z"), arrays.get("rate"), previous, trend)
     columns = {column: arrays[f"row_{column}"] for column in result.columns}
     rows = len(arrays["row_time"])
     result.rows = [{column: (int(values[i]) if column in INTEGER_COLUMNS else np.float64(values[i]))
