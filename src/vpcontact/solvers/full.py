@@ -38,7 +38,9 @@ class FullNewton(SemismoothNewton):
         super().__init__(weights, r, tolerance, max_iterations, length_scale)
         started = time.perf_counter()
         self.A, self.N, self.gap0, self.Z = A, N.tocsr(), gap0, rigid
-        self._A_abs, self._N_abs = abs(self.A), abs(self.N)  # for the rounding level of the residual
+        # |A| and |N| for the rounding level of the residual; |A| shares A's index arrays
+        self._A_abs = sp.csr_matrix((np.abs(A.data), A.indices, A.indptr), shape=A.shape)
+        self._N_abs = abs(self.N)
         self.frame = NormalFrame(self.N)
         self.rotated = self.frame.rotate(A)  # Q A Q
         framed = time.perf_counter()
