@@ -10,7 +10,8 @@ The runs are a plain list, in the order of the paper:
 - the load: the printed load (1000 t N/m) for β = ±1 and ρ = 0.01, and the load recalibrated for
   k ≈ 1/128 (`load_cases`, `calibrate`);
 - Figs. 8, 9: the study ρ = 1, …, 1e−6 against K ≡ 0 (`rho_study_text`, run by `studies.run_study`);
-- Fig. 10: the study h = k = 1/4, …, 1/256 against 1/512 (`hk_study_text`, `studies.run_study`).
+- Fig. 10: the study h = k = 1/4, …, 1/256 against 1/512 (`hk_study_text`, `studies.run_study`);
+- beyond the paper: the rates in h alone and in k alone (`h_study_text`, `k_study_text`, `rate_record`).
 
 Each run writes the standard outputs under DIR/cases/ or DIR/studies/ (a study can be rerun with
 ``vpcontact study DIR/studies/NAME.toml --out DIR/studies/NAME``). `run` measures what the paper
@@ -138,6 +139,14 @@ class Plan:
     levels: tuple = (4, 8, 16, 32, 64, 128, 256)
     """h = k = 1/level: the levels compared with the reference."""
     reference_level: int = 512
+    h_levels: tuple = (4, 8, 16, 32, 64)
+    """The rate in h alone: h = 1/level, every level and the reference with ``h_steps`` steps."""
+    h_reference_level: int = 256
+    h_steps: int = 35
+    k_steps: tuple = (4, 9, 18, 35, 70, 141)
+    """The rate in k alone: k = 1.1/steps, every run and the reference on the mesh of ``k_level``."""
+    k_reference_steps: int = 563
+    k_level: int = 32
 
     @property
     def mode(self) -> str:
@@ -146,7 +155,9 @@ class Plan:
 
 def make_plan(quick: bool) -> Plan:
     if quick:
-        return Plan(True, figure_h=0.05, rho=(1.0, 1e-1, 1e-2, 1e-3, 1e-4), levels=(4, 8, 16, 32), reference_level=64)
+        return Plan(True, figure_h=0.05, rho=(1.0, 1e-1, 1e-2, 1e-3, 1e-4), levels=(4, 8, 16, 32), reference_level=64,
+                    h_levels=(4, 8, 16), h_reference_level=64, h_steps=9, k_steps=(4, 9, 18, 35),
+                    k_reference_steps=141, k_level=16)
     return Plan(False, figure_h=0.0125)
 
 
@@ -225,29 +236,38 @@ def level_overrides(level: int) -> dict:
     return {"mesh.h": math.sqrt(2.0) * h, "time.steps": round(T / h)}
 
 
-def hk_study_text(plan: Plan) -> str:
-    """Fig. 10: ‖u − u^{hk}‖_V at t = 1.1 for h = k = 1/level against the reference level. The
-    reference is listed first: the longest run starts at once, and the other workers run the
-    levels meanwhile (listed last, it ran alone after them)."""
-    lines = [
-        "# Fig. 10 of the paper, written by `vpcontact reproduce`.",
-        'base = "../cases/paper_ball.toml"',
-        "",
-        "[set]",
-        '"output.field_steps" = "final"',
-        "",
-    ]
-    for level in (plan.reference_level, *plan.levels):
-        o = level_overrides(level)
-        lines += [
-            "[[runs]]",
-            f'id = "{_level_id(level, plan)}"',
-            f'"mesh.h" = {o["mesh.h"]!r}',
-            f'"time.steps" = {o["time.steps"]}',
-            "",
-        ]
-    lines += ["[compare]", f'reference = "{_level_id(plan.reference_level, plan)}"', f"times = [{T!r}]", ""]
+def convergence_study_text(title: str, runs: list[tuple[str, dict]]) -> str:
+    """A study of the paper case's runs (id, overrides), each compared at t = 1.1 with the first one,
+    the reference. The reference is listed first: the longest run starts at once, and the other
+    workers run the others meanwhile (listed last, it ran alone after them)."""
+    lines = [f"# {title}, written by `vpcontact reproduce`.", 'base = "../cases/paper_ball.toml"', "", "[set]",
+             '"output.field_steps" = "final"', ""]
+    for run_id, overrides in runs:
+        lines += ["[[runs]]", f'id = "{run_id}"', *(f'"{key}" = {value!r}' for key, value in overrides.items()), ""]
+    lines += ["[compare]", f'reference = "{runs[0][0]}"', f"times = [{T!r}]", ""]
     return "\n".join(lines)
+
+
+def hk_study_text(plan: Plan) -> str:
+    """Fig. 10: ‖u − u^{hk}‖_V at t = 1.1 for h = k = 1/level against the reference level."""
+    return convergence_study_text("Fig. 10 of the paper", [(_level_id(level, plan), level_overrides(level))
+                                                           for level in (plan.reference_level, *plan.levels)])
+
+
+def h_study_text(plan: Plan) -> str:
+    """The error in h alone: h = 1/level against 1/h_reference_level, all with the same time steps."""
+    levels = (plan.h_reference_level, *plan.h_levels)
+    return convergence_study_text(
+        f"The rate in h: every run with {plan.h_steps} time steps",
+        [(f"h=1_{level}", {"mesh.h": level_overrides(level)["mesh.h"], "time.steps": plan.h_steps}) for level in levels])
+
+
+def k_study_text(plan: Plan) -> str:
+    """The error in k alone: k = 1.1/steps against k_reference_steps, all on the mesh of 1/k_level."""
+    h = level_overrides(plan.k_level)["mesh.h"]
+    return convergence_study_text(
+        f"The rate in k: every run on the mesh of h = 1/{plan.k_level}",
+        [(f"steps={steps}", {"mesh.h": h, "time.steps": steps}) for steps in (plan.k_reference_steps, *plan.k_steps)])
 
 
 def _level_id(level: int, plan: Plan) -> str:
@@ -378,6 +398,17 @@ def run(
         hk_rows = run_named_study(out, "hk_convergence", hk_study_text(plan), executor)
         data["hk_study"] = hk_record(hk_rows, plan, out / "studies" / "hk_convergence")
         log(f"  {timer.part(f'Fig. 10: h–k study ({len(plan.levels) + 1} runs)', t0)}")
+
+        log("beyond the paper: the rates in h and in k separately ...")
+        t0 = clock()
+        h_rows = run_named_study(out, "h_convergence", h_study_text(plan), executor)
+        k_rows = run_named_study(out, "k_convergence", k_study_text(plan), executor)
+        data["rates"] = {
+            "h": rate_record(h_rows, [f"h=1_{level}" for level in plan.h_levels], [1.0 / level for level in plan.h_levels]),
+            "k": rate_record(k_rows, [f"steps={steps}" for steps in plan.k_steps], [T / steps for steps in plan.k_steps]),
+        }
+        runs = len(plan.h_levels) + len(plan.k_steps) + 2
+        log(f"  {timer.part(f'beyond the paper: rates in h and in k ({runs} runs)', t0)}")
 
     data["mesh"] = mesh_record(results["beta+1_k0.1"])
     data["K_bottom_final"] = {
@@ -623,6 +654,21 @@ def hk_record(rows: list[dict], plan: Plan, folder: Path) -> dict:
             "wall_time_s": _number(reference["wall_time_s"]),
         },
     }
+
+
+def rate_record(rows: list[dict], ids: list[str], x: list[float]) -> dict:
+    """The errors ‖u − u_ref‖_V and ‖σ − σ_ref‖_Q at t = 1.1 of the runs ``ids`` (their step size
+    or mesh size ``x``), the slopes fitted to all of them and to the finest three, per norm."""
+    by_id = {row["id"]: row for row in rows}
+    key = f"t{T:g}"
+    record = {"x": x, "dofs": [int(_number(by_id[i]["dofs"])) for i in ids],
+              "steps": [int(_number(by_id[i]["steps"])) for i in ids]}
+    for norm in ("V", "Q"):
+        error = [_number(by_id[i][f"norm_{norm}_{key}"]) for i in ids]
+        record[f"error_{norm}"] = error
+        record[f"slope_{norm}"] = fit_slope(x, error)
+        record[f"slope_{norm}_finest_three"] = fit_slope(x[-3:], error[-3:])
+    return record
 
 
 # --- the pictures' data ----------------------------------------------------------------------------
@@ -961,6 +1007,12 @@ def settings(plan: Plan) -> dict:
         "fig9_rho": list(plan.fig9_rho),
         "hk_levels": list(plan.levels),
         "hk_reference_level": plan.reference_level,
+        "h_levels": list(plan.h_levels),
+        "h_reference_level": plan.h_reference_level,
+        "h_steps": plan.h_steps,
+        "k_steps": list(plan.k_steps),
+        "k_reference_steps": plan.k_reference_steps,
+        "k_level": plan.k_level,
         "printed_load": PRINTED_LOAD,
         "calibrated_load": CALIBRATED_LOAD,
         "figure_times": list(FIGURE_TIMES),
