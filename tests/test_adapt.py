@@ -187,3 +187,24 @@ def test_resume_of_an_adaptive_run_is_refused_and_overwrite_replaces_only_its_ou
     assert (out / "notes.txt").read_text() == "mine" and (out / "cycles" / "mine.txt").read_text() == "mine too"
     assert sorted(p.name for p in (out / "cycles").iterdir()) == ["1", "mine.txt"]
     assert len((out / "adapt.csv").read_text().splitlines()) == 2
+
+
+def test_a_study_of_an_adaptive_case_is_refused(tmp_path):
+    write_case(tmp_path, adaptive_case(), "base.toml")
+    (tmp_path / "study.toml").write_text('base = "base.toml"\n[[vary]]\n"contact.rho" = [1.0, 0.5]\n')
+    before = snapshot_tree(tmp_path)
+    status, _, stderr = run_cli("study", str(tmp_path / "study.toml"), "--out", str(tmp_path / "study"), "--quiet")
+    assert_refused(status, stderr, "[adapt]", "vpcontact run", untouched=[(tmp_path, before)])
+
+
+def test_a_stopped_cycle_stops_the_adaptation_with_its_status():
+    case = paper_case(cycles=3)
+    asked = []
+
+    def stop():
+        asked.append(1)
+        return "stopped by a test" if len(asked) > 14 else None  # in the second cycle (11 steps each)
+
+    adaptation = adapt(build_problem(case), stop=stop)
+    assert adaptation.status == "interrupted" and len(adaptation.rows) == 2
+    assert adaptation.message.startswith("cycle 2: stopped by a test after step 3")

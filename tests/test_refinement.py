@@ -152,3 +152,15 @@ def test_a_written_mesh_reads_back_with_its_parts_and_regions(make, tmp_path):
         assert facet_node_sets(back, back.facets(name)) == facet_node_sets(mesh, facets)
     for name, members in mesh.regions.items():
         assert elements(back, back.regions[name]) == elements(mesh, members)
+
+
+def test_a_projection_that_folds_an_element_is_refused():
+    """A 'curved' bottom whose projection lifts the new nodes above the row of nodes over them."""
+    import dataclasses
+
+    from vpcontact.errors import CaseError
+
+    mesh = meshes.rectangle(1.0, 1.0, 0.25)
+    lifted = dataclasses.replace(mesh, curved_parts={"bottom": lambda x: x + np.array([[0.0], [0.4]])})
+    with pytest.raises(CaseError, match=r"refining the mesh turns \d+ element\(s\) inside out near \(.*smaller mesh.h"):
+        refine(lifted, np.flatnonzero(mesh.centroids[1] < 0.25))
