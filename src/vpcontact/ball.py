@@ -110,7 +110,7 @@ def coated_tetrahedra(n: int, coating: float, h: float, h_bottom: float | None) 
     interface = shell[s == s_m][0]  # the interface's nodes' shell: one product s_m · (s'/s_m) for all of them
     if h_bottom is not None and h_bottom < h:
         mesh = _BoxOfBall(q, t)
-        with _quiet_bisection():
+        with quiet_bisection():
             while (marked := _too_long(to_ball(mesh.p), mesh.t, h, h_bottom)).size:
                 mesh = mesh.refined(marked)
         q, t = mesh.p, mesh.t
@@ -183,7 +183,7 @@ def graded_towards_bottom(p: np.ndarray, t: np.ndarray, h: float, h_bottom: floa
     bisection level, the new nodes on the sphere are moved radially onto it."""
     mesh = skfem.MeshTet1(p, t)
     centre = np.array([[0.0], [0.0], [1.0]])
-    with _quiet_bisection():
+    with quiet_bisection():
         while (marked := _too_long(mesh.p, mesh.t, h, h_bottom)).size:
             mesh = mesh.refined(marked)
             boundary = mesh.facets[:, mesh.boundary_facets()]
@@ -206,7 +206,7 @@ def _too_long(p: np.ndarray, t: np.ndarray, h: float, h_bottom: float) -> np.nda
 
 
 @contextmanager
-def _quiet_bisection():
+def quiet_bisection():
     """Around skfem's bisection, which seeds NumPy's global generator (the caller's state is kept) and logs
     a warning for each copy of its arrays (silenced)."""
     rng, log = np.random.get_state(), logging.getLogger("skfem.mesh.mesh")

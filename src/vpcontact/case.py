@@ -551,6 +551,18 @@ class OutputSection(_Section):
         )
 
 
+class AdaptSection(_Section):
+    """Adaptive meshes (:mod:`vpcontact.adapt`): up to ``cycles`` solves of the whole history, each on the
+    mesh refined from the one before by Dörfler marking (the fewest elements holding ``theta`` of the sum of
+    the time functional of the indicators), none with more than ``max_dofs`` dofs."""
+
+    cycles: Annotated[int, Field(ge=1)]
+    theta: Annotated[float, Field(gt=0, le=1)] = 0.5
+    max_dofs: Annotated[int, Field(gt=0)] = 1_000_000
+    functional: Literal["max", "l2"] = "max"  # max over the steps of η_K²(t_n), or Σ_n k_n η_K²(t_n)
+    estimator: Literal["recovery"] = "recovery"  # the keys of vpcontact.adapt.ESTIMATORS
+
+
 class Case(_Section):
     """A whole case; ``base_dir`` resolves relative file names (the case file's folder)."""
 
@@ -562,6 +574,7 @@ class Case(_Section):
     time: TimeSection
     solver: SolverSection = SolverSection()
     output: OutputSection = OutputSection()
+    adapt: Optional[AdaptSection] = None
     base_dir: Annotated[str, Field(exclude=True)] = "."
 
     @model_validator(mode="after")
@@ -585,6 +598,13 @@ class Case(_Section):
     def materials(self) -> list[MaterialSection]:
         """The material entries: the single ``[material]`` as a list of one."""
         return self.material if isinstance(self.material, list) else [self.material]
+
+    @model_validator(mode="after")
+    def _adapt_from_the_case_mesh(self):
+        if self.adapt is not None and self.initial.from_run is not None:
+            raise ValueError("[adapt] with initial.from_run: the fields a restart starts from are on the mesh of that "
+                             "run, and the adaptive cycles solve on other meshes; remove one of them")
+        return self
 
     @model_validator(mode="after")
     def _field_steps_in_range(self):

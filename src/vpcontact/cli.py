@@ -98,6 +98,8 @@ def _run(args) -> int:
     if outcome.result is None:
         print(f"vpcontact: {outcome.message}")
         return 0
+    if case.adapt is not None:
+        print(f"adaptive: {outcome.message}; adapt.csv, cycles/ and the final_mesh.msh -> {args.out}")
     summary = outcome.result.summary()
     final = summary["final"]
     cuts = f", {summary['step_cuts']} step cuts" if summary["step_cuts"] else ""

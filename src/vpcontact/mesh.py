@@ -37,6 +37,7 @@ from vpcontact.mesh_checks_3d import check_tetrahedra
 from vpcontact.memory import available_memory
 
 NormalField = Callable[[np.ndarray], np.ndarray]
+Projection = Callable[[np.ndarray], np.ndarray]
 
 #: The skfem mesh type of each dimension.
 SKFEM_MESH = {2: skfem.MeshTri, 3: skfem.MeshTet}
@@ -60,6 +61,12 @@ class Mesh:
     regions: dict[str, np.ndarray] = field(default_factory=dict)
     """Region name -> sorted int64 indices of elements (columns of ``mesh.t``): the groups of elements
     materials are assigned to; empty when the mesh does not group its elements (one region, the body)."""
+    curved_parts: dict[str, Projection] = field(default_factory=dict)
+    """Part -> f(points (d, k)) -> the nearest points (d, k) of the exact curve or surface the part lies on: the
+    curved parts of a built-in shape, where refinement (`vpcontact.refinement`) moves its new nodes."""
+    curved_interfaces: dict[tuple[str, str], Projection] = field(default_factory=dict)
+    """(region, region) -> the projection onto the exact curve or surface between the two regions (a coated
+    shape's interface), like ``curved_parts``."""
 
     def facets(self, part: str | int) -> np.ndarray:
         """Facet indices of `part` (an int n means the part named str(n))."""
@@ -142,8 +149,11 @@ def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
 
 
 def _wrap(p: np.ndarray, t: np.ndarray, classify: Callable[[np.ndarray], dict[str, np.ndarray]],
-          exact_normals: dict[str, NormalField], regions: dict[str, np.ndarray] | None = None) -> Mesh:
-    """Build a `Mesh` from nodes `p` (d, n) and triangles or tetrahedra `t` (d + 1, m) (and its `regions`).
+          exact_normals: dict[str, NormalField], regions: dict[str, np.ndarray] | None = None,
+          curved_parts: dict[str, Projection] | None = None,
+          curved_interfaces: dict[tuple[str, str], Projection] | None = None) -> Mesh:
+    """Build a `Mesh` from nodes `p` (d, n) and triangles or tetrahedra `t` (d + 1, m) (and its `regions`,
+    its curved parts and interfaces).
 
     `classify(centroids (d, k))` returns part name -> boolean mask over the k boundary
     facets; the masks must partition the boundary (checked).
@@ -154,7 +164,19 @@ def _wrap(p: np.ndarray, t: np.ndarray, classify: Callable[[np.ndarray], dict[st
     if not np.array_equal(np.sum(list(masks.values()), axis=0), np.ones(boundary.size)):
         raise RuntimeError("boundary facets do not split exactly into the parts")
     parts = {name: boundary[mask] for name, mask in masks.items()}
-    return Mesh(mesh.with_boundaries(parts), parts, exact_normals, regions=regions or {})
+    return Mesh(mesh.with_boundaries(parts), parts, exact_normals, regions=regions or {},
+                curved_parts=curved_parts or {}, curved_interfaces=curved_interfaces or {})
+
+
+def onto_sphere(center: np.ndarray, radius: float) -> Projection:
+    """The projection of points (d, ...) onto the circle (d = 2) or sphere (d = 3) of `radius` around `center`
+    (along the radius through the point)."""
+    def project(x: np.ndarray) -> np.ndarray:
+        at = center.reshape((-1,) + (1,) * (x.ndim - 1))
+        offset = x - at
+        return at + radius * offset / np.sqrt((offset**2).sum(axis=0))
+
+    return project
 
 
 def _signed_areas(p: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -188,7 +210,8 @@ def half_disc(h: float, radius: float = 1.0, coating: float | None = None) -> Me
     """Quasi-uniform mesh of the half disc {x > 0, x² + (y − R)² < R²} (center (0, R)).
 
     Parts: "axis" (x = 0), "bottom_arc" (arc from (0, 0) to (R, R)), "top_arc" (arc from
-    (R, R) to (0, 2R)), all with exact outward normals. Requires 0 < h ≤ R.
+    (R, R) to (0, 2R)), all with exact outward normals, the arcs with their projection onto the
+    circle (``curved_parts``). Requires 0 < h ≤ R.
 
     Each quarter arc has ceil((π/2)·R/h) facets of equal arc length, the axis ceil(2R/h)
     equal facets; (0, 0), (R, R) and (0, 2R) are nodes. Interior nodes: one layer parallel
@@ -200,7 +223,8 @@ def half_disc(h: float, radius: float = 1.0, coating: float | None = None) -> Me
     for R/h ≥ 5 the triangle count is within 5 % of (πR²/2)/(√3 h²/4).
 
     With a `coating` c (0 < c < R) the mesh has the regions "core" (distance to the center < R − c)
-    and "coating", and a conforming interface: the half circle of radius R − c is a line of nodes
+    and "coating" (their interface's projection in ``curved_interfaces``), and a conforming interface:
+    the half circle of radius R − c is a line of nodes
     (`_coated_half_disc`); the parts and their facets on the arcs are the same. Measured for R/h in
     [5, 50] and h ≤ c ≤ R − h: smallest angle ≥ 25°, longest edge ≤ 1.41 h; a coating thinner than h
     is one layer of flat triangles (their height c against their length h); one not thicker than the
@@ -240,7 +264,10 @@ def half_disc(h: float, radius: float = 1.0, coating: float | None = None) -> Me
         on_axis = mid[0] < 1e-9 * h
         return {"axis": on_axis, "bottom_arc": ~on_axis & (mid[1] < R), "top_arc": ~on_axis & (mid[1] > R)}
 
-    mesh = _wrap(p, t, classify, {"axis": axis_normal, "bottom_arc": radial, "top_arc": radial}, regions)
+    arc = onto_sphere(center, R)
+    interfaces = {} if coating is None else {("core", "coating"): onto_sphere(center, R - coating)}
+    mesh = _wrap(p, t, classify, {"axis": axis_normal, "bottom_arc": radial, "top_arc": radial}, regions,
+                 {"bottom_arc": arc, "top_arc": arc}, interfaces)
     used = np.bincount(t.ravel(), minlength=p.shape[1]) > 0
     if mesh.parts["bottom_arc"].size != n_arc or mesh.parts["axis"].size != n_axis or not used.all():
         raise RuntimeError("half_disc: the triangulation does not follow the boundary nodes or misses a node")
@@ -427,7 +454,8 @@ def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None, c
     """Tetrahedral mesh of the quarter ball {x > 0, y > 0, x² + y² + (z − R)² < R²} (center (0, 0, R)).
 
     Parts: "sym_x" (x = 0), "sym_y" (y = 0), "top" (the sphere above z = R), "bottom" (the
-    sphere below it; the two split by facet centroids), all with exact outward normals.
+    sphere below it; the two split by facet centroids), all with exact outward normals, "top" and
+    "bottom" with their projection onto the sphere (``curved_parts``).
     Requires 0 < h ≤ R and, if given, 0 < h_bottom ≤ h.
 
     Two octants of the ball, each the image of a structured grid of n³ cells on the cube [0, 1]³
@@ -448,7 +476,8 @@ def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None, c
     h_bottom/R, then scaled by R: the same tetrahedra in any unit of length.
 
     With a `coating` c (0 < c < R) the mesh has the regions "core" (distance to the center < R − c)
-    and "coating", and a conforming interface: the nodes are moved along their radii so that the shell
+    and "coating" (their interface's projection in ``curved_interfaces``), and a conforming interface:
+    the nodes are moved along their radii so that the shell
     of nodes nearest the radius R − c (at least one layer of cells on each side) lies on the sphere of
     that radius, and the grading bisects the cells before they are mapped onto the ball, so that the
     nodes it adds on that sphere lie on it too (`vpcontact.ball.coated_tetrahedra`). Measured for R/h
@@ -503,7 +532,9 @@ def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None, c
 
     normals = {"sym_x": _constant((-1.0, 0.0, 0.0)), "sym_y": _constant((0.0, -1.0, 0.0)), "top": radial,
                "bottom": radial}
-    return _wrap(p, t, classify, normals, regions)
+    sphere = onto_sphere(center, R)
+    interfaces = {} if coating is None else {("core", "coating"): onto_sphere(center, R * (1.0 - coating))}
+    return _wrap(p, t, classify, normals, regions, {"top": sphere, "bottom": sphere}, interfaces)
 
 
 def block(width: float, depth: float, height: float, h: float) -> Mesh:
@@ -610,7 +641,7 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
         known = (facet_nodes >= 0) & (facet_nodes < renumber.size)  # a damaged file may name other nodes
         nodes = np.where(known, renumber[np.where(known, facet_nodes, 0)], -1)
         boundary = mesh.boundary_facets().astype(np.int64)
-        found = _find_columns(mesh.facets[:, boundary], nodes)
+        found = find_columns(mesh.facets[:, boundary], nodes)
         bad = np.flatnonzero((nodes < 0).any(axis=0) | (found < 0))
         if bad.size:
             what, kind = {2: ("line", "edge"), 3: ("triangle", "face")}[dim]
@@ -654,7 +685,7 @@ CELLS = {2: ("triangle", "line"), 3: ("tetra", "triangle")}
 ELEMENT_NAMES = {2: ("triangle", "triangles"), 3: ("tetrahedron", "tetrahedra")}
 
 
-def _find_columns(table: np.ndarray, query: np.ndarray) -> np.ndarray:
+def find_columns(table: np.ndarray, query: np.ndarray) -> np.ndarray:
     """For each column of `query` (k, q), the index of the column of `table` (k, r) with the same
     numbers in any order, or -1 (the columns of `table` are distinct sets)."""
     both = np.sort(np.hstack((table, query)), axis=0)

@@ -101,7 +101,7 @@ def _distance_to_simplices(x: np.ndarray, vertices: np.ndarray) -> np.ndarray:
     return best
 
 
-class _Locator:
+class Locator:
     """Finds, for query points, a source element containing each (or the nearest one) and the
     barycentric coordinates of the point in it."""
 
@@ -190,7 +190,7 @@ def transfer(source: Snapshot, target_points, target_elements) -> Snapshot:
     """
     target_points = np.asarray(target_points, dtype=float)
     target_elements = np.asarray(target_elements, dtype=np.int64)
-    locator = _Locator(source.points, source.elements)
+    locator = Locator(source.points, source.elements)
     element, weights = locator.locate(target_points.T)
     nodal = np.asarray(source.displacement, dtype=float)[locator.elements[:, element]]  # (d + 1, q, d)
     displacement = np.einsum("qv,vqd->qd", weights, nodal)

@@ -82,8 +82,11 @@ class Problem:
 def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Callable | None = None,
                   tractions: Mapping | None = None, body_force: Density | None = None,
                   viscoplastic: Callable | None = None, initial_displacement=None, initial_stress=None,
-                  initial_xi=None) -> Problem:
+                  initial_xi=None, mesh: meshes.Mesh | None = None) -> Problem:
     """Assemble the problem of ``case``; the keyword arguments replace parts of the case by Python objects:
+
+    - ``mesh``: the mesh to solve on instead of the one ``[mesh]`` makes (a refinement of it,
+      :mod:`vpcontact.adapt`), with the same parts and regions;
 
     - ``p``, ``stiffness_law``: the laws p(r) and K(ξ) of the contact, vectorized over NumPy arrays; an
       object with a ``derivative`` method is used as it is (see :mod:`vpcontact.contact`), a plain
@@ -111,7 +114,7 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         raise CaseError("p and stiffness_law are laws of the contact, and the case has no [contact]")
     p = None if p is None else _api_law(p, "p")
     stiffness_law = None if stiffness_law is None else _api_law(stiffness_law, "stiffness_law")
-    mesh = _make_mesh(case)
+    mesh = _make_mesh(case) if mesh is None else mesh
     meshed = time.perf_counter()
     dim = mesh.dim
     _check_dimension(case, dim)

@@ -20,10 +20,17 @@ Status (summary.json) and exit status of the command line:
 
 The directory is held while the run writes (see :mod:`vpcontact.directory`); ``--overwrite`` removes
 the outputs of an earlier run (``writers.OUTPUTS``) and nothing else.
+
+A case with ``[adapt]`` runs its adaptive cycles (:mod:`vpcontact.adapt`): ``case.resolved.toml`` first,
+each cycle's run in ``cycles/<n>/`` (its outputs as above, summary.json last) with ``adapt.csv``
+refreshed after each cycle, then the last cycle's mesh ``final_mesh.msh`` and ``summary.json`` (the
+status, why the cycles stopped, the rows of adapt.csv). It writes no checkpoints: ``--resume`` is refused; the
+status and exit status are those of the last cycle's run ("failed" too when a refinement fails).
 """
 
 from __future__ import annotations
 
+import csv
 import json
 import signal
 import sys
@@ -33,13 +40,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from . import checkpoint, directory
+from .adapt import COLUMNS, Adaptation, Cycle, adapt, check_start
 from .case import Case, load_case
 from .errors import CaseError
-from .problem import build_problem
+from .mesh_file import write_mesh
+from .problem import Problem, build_problem
 from .results import Result
 from .stepping import TimeLoop
-from .writers import (check_room, remove_files, remove_outputs, remove_temporaries, versions, write_outputs,
-                      write_resolved_case)
+from .writers import (check_room, json_safe, remove_files, remove_outputs, remove_temporaries, replacing, versions,
+                      write_outputs, write_resolved_case, write_text)
 
 SIGNAL_NAMES = {signal.SIGINT: "SIGINT", signal.SIGTERM: "SIGTERM"}
 EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
@@ -65,8 +74,14 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
     out = Path(out)
     if resume and overwrite:
         raise CaseError("--resume and --overwrite exclude each other")
+    if resume and case.adapt is not None:
+        raise CaseError("--resume of an adaptive run ([adapt]) is not supported: it keeps no checkpoints; run it "
+                        "again with --overwrite")
     directory.usable(out)
     check_room(out)
+    if case.adapt is not None and (out / "cycles").exists() and not (out / "cycles").is_dir():
+        raise CaseError(f"--out '{out}': '{out / 'cycles'}' is not a folder, and an adaptive run writes its cycles/ "
+                        f"there: move it away")
     used = directory.holds_files(out)
     if used and not (resume or overwrite):
         raise CaseError(f"--out '{out}' is not empty (use --overwrite to replace the outputs of a run in it, or "
@@ -80,6 +95,11 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
     try:
         with StopOnSignals() as stopper:
             problem = build_problem(case)
+            if case.adapt is not None:
+                check_start(problem)
+                started = True  # from here on the directory is written to: nothing above wrote to it
+                adaptation = _adapt_locked(problem, held, clear=overwrite and used, stopper=stopper, progress=progress)
+                return Outcome(adaptation.last.result, adaptation.status, adaptation.message, stopper.signal)
             loop = TimeLoop(problem)
             resuming = resume and checkpoint.exists(out)
             if resuming:
@@ -126,6 +146,38 @@ def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool
     if result.status != "interrupted":
         checkpoint.remove(out)
     return result
+
+
+def _adapt_locked(problem: Problem, held: directory.Held, *, clear: bool, stopper, progress: bool) -> Adaptation:
+    """The adaptive cycles of ``problem.case`` in a directory this process holds (see the module docstring)."""
+    out, case = held.path, problem.case
+    if clear:
+        remove_outputs(out)
+    remove_temporaries(out)
+    remove_files(out, ("summary.json",))
+    write_resolved_case(case, out)
+    rows = []
+
+    def after_cycle(cycle: Cycle) -> None:
+        held.check()
+        directory.mkdir(out / "cycles")
+        folder = out / "cycles" / str(cycle.number)
+        directory.mkdir(folder)
+        write_outputs(cycle.result, folder)
+        rows.append(cycle.row)
+        with replacing(out / "adapt.csv") as temporary, temporary.open("w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=COLUMNS)
+            writer.writeheader()
+            writer.writerows({k: repr(v) if isinstance(v, float) else v for k, v in row.items()} for row in rows)
+
+    adaptation = adapt(problem, after_cycle=after_cycle, stop=stopper.reason, progress=progress,
+                       after_step=lambda loop: held.check())
+    with replacing(out / "final_mesh.msh") as temporary:
+        write_mesh(adaptation.mesh, temporary)
+    summary = {"status": adaptation.status, "message": adaptation.message, "cycles": adaptation.rows,
+               "versions": versions()}
+    write_text(out / "summary.json", json.dumps(json_safe(summary), indent=2) + "\n")
+    return adaptation
 
 
 def _finished(case: Case, out: Path) -> Outcome | None:

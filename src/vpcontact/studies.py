@@ -198,6 +198,9 @@ def _with_field_times(base: Path, overrides: dict, times: list[float], run_id: s
         case = load_case(base, overrides)
     except CaseError as error:
         raise CaseError(f"run '{run_id}': {error}") from None
+    if case.adapt is not None:
+        raise CaseError(f"run '{run_id}': its case has [adapt], and a study solves each run once on its mesh; "
+                        f"remove [adapt] from the study's case (run adaptive cases with vpcontact run)")
     if not times:
         return overrides
     start = case.time.start or 0.0  # t_n = t_0 + n k

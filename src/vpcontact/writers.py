@@ -65,12 +65,15 @@ def _temporary(path: Path, tag: str) -> Path:
     return path.with_name(f".{path.stem}.tmp-{tag}{path.suffix}")
 
 
-#: Every file vpcontact writes in a run directory, as glob patterns (those in checkpoint/ are the
-#: files of :mod:`vpcontact.checkpoint`), summary.json first: ``--overwrite`` removes these, their
-#: temporaries, and fields/ or checkpoint/ if that leaves them empty; nothing else.
-OUTPUTS = ("summary.json", "history.csv", "contact.csv", "solution.npz", "case.resolved.toml",
-           "fields/body.pvd", "fields/contact.pvd", "fields/body_*.vtu", "fields/contact_*.vtu",
-           "checkpoint/state.npz", "checkpoint/fields_*.npz", *(f"figures/{stem}.png" for stem in FIGURES))
+#: The files of one run, as glob patterns, summary.json first.
+RUN_OUTPUTS = ("summary.json", "history.csv", "contact.csv", "solution.npz", "fields/body.pvd", "fields/contact.pvd",
+               "fields/body_*.vtu", "fields/contact_*.vtu", *(f"figures/{stem}.png" for stem in FIGURES))
+OUTPUTS = (*RUN_OUTPUTS, "case.resolved.toml", "checkpoint/state.npz", "checkpoint/fields_*.npz", "adapt.csv",
+           "final_mesh.msh", *(f"cycles/[0-9]*/{name}" for name in RUN_OUTPUTS))
+"""Every file vpcontact writes in a run directory, as glob patterns (those in checkpoint/ are the files of
+:mod:`vpcontact.checkpoint`; an adaptive run, ``[adapt]``, writes adapt.csv, the final_mesh.msh and each
+cycle's run in cycles/<n>/), summary.json first: ``--overwrite`` removes these, their temporaries, and
+the folders that this leaves empty; nothing else."""
 TEMPORARIES = tuple(str(_temporary(Path(pattern), "[0-9]*")) for pattern in OUTPUTS)
 """The temporary files of the OUTPUTS (of any process: a killed writer leaves its own)."""
 
