@@ -538,6 +538,7 @@ class OutputSection(_Section):
     checkpoint_every_steps: Annotated[int, Field(ge=0)] = 0  # 0: not by step count
     checkpoint_every_seconds: NonNegativeFloat = 60.0  # 0: not by time
     figures: bool = False  # figures/*.png at the end of a complete or failed run (vpcontact.plots)
+    error_estimate: bool = False  # the residual error estimate at every step (vpcontact.residual_estimate)
 
     @field_validator("field_steps")
     @classmethod
