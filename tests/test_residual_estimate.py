@@ -293,3 +293,52 @@ def test_the_effectivity_benchmark_reports_its_table_and_figures(tmp_path):
     assert 3.0 < report["bands"]["punch"]["min"] and report["bands"]["punch"]["max"] < 6.0
     assert (tmp_path / "effectivity_punch.png").stat().st_size > 0
     assert json.loads((tmp_path / "effectivity.json").read_text())["rows"] == report["rows"]
+
+
+def estimating_half_disc(max_iterations: int = 50) -> dict:
+    data = half_disc_case(h=0.25, stiffness={"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0}, load=20.0)
+    data["solver"]["max_iterations"] = max_iterations
+    data["output"] = {"field_steps": "all", "error_estimate": True}
+    return data
+
+
+def test_a_sub_step_gets_the_estimate_of_its_own_time():
+    """With Newton limited to 5 iterations step 4 is cut (tests/test_robustness.py): its sub-steps have rows
+    with their own η, and the step's last row is the estimate of the level at t_4."""
+    result = solve(estimating_half_disc(max_iterations=5))
+    assert result.status == "complete" and result.step_cuts > 0
+    eta = result.series("error_estimate")
+    assert eta.size == len(result.rows) > result.steps and np.all(eta > 0)
+    ends = result.ends_step()
+    np.testing.assert_allclose(eta[ends], [estimate(Level.of(result, n)).total for n in range(1, result.steps + 1)],
+                               rtol=1e-12)
+    inner = np.flatnonzero(~ends)
+    assert np.all(np.diff(result.series("t")[inner[0]:inner[-1] + 2]) > 0)  # the sub-steps' rows, in time order
+
+
+def test_a_resumed_run_keeps_the_estimate_columns_and_indicators(tmp_path):
+    from vpcontact import checkpoint
+    from vpcontact.problem import build_problem
+    from vpcontact.stepping import TimeLoop
+
+    case = vpcontact.Case.model_validate(estimating_half_disc())
+    whole = vpcontact.solve(case)
+    first = TimeLoop(build_problem(case))
+    first.run(stop=lambda: "stopped" if first.state.step == 6 else None)
+    checkpoint.save(first, tmp_path)
+    second = TimeLoop(build_problem(case))
+    assert checkpoint.restore(second, tmp_path) == 6
+    resumed = second.run()
+    assert resumed.status == "complete" and resumed.columns == whole.columns
+    np.testing.assert_allclose(resumed.series("error_estimate"), whole.series("error_estimate"), rtol=1e-10)
+    for step in (3, 11):  # saved with the checkpoint, and computed after it
+        np.testing.assert_allclose(resumed.fields[step].error_indicator, whole.fields[step].error_indicator, rtol=1e-10)
+
+
+def test_a_3d_run_records_the_estimate():
+    case = vpcontact.load_case("examples/quarter_ball.toml", {"mesh.h": 0.6, "output.field_steps": [11],
+                                                             "output.error_estimate": True})
+    result = vpcontact.solve(case)
+    assert result.columns == history_columns(3) + ESTIMATE_COLUMNS
+    assert result.series("error_estimate")[-1] == pytest.approx(estimate(Level.of(result, 11)).total, rel=1e-12)
+    assert result.fields[11].error_indicator.shape == (result.elements,)
