@@ -16,7 +16,8 @@ from vpcontact.indicators import Level
 from vpcontact.mesh import read_mesh
 from vpcontact.norms import differences
 from vpcontact.problem import build_problem
-from vpcontact.recovery_estimate import estimate
+from vpcontact.recovery_estimate import estimate as recovery_estimate
+from vpcontact.residual_estimate import estimate as residual_estimate
 
 
 def test_dorfler_marks_the_fewest_largest_entries_holding_theta_of_the_sum():
@@ -40,11 +41,13 @@ def paper_case(**settings):
 
 
 @pytest.mark.parametrize("functional", ["max", "l2"])
-def test_the_time_functional_folds_every_steps_indicators(functional):
-    case = paper_case(functional=functional)
+@pytest.mark.parametrize("estimator", ["residual", "recovery"])
+def test_the_time_functional_folds_every_steps_indicators(functional, estimator):
+    case = paper_case(functional=functional, estimator=estimator)
     result, folded = solve_and_estimate(build_problem(case))
     assert sorted(result.fields) == [3, 11]  # the other steps' fields were dropped once folded
     every = vpcontact.solve(case.model_copy(update={"output": case.output.model_copy(update={"field_steps": "all"})}))
+    estimate = {"residual": residual_estimate, "recovery": recovery_estimate}[estimator]
     squared = np.array([estimate(Level.of(every, n)).squared for n in range(1, 12)])
     expected = squared.max(axis=0) if functional == "max" else every.problem.k * squared.sum(axis=0)
     np.testing.assert_allclose(folded, expected, rtol=1e-10)
@@ -159,7 +162,7 @@ def test_a_quarter_ball_adapts_in_3d(tmp_path):
     ("adapt.max_dofs=-3", ["adapt.max_dofs", "> 0"]),
     ("adapt.max_dofs=50", ["adapt.max_dofs = 50", "dofs of the first mesh"]),
     ("adapt.functional=\"sum\"", ["adapt.functional", "'max' or 'l2'"]),
-    ("adapt.estimator=\"kelly\"", ["adapt.estimator", "'recovery'"]),
+    ("adapt.estimator=\"kelly\"", ["adapt.estimator", "'residual'"]),
     ("adapt.cycle=2", ["unknown key 'adapt.cycle'", "adapt.cycles"]),
     ("initial={from_run=\"elsewhere\", step=1}", ["[adapt] with initial.from_run"]),
 ])

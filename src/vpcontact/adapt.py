@@ -2,7 +2,7 @@
 
 Each cycle c = 1, 2, … solves the case's whole history on the current mesh (the ordinary ``build_problem``
 / ``TimeLoop`` path: every option of a case works) and, as the steps go, folds the element indicators
-η_K²(t_n) of the estimator (``adapt.estimator``, one of ESTIMATORS: ``estimate(level) -> Indicators``) at
+η_K²(t_n) of the estimator (``adapt.estimator``, one of ESTIMATORS: "residual" or "recovery") at
 every step into one value per element, the time functional (``adapt.functional``):
 
     "max":  F_K = max_n η_K²(t_n),        "l2":  F_K = Σ_n k η_K²(t_n)   (k the time step);
@@ -29,11 +29,16 @@ from .indicators import Indicators, Level
 from .mesh import Mesh
 from .problem import Problem, build_problem
 from .refinement import refine
+from .residual_estimate import ResidualEstimator
 from .results import Result
 from .stepping import TimeLoop
 
-#: The estimators ``adapt.estimator`` names: each maps a time level to its squared element indicators.
-ESTIMATORS: dict[str, Callable[[Level], Indicators]] = {"recovery": recovery_estimate.estimate}
+#: The estimators ``adapt.estimator`` names: each prepares, for a problem, the map from its time levels to
+#: their squared element indicators (the residual one computes the mesh's facet geometry once).
+ESTIMATORS: dict[str, Callable[[Problem], Callable[[Level], Indicators]]] = {
+    "residual": ResidualEstimator,
+    "recovery": lambda problem: recovery_estimate.estimate,
+}
 #: The columns of adapt.csv, one row per cycle.
 COLUMNS = ("cycle", "dofs", "contact_nodes", "estimate", "wall_time_s")
 
@@ -95,7 +100,7 @@ def solve_and_estimate(problem: Problem, *, stop: Callable[[], str | None] | Non
     """Run the whole history of ``problem`` and fold the indicators of ``adapt.estimator`` at each step into
     the time functional ``adapt.functional`` (see the module docstring): (the run, F_K per element)."""
     settings = problem.case.adapt
-    estimator = ESTIMATORS[settings.estimator]
+    estimator = ESTIMATORS[settings.estimator](problem)
     loop = TimeLoop(problem)
     wanted = loop.result.field_steps
     loop.result.field_steps = range(1, len(problem.times) + 1)  # every step's fields, dropped once folded
@@ -110,7 +115,7 @@ def solve_and_estimate(problem: Problem, *, stop: Callable[[], str | None] | Non
         if settings.functional == "max":
             np.maximum(functional, squared, out=functional)
         else:
-            np.add(functional, problem.k * squared, out=functional)
+            np.add(functional, row["k"] * squared, out=functional)
         if step not in wanted:
             loop.result.fields.pop(step, None)
         if after_step is not None:

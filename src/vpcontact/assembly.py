@@ -196,6 +196,10 @@ class LoadVector:
         the density in messages, e.g. ``boundary.traction[0].value``."""
         self._ndofs, self._nodal_dofs = basis.N, basis.nodal_dofs
         scalar = basis.elem.elem
+        #: (facets of the part, density) of each traction and the density of each body force, for the
+        #: residual of an error estimate (:mod:`vpcontact.residual_estimate`)
+        self.tractions = [(mesh.facets(part), f) for _, part, f in tractions]
+        self.body_forces = [f for _, f in body_forces]
         self._terms = [_Term(name, FacetBasis(mesh.mesh, scalar, facets=mesh.facets(part), intorder=4), f)
                        for name, part, f in tractions]
         self._terms += [_Term(name, Basis(mesh.mesh, scalar, intorder=4), f) for name, f in body_forces]

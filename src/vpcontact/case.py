@@ -538,6 +538,7 @@ class OutputSection(_Section):
     checkpoint_every_steps: Annotated[int, Field(ge=0)] = 0  # 0: not by step count
     checkpoint_every_seconds: NonNegativeFloat = 60.0  # 0: not by time
     figures: bool = False  # figures/*.png at the end of a complete or failed run (vpcontact.plots)
+    error_estimate: bool = False  # the residual error estimate at every step (vpcontact.residual_estimate)
 
     @field_validator("field_steps")
     @classmethod
@@ -560,7 +561,7 @@ class AdaptSection(_Section):
     theta: Annotated[float, Field(gt=0, le=1)] = 0.5
     max_dofs: Annotated[int, Field(gt=0)] = 1_000_000
     functional: Literal["max", "l2"] = "max"  # max over the steps of η_K²(t_n), or Σ_n k_n η_K²(t_n)
-    estimator: Literal["recovery"] = "recovery"  # the keys of vpcontact.adapt.ESTIMATORS
+    estimator: Literal["residual", "recovery"] = "residual"  # the keys of vpcontact.adapt.ESTIMATORS
 
 
 class Case(_Section):

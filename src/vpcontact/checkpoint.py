@@ -94,8 +94,8 @@ def save(loop: TimeLoop, out: Path) -> None:
         path = target / f"fields_{n:05d}.npz"
         if not path.exists():
             fields = result.fields[n]
-            arrays = {name: getattr(fields, name) for name in ("displacement", "stress", "stress33", "von_mises", "z")
-                      if getattr(fields, name) is not None}
+            arrays = {name: getattr(fields, name) for name in ("displacement", "stress", "stress33", "von_mises", "z",
+                                                           "error_indicator") if getattr(fields, name) is not None}
             with replacing(path) as temporary:
                 np.savez(temporary, **arrays)
     rows = len(result.rows)
@@ -182,7 +182,7 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
     for n in meta["field_steps"]:
         data = _read(folder(out) / f"fields_{n:05d}.npz")
         result.fields[n] = Fields(data["displacement"], data["stress"], data.get("stress33"), data["von_mises"],
-                                  data.get("z"))
+                                  data.get("z"), data.get("error_indicator"))
     if result.fields:
         result.final = result.fields[max(result.fields)]
     loop.earlier_time = float(meta["elapsed_s"])

@@ -203,15 +203,42 @@ def strain_norm(points, elements, displacement) -> float:
     """‖ε(u)‖_{L²(Ω_h)} = (Σ_T |T| ε(u)|_T : ε(u)|_T)^½ for the P1 displacement u with nodal values
     `displacement` (nnodes, d) on the mesh (points (d, nnodes), elements (d + 1, nelements)); exact,
     ε(u) = sym ∇u being constant on each element."""
+    strain, measure = _strains(points, elements, displacement)
+    return float(np.sqrt(np.sum(measure * (strain**2).sum(axis=(1, 2)))))
+
+
+def _strains(points, elements, displacement) -> tuple[np.ndarray, np.ndarray]:
+    """ε(u) (m, d, d) of the P1 displacement with nodal values ``displacement`` on each element, and the
+    elements' measures (m,)."""
     points = np.asarray(points, dtype=float)
     elements = np.asarray(elements, dtype=np.int64)
     d = points.shape[0]
     _, inverse, det = _affine(points, elements)
     u = np.asarray(displacement, dtype=float)[elements]  # (d + 1, m, d)
     gradient = np.stack([u[i] - u[0] for i in range(1, d + 1)], axis=2) @ inverse  # (m, d, d): ∂u_i/∂x_j
-    strain = 0.5 * (gradient + gradient.transpose(0, 2, 1))
-    measure = np.abs(det) / math.factorial(d)
-    return float(np.sqrt(np.sum(measure * (strain**2).sum(axis=(1, 2)))))
+    return 0.5 * (gradient + gradient.transpose(0, 2, 1)), np.abs(det) / math.factorial(d)
+
+
+def element_energies(points, elements, displacement, lame) -> np.ndarray:
+    """∫_T ℰε(u):ε(u) = |T| (λ (tr ε)² + 2μ ε:ε) on each element T (m,) for the P1 displacement with nodal
+    values ``displacement`` (nnodes, d); ``lame`` = (λ, μ), numbers or arrays over the elements (the
+    isotropic ℰ of :class:`~vpcontact.material.Elasticity`; in 2D its plane hypothesis's λ)."""
+    strain, measure = _strains(points, elements, displacement)
+    lam, mu = (np.asarray(value, dtype=float) for value in lame)
+    trace = np.einsum("mii->m", strain)
+    return measure * (lam * trace**2 + 2.0 * mu * (strain**2).sum(axis=(1, 2)))
+
+
+def energy_norm(points, elements, displacement, lame) -> float:
+    """‖u‖_E = (∫_Ω ℰε(u):ε(u))^½ for the P1 displacement u (``element_energies``); exact."""
+    return float(np.sqrt(element_energies(points, elements, displacement, lame).sum()))
+
+
+def containing_elements(points, elements, x) -> np.ndarray:
+    """For points x (d, q): the element (columns of ``elements``) of the mesh that contains each (the
+    nearest one for a point outside the mesh), as :func:`transfer` locates them."""
+    locator = Locator(np.asarray(points, dtype=float), np.asarray(elements, dtype=np.int64))
+    return locator.locate(np.asarray(x, dtype=float).T)[0]
 
 
 def stress_norm(points, elements, stress) -> float:

@@ -40,6 +40,11 @@ def history_columns(dim: int) -> tuple[str, ...]:
 
 #: The history columns of a 2D body (the paper's case).
 HISTORY_COLUMNS = history_columns(2)
+#: The terms of the residual error estimate (:mod:`vpcontact.residual_estimate`).
+ESTIMATE_TERMS = ("body_force", "jump", "neumann", "contact_tangential", "contact_normal", "complementarity")
+#: The history columns a run with ``output.error_estimate`` adds: η(t) = (Σ_K η_K²)^½ and each term's share
+#: (Σ_K η_K,term²)^½.
+ESTIMATE_COLUMNS = ("error_estimate", *(f"error_estimate_{term}" for term in ESTIMATE_TERMS))
 #: History columns holding integers (the others are floats).
 INTEGER_COLUMNS = ("step", "newton_iterations", "nodes_separated", "nodes_in_compliance", "nodes_at_limit", "substep")
 CONTACT_ARRAYS = ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid", "status")
@@ -74,18 +79,20 @@ class Fields:
     """Displacement at the nodes (nnodes, d); per element: the stress (nelements, d, d), in 2D also the
     out-of-plane σ33 of the elastic response (None in 3D), and the von Mises stress of the 3D tensor;
     with a viscoplastic law or initial data with z_0 = σ_0 − ℰε(u_0) ≠ 0, the history z (nelements, d, d)
-    of the step, so that stress = ℰε(u) + z (None otherwise: z = 0)."""
+    of the step, so that stress = ℰε(u) + z (None otherwise: z = 0); with ``output.error_estimate`` the
+    error indicator η_K of each element (nelements,) (None otherwise)."""
 
     displacement: np.ndarray
     stress: np.ndarray
     stress33: np.ndarray | None
     von_mises: np.ndarray
     z: np.ndarray | None = None
+    error_indicator: np.ndarray | None = None
 
     def __repr__(self) -> str:
         """The shapes, not the values."""
         shapes = ", ".join(f"{name}{getattr(self, name).shape}" for name in
-                           ("displacement", "stress", "stress33", "von_mises", "z") if getattr(self, name) is not None)
+                           ("displacement", "stress", "stress33", "von_mises", "z", "error_indicator") if getattr(self, name) is not None)
         return f"Fields({shapes})"
 
 
@@ -120,13 +127,15 @@ class Result:
     completed_steps: int = 0  # time steps t_n reached
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
+    error_estimate: bool = False  # output.error_estimate: the rows have the ESTIMATE_COLUMNS
 
     @classmethod
     def start(cls, problem, solver) -> "Result":
         wanted = field_step_numbers(problem.case.output.field_steps, len(problem.times))
         return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
                    contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
-                   augmentation=solver.r, method=solver.name, method_reason=solver.reason, problem=problem)
+                   augmentation=solver.r, method=solver.name, method_reason=solver.reason, problem=problem,
+                   error_estimate=problem.case.output.error_estimate)
 
     # --- filling in ------------------------------------------------------------------------------
     def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status, substep: int = 1,
@@ -165,6 +174,18 @@ class Result:
             if ends_step and n in self.field_steps:
                 self.fields[n] = fields
 
+    def contact_row(self, row: int = -1) -> dict[str, np.ndarray]:
+        """The per-node contact arrays (CONTACT_ARRAYS) of one history row (default: the last)."""
+        return {name: np.asarray(self.contact[name][row]) for name in CONTACT_ARRAYS}
+
+    def record_estimate(self, indicators, fields: Fields) -> None:
+        """Add the error estimate (:class:`~vpcontact.indicators.Indicators`) of the last recorded level to
+        its history row (ESTIMATE_COLUMNS) and its η_K to that level's ``fields``."""
+        self.rows[-1].update({"error_estimate": indicators.total,
+                              **{f"error_estimate_{term}": float(np.sqrt(indicators.terms[term].sum()))
+                                 for term in ESTIMATE_TERMS}})
+        fields.error_indicator = np.sqrt(indicators.squared)
+
     def fail(self, message: str) -> None:
         self.status, self.message = "failed", message
 
@@ -178,8 +199,9 @@ class Result:
     # --- reading ---------------------------------------------------------------------------------
     @property
     def columns(self) -> tuple[str, ...]:
-        """The history columns (history.csv) of this run's dimension."""
-        return history_columns(self.dim)
+        """The history columns (history.csv) of this run's dimension, and with ``output.error_estimate``
+        the ESTIMATE_COLUMNS."""
+        return history_columns(self.dim) + (ESTIMATE_COLUMNS if self.error_estimate else ())
 
     @property
     def steps(self) -> int:
@@ -276,6 +298,8 @@ class Result:
 # --- memory ----------------------------------------------------------------------------------------
 #: Bytes of one history row in memory: a dict of the HISTORY_COLUMNS and its time (CPython 3.11, measured).
 HISTORY_ROW_BYTES = 1100
+#: Bytes the ESTIMATE_COLUMNS add to a history row in memory (7 float objects and the larger dict; CPython 3.11, measured).
+ESTIMATE_ROW_BYTES = 900
 #: Bytes of a NumPy array object besides its data.
 ARRAY_BYTES = 112
 #: Bytes the writers add while they write, whatever the run's length (contact.csv is written in blocks).
@@ -283,18 +307,23 @@ WRITING_BYTES = 2**24
 
 
 def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, contact_nodes: int,
-                  history: bool, dim: int = 2) -> dict[str, int]:
+                  history: bool, dim: int = 2, estimate: bool = False) -> dict[str, int]:
     """Bytes a run of ``steps`` steps keeps for its outputs until they are written, by part: the history
     rows, the per-node contact rows and the fields at ``field_steps`` steps (``history``: with the
-    viscoplastic history z), each with the copy a checkpoint or solution.npz makes of them, and what
-    the writers add. A step cut into sub-steps adds rows: this is the least a run needs."""
-    copies = 8 * len(history_columns(dim))
+    viscoplastic history z; ``estimate``: with the ESTIMATE_COLUMNS in every row and η_K in the fields),
+    each with the copy a checkpoint or solution.npz makes of them, and what the writers add. A step cut
+    into sub-steps adds rows: this is the least a run needs."""
+    columns = len(history_columns(dim)) + (len(ESTIMATE_COLUMNS) if estimate else 0)
+    copies = 8 * columns
+    row = HISTORY_ROW_BYTES + (ESTIMATE_ROW_BYTES if estimate else 0)
     contact = len(CONTACT_ARRAYS) * ARRAY_BYTES + 2 * (8 * (len(CONTACT_ARRAYS) - 1) + 1) * contact_nodes
     tensor = dim * dim
     per_field = 5 * ARRAY_BYTES + 8 * (dim * nodes + (tensor + 2) * elements) + 8 * (dim * nodes + tensor * elements)
     if history:
         per_field += 2 * 8 * tensor * elements
-    return {"history rows": steps * (HISTORY_ROW_BYTES + copies), "contact rows": steps * contact,
+    if estimate:
+        per_field += ARRAY_BYTES + 2 * 8 * elements
+    return {"history rows": steps * (row + copies), "contact rows": steps * contact,
             "fields": (field_steps + 1) * per_field, "writing": WRITING_BYTES}
 
 
@@ -303,7 +332,8 @@ def check_memory(case, nodes: int, elements: int, contact_nodes: int, history: b
     available now: one line naming time.steps (and output.field_steps when the fields are the most)."""
     steps = case.time.steps
     field_steps = len(field_step_numbers(case.output.field_steps, steps))
-    parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim)
+    parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim,
+                          estimate=case.output.error_estimate)
     needed, available = sum(parts.values()), available_memory()
     if needed <= available:
         return

@@ -21,6 +21,9 @@ it fails, down to ``solver.max_step_cuts`` halvings. A sub-step of length h endi
 ordinary step of the same scheme: loads at t, z advanced by h 𝒢 from the last converged level, ξ
 by h d⁺ (the same rules with h for k), so a cut step is exactly the same scheme on a finer grid.
 The state carried from level to level is a :class:`LoopState`; it is all a checkpoint needs.
+
+With ``output.error_estimate`` the fields are computed at every level and the residual estimator
+(:mod:`vpcontact.residual_estimate`) adds η(t) and its terms to the level's history row and η_K to its fields.
 """
 
 from __future__ import annotations
@@ -35,7 +38,9 @@ from tqdm.auto import tqdm
 from .assembly import NonFiniteLoad, element_strain, stress_force
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from .material import von_mises
+from .indicators import Level
 from .problem import Problem
+from .residual_estimate import ResidualEstimator
 from .results import Fields, Result
 from .rigid_modes import RigidModes
 from .solvers import DofLayout, StepData, StepSolution, make_solver
@@ -121,6 +126,7 @@ class TimeLoop:
                                   factorization=options.factorization, layout=layout)
         self.max_cuts = options.max_step_cuts
         self.result = Result.start(problem, self.solver)
+        self.estimator = ResidualEstimator(problem) if case.output.error_estimate else None
         self._created = started
         self.setup_time = clock.perf_counter() - started
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
@@ -260,7 +266,8 @@ class TimeLoop:
         K = law.K(xi)
         fields, rate = None, None
         G = problem.viscoplastic
-        if G is not None or (ends_step and (n in result.field_steps or n == len(problem.times))):
+        wanted = ends_step and (n in result.field_steps or n == len(problem.times))
+        if G is not None or self.estimator is not None or wanted:
             u = self._u
             u[problem.free] = self.solver.displacement(attempt.step, solution)
             strain = element_strain(problem.basis, u)
@@ -285,6 +292,9 @@ class TimeLoop:
         self._substep += 1
         result.record(n, attempt.t, solution, fields, xi=xi, K=K, compliance=compliance,
                       status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step)
+        if self.estimator is not None:
+            level = Level(problem, n, attempt.t, h, fields, result.contact_row())
+            result.record_estimate(self.estimator(level), fields)
         trend = None if state.previous is None else Trend.between(state.previous, solution, h)
         self.state = LoopState(state.step, xi, attempt.z, rate, solution, trend)
         return None

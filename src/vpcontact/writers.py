@@ -283,6 +283,8 @@ def _write_fields(result: Result, folder: Path) -> None:
                      **materials}
         if fields.z is not None:
             cell_data["z"] = [_tensors_in_space(fields.z)]
+        if fields.error_indicator is not None:
+            cell_data["error_indicator"] = [fields.error_indicator]
         with replacing(folder / name) as temporary:
             meshio.write(temporary, meshio.Mesh(points, elements, point_data={"displacement": displacement},
                                                 cell_data=cell_data))
