@@ -190,3 +190,23 @@ def test_difference_norms_through_the_api_between_two_solves():
     norms = differences(one.snapshot(), two)
     assert norms["V"] == pytest.approx(0.5 * norms["V_reference"], rel=1e-10)
     assert norms["Q"] == pytest.approx(0.5 * norms["Q_reference"], rel=1e-10)
+
+
+def test_the_energy_norm_of_a_difference_uses_the_references_lame_parameters():
+    """w = offset x on the rectangle of area 2: ε(w) = [[1, 1], [1, 0.5]], tr ε = 1.5, ε:ε = 3.25, so
+    ‖w‖_E² = 2 (λ 1.5² + 2μ 3.25) with the reference's (λ, μ); elements of another (λ, μ) weigh theirs."""
+    mesh = rectangle(2.0, 1.0, 0.25).mesh
+    p, t = mesh.p, mesh.t
+    lam, mu = 577.0, 385.0
+    lame = np.array([np.full(t.shape[1], lam), np.full(t.shape[1], mu)])
+    reference = Snapshot(p, t, np.zeros((p.shape[1], 2)), np.zeros((t.shape[1], 2, 2)), lame)
+    offset = np.array([[1.0, 4.0], [-2.0, 0.5]])
+    solution = Snapshot(p, t, (offset @ p).T, np.zeros((t.shape[1], 2, 2)))
+    result = differences(solution, reference)
+    assert result["energy"] == pytest.approx(math.sqrt(2.0 * (lam * 1.5**2 + 2 * mu * 3.25)), rel=1e-12)
+    assert result["energy_reference"] == 0.0
+    stiffer = lame.copy()
+    stiffer[:, p[0, t].mean(axis=0) < 1.0] *= 4.0  # the left half (area 1) four times as stiff
+    result = differences(solution, Snapshot(p, t, reference.displacement, reference.stress, stiffer))
+    assert result["energy"] == pytest.approx(math.sqrt(5.0 * (lam * 1.5**2 + 2 * mu * 3.25)), rel=1e-12)
+    assert "energy" not in differences(reference, solution)  # a reference without (λ, μ): no energy norm

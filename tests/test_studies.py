@@ -58,6 +58,7 @@ def test_local_pool_and_dask_cluster_give_the_same_table(tmp_path):
     assert table == other
     # Fig. 8: the distance to the Signorini solution shrinks with rho; the reference to itself is 0
     assert float(table["signorini"]["norm_V_t1.1"]) == 0.0 and float(table["signorini"]["norm_Q_t1.1"]) == 0.0
+    assert float(table["signorini"]["norm_energy_t1.1"]) == 0.0 and float(table["rho=1"]["norm_energy_t1.1"]) > 0.0
     distance = [float(table[f"rho={r}"]["norm_V_t1.1"]) + float(table[f"rho={r}"]["norm_Q_t1.1"]) for r in ("1", "0.1", "0.01")]
     assert distance[0] > distance[1] > distance[2] > 0
 

@@ -51,6 +51,8 @@ class Snapshot:
     """P1 displacement, its values at the nodes (nnodes, d)."""
     stress: np.ndarray
     """P0 stress, one symmetric tensor per element (nelements, d, d)."""
+    lame: np.ndarray | None = None
+    """The Lamé parameters (λ, μ) of each element (2, nelements), for the energy norm; None: not known."""
 
     def __post_init__(self):
         d = np.shape(self.points)[0] if np.ndim(self.points) == 2 else 0
@@ -267,13 +269,20 @@ def differences(solution: Snapshot, reference: Snapshot) -> dict[str, float]:
     """{"V": ‖ε(u − u_ref)‖_{L²}, "Q": ‖σ − σ_ref‖_{L²}, "U": ‖u − u_ref‖_{L²}, "V_reference": ‖ε(u_ref)‖,
     "Q_reference": ‖σ_ref‖, "U_reference": ‖u_ref‖} computed on the reference mesh after transferring
     `solution` to it (`transfer`); no transfer when the meshes are identical (equal points and
-    elements arrays)."""
+    elements arrays). When the reference knows its Lamé parameters also "energy": ‖u − u_ref‖_E =
+    (∫ ℰε(u − u_ref):ε(u − u_ref))^½ with the reference's ℰ, and "energy_reference": ‖u_ref‖_E."""
     same_mesh = (np.array_equal(solution.points, reference.points)
                  and np.array_equal(solution.elements, reference.elements))
     if not same_mesh:
         solution = transfer(solution, reference.points, reference.elements)
     p, t = reference.points, reference.elements
+    energy = {}
+    if reference.lame is not None:
+        error = np.asarray(solution.displacement) - np.asarray(reference.displacement)
+        energy = {"energy": energy_norm(p, t, error, reference.lame),
+                  "energy_reference": energy_norm(p, t, reference.displacement, reference.lame)}
     return {
+        **energy,
         "V": strain_norm(p, t, np.asarray(solution.displacement) - np.asarray(reference.displacement)),
         "Q": stress_norm(p, t, np.asarray(solution.stress) - np.asarray(reference.stress)),
         "U": displacement_norm(p, t, np.asarray(solution.displacement) - np.asarray(reference.displacement)),

@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+import tomli_w
 
 from . import __version__, directory, writers
 from .case import load_case
@@ -236,16 +237,23 @@ def level_overrides(level: int) -> dict:
     return {"mesh.h": math.sqrt(2.0) * h, "time.steps": round(T / h)}
 
 
-def convergence_study_text(title: str, runs: list[tuple[str, dict]]) -> str:
+def convergence_study_text(title: str, runs: list[tuple[str, dict]], settings: dict | None = None) -> str:
     """A study of the paper case's runs (id, overrides), each compared at t = 1.1 with the first one,
-    the reference. The reference is listed first: the longest run starts at once, and the other
-    workers run the others meanwhile (listed last, it ran alone after them)."""
+    the reference; ``settings``: overrides of every run. The reference is listed first: the longest run
+    starts at once, and the other workers run the others meanwhile (listed last, it ran alone after them)."""
+    common = {"output.field_steps": "final", **(settings or {})}
     lines = [f"# {title}, written by `vpcontact reproduce`.", 'base = "../cases/paper_ball.toml"', "", "[set]",
-             '"output.field_steps" = "final"', ""]
+             *(f'"{key}" = {_toml(value)}' for key, value in common.items()), ""]
     for run_id, overrides in runs:
-        lines += ["[[runs]]", f'id = "{run_id}"', *(f'"{key}" = {value!r}' for key, value in overrides.items()), ""]
+        lines += ["[[runs]]", f'id = "{run_id}"', *(f'"{key}" = {_toml(value)}' for key, value in overrides.items()),
+                  ""]
     lines += ["[compare]", f'reference = "{runs[0][0]}"', f"times = [{T!r}]", ""]
     return "\n".join(lines)
+
+
+def _toml(value) -> str:
+    """A value as TOML writes it."""
+    return tomli_w.dumps({"value": value}).partition("=")[2].strip()
 
 
 def hk_study_text(plan: Plan) -> str:
@@ -255,11 +263,13 @@ def hk_study_text(plan: Plan) -> str:
 
 
 def h_study_text(plan: Plan) -> str:
-    """The error in h alone: h = 1/level against 1/h_reference_level, all with the same time steps."""
+    """The error in h alone: h = 1/level against 1/h_reference_level, all with the same time steps and
+    the residual error estimate (the effectivity of the estimator: the spatial error of one time grid)."""
     levels = (plan.h_reference_level, *plan.h_levels)
     return convergence_study_text(
-        f"The rate in h: every run with {plan.h_steps} time steps",
-        [(f"h=1_{level}", {"mesh.h": level_overrides(level)["mesh.h"], "time.steps": plan.h_steps}) for level in levels])
+        f"The rate in h and the estimator's effectivity: every run with {plan.h_steps} time steps",
+        [(f"h=1_{level}", {"mesh.h": level_overrides(level)["mesh.h"], "time.steps": plan.h_steps}) for level in levels],
+        {"output.error_estimate": True})
 
 
 def k_study_text(plan: Plan) -> str:
@@ -658,7 +668,8 @@ def hk_record(rows: list[dict], plan: Plan, folder: Path) -> dict:
 
 def rate_record(rows: list[dict], ids: list[str], x: list[float]) -> dict:
     """The errors ‖u − u_ref‖_V and ‖σ − σ_ref‖_Q at t = 1.1 of the runs ``ids`` (their step size
-    or mesh size ``x``), the slopes fitted to all of them and to the finest three, per norm."""
+    or mesh size ``x``), the slopes fitted to all of them and to the finest three, per norm; for runs
+    with the error estimate also ‖u − u_ref‖_E, η(1.1) and the effectivity index η / ‖u − u_ref‖_E."""
     by_id = {row["id"]: row for row in rows}
     key = f"t{T:g}"
     record = {"x": x, "dofs": [int(_number(by_id[i]["dofs"])) for i in ids],
@@ -668,6 +679,10 @@ def rate_record(rows: list[dict], ids: list[str], x: list[float]) -> dict:
         record[f"error_{norm}"] = error
         record[f"slope_{norm}"] = fit_slope(x, error)
         record[f"slope_{norm}_finest_three"] = fit_slope(x[-3:], error[-3:])
+    if "error_estimate" in rows[0]:  # the runs estimated their error: η against ‖u − u_ref‖_E
+        record["error_energy"] = [_number(by_id[i][f"norm_energy_{key}"]) for i in ids]
+        record["estimate"] = [_number(by_id[i]["error_estimate"]) for i in ids]
+        record["effectivity"] = [eta / error for eta, error in zip(record["estimate"], record["error_energy"])]
     return record
 
 

@@ -262,6 +262,8 @@ class Result:
                                                  "penetration_probe", "normal_stress_probe", "nodes_separated",
                                                  "nodes_in_compliance", "nodes_at_limit")}
             final["contact_force"] = [last[f"contact_force_{c}"] for c in coordinates(self.dim)]
+            if self.error_estimate:
+                final["error_estimate"] = last["error_estimate"]
         return {
             "status": self.status, "message": self.message, "dofs": self.dofs, "elements": self.elements,
             "nodes": self.nodes, "contact_nodes": self.contact_nodes, "steps": self.steps,

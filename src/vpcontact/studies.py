@@ -402,6 +402,7 @@ def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = N
                 row[f"norm_V_t{t:g}"] = norms.get("V", math.nan)
                 row[f"norm_Q_t{t:g}"] = norms.get("Q", math.nan)
                 row[f"norm_U_t{t:g}"] = norms.get("U", math.nan)
+                row[f"norm_energy_t{t:g}"] = norms.get("energy", math.nan)
         rows.append(row)
     columns = list(dict.fromkeys(key for row in rows for key in row))
     with replacing(out / "study.csv") as temporary, temporary.open("w", newline="") as handle:
@@ -436,6 +437,7 @@ def _snapshots(study: Study, run_id: str) -> dict[float, Snapshot]:
         with np.load(spec.out / "solution.npz") as solution:
             data = {key: solution[key] for key in ("times", "points", "displacement", "stress")}
             data["elements"] = solution[CELLS[data["points"].shape[0]][2]]
+            data["lame"] = solution["lame"] if "lame" in solution else None  # runs of earlier versions lack it
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):  # missing or damaged: no norms
         return {}
     found = {}
@@ -443,5 +445,6 @@ def _snapshots(study: Study, run_id: str) -> dict[float, Snapshot]:
         index = np.flatnonzero(np.isclose(data["times"], t, rtol=1e-9, atol=1e-12))
         if index.size:
             i = index[0]
-            found[t] = Snapshot(data["points"], data["elements"], data["displacement"][i], data["stress"][i])
+            found[t] = Snapshot(data["points"], data["elements"], data["displacement"][i], data["stress"][i],
+                                data["lame"])
     return found

@@ -333,7 +333,8 @@ def _end_of_step_row(result: Result, step: int) -> int:
 def write_solution(result: Result, path: Path) -> None:
     """solution.npz: ``points`` (d, nnodes), the elements by their type, ``triangles`` (3, nelements) in
     2D or ``tetrahedra`` (4, nelements) in 3D, ``steps`` (s,), ``times`` (s,), ``displacement``
-    (s, nnodes, d), ``stress`` (s, nelements, d, d) at the s field steps; with a viscoplastic law or an
+    (s, nnodes, d), ``stress`` (s, nelements, d, d) at the s field steps, ``lame`` (2, nelements) the
+    Lamé parameters (λ, μ) of each element (for energy norms); with a viscoplastic law or an
     initial stress also ``z`` (s, nelements, d, d), the history of (2.28): stress = ℰε(u) + z; with a
     contact part also ``contact_nodes`` (m,), the node indices of Γ3, and ``xi`` (s, m), the layer's
     history ξ there. A run restarts from one of these steps with ``initial.from_run``."""
@@ -342,7 +343,9 @@ def write_solution(result: Result, path: Path) -> None:
     arrays = dict(points=mesh.p, steps=np.array(steps), **{CELLS[result.dim][2]: mesh.t},
                   times=np.array([result.problem.times[s - 1] for s in steps]),
                   displacement=np.array([result.fields[s].displacement for s in steps]),
-                  stress=np.array([result.fields[s].stress for s in steps]))
+                  stress=np.array([result.fields[s].stress for s in steps]),
+                  lame=np.array([np.broadcast_to(np.asarray(value, dtype=float), mesh.t.shape[1:])
+                                 for value in result.problem.elasticity.lame]))
     if steps and result.fields[steps[0]].z is not None:
         arrays["z"] = np.array([result.fields[s].z for s in steps])
     surface = result.problem.surface
