@@ -404,6 +404,23 @@ def hk_figure(data: dict, folder: Path) -> dict:
     return _save(figure, folder, "fig10")
 
 
+def adaptive_figure(data: dict, folder: Path) -> dict:
+    """Beyond the paper: ‖u − u_ref‖_E at t = 1.1 against DOFs, uniform and adaptive meshes (log–log)."""
+    h, a = data["rates"]["h"], data["adaptive"]
+    figure, ax = _line_figure(
+        f"Adaptive and uniform meshes, against the 1/{data['settings']['h_reference_level']} solution",
+        "DOFs",
+        r"$\|u - u_{ref}\|_E$ at t = 1.1 s",
+    )
+    ax.loglog(h["dofs"], h["error_energy"], "o-", color="k", label="uniform, h = 1/4, 1/8, …")
+    ax.loglog(a["dofs"], a["error_energy"], "s-", color="C3", label="adaptive (residual estimator)")
+    ax.loglog(a["dofs"], a["estimate"], "s:", color="C3", mfc="none", lw=1, label="adaptive: the estimate η")
+    dofs = np.array(h["dofs"], dtype=float)
+    ax.loglog(dofs, h["error_energy"][-1] * np.sqrt(dofs[-1] / dofs), ":", color="0.5", label="DOFs$^{-1/2}$")
+    ax.legend(fontsize=8)
+    return _save(figure, folder, "fig11")
+
+
 TITLES = {
     "fig02": "Fig. 2: deformed mesh and contact forces, β = 1",
     "fig03": "Fig. 3: deformed mesh and contact forces, β = −1",
@@ -414,6 +431,7 @@ TITLES = {
     "fig08": "Fig. 8: ‖u_ρ − u_*‖_V + ‖σ_ρ − σ_*‖_Q at t = 1.1 s against ρ",
     "fig09": "Fig. 9: deformed mesh and contact forces at t = 1.1 s for four values of ρ",
     "fig10": "Fig. 10: ‖u − u^{hk}‖_V at t = 1.1 s against h + k",
+    "fig11": "Fig. 11 (beyond the paper): adaptive and uniform meshes, error against DOFs",
 }
 
 
@@ -458,5 +476,6 @@ def draw_all(data: dict, frames: dict, folder: Path) -> dict:
             [frames[f"rho_{rho:g}"] for rho in data["settings"]["fig9_rho"]], TITLES["fig09"], folder, "fig09"
         ),
         "fig10": hk_figure(data, folder),
+        "fig11": adaptive_figure(data, folder),
     }
     return {key: {"title": TITLES[key], **paths} for key, paths in drawn.items()}

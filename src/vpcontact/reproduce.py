@@ -11,7 +11,8 @@ The runs are a plain list, in the order of the paper:
   k ≈ 1/128 (`load_cases`, `calibrate`);
 - Figs. 8, 9: the study ρ = 1, …, 1e−6 against K ≡ 0 (`rho_study_text`, run by `studies.run_study`);
 - Fig. 10: the study h = k = 1/4, …, 1/256 against 1/512 (`hk_study_text`, `studies.run_study`);
-- beyond the paper: the rates in h alone and in k alone (`h_study_text`, `k_study_text`, `rate_record`).
+- beyond the paper: the rates in h alone and in k alone (`h_study_text`, `k_study_text`, `rate_record`), the
+  residual error estimate's effectivity, and adaptive meshes against uniform ones (`adaptive_record`).
 
 Each run writes the standard outputs under DIR/cases/ or DIR/studies/ (a study can be rerun with
 ``vpcontact study DIR/studies/NAME.toml --out DIR/studies/NAME``). `run` measures what the paper
@@ -39,6 +40,7 @@ import tomli_w
 
 from . import __version__, directory, writers
 from .case import load_case
+from .norms import differences
 from .writers import json_safe
 
 #: The paper's example with the calibrated load: the content of examples/paper_ball.toml (a test
@@ -148,6 +150,10 @@ class Plan:
     """The rate in k alone: k = 1.1/steps, every run and the reference on the mesh of ``k_level``."""
     k_reference_steps: int = 563
     k_level: int = 32
+    adapt_level: int = 8
+    """Adaptive meshes from h = 1/adapt_level, on the rate in h's time grid and against its reference."""
+    adapt_cycles: int = 12
+    adapt_max_dofs: int = 20_000
 
     @property
     def mode(self) -> str:
@@ -158,7 +164,7 @@ def make_plan(quick: bool) -> Plan:
     if quick:
         return Plan(True, figure_h=0.05, rho=(1.0, 1e-1, 1e-2, 1e-3, 1e-4), levels=(4, 8, 16, 32), reference_level=64,
                     h_levels=(4, 8, 16), h_reference_level=64, h_steps=9, k_steps=(4, 9, 18, 35),
-                    k_reference_steps=141, k_level=16)
+                    k_reference_steps=141, k_level=16, adapt_level=4, adapt_cycles=6, adapt_max_dofs=1_500)
     return Plan(False, figure_h=0.0125)
 
 
@@ -419,6 +425,12 @@ def run(
         }
         runs = len(plan.h_levels) + len(plan.k_steps) + 2
         log(f"  {timer.part(f'beyond the paper: rates in h and in k ({runs} runs)', t0)}")
+
+    log("beyond the paper: adaptive meshes against uniform ones ...")
+    t0 = clock()
+    data["adaptive"] = adaptive_record(base, plan, out)
+    cycles = len(data["adaptive"]["dofs"])
+    log(f"  {timer.part(f'beyond the paper: adaptive meshes ({cycles} cycles)', t0)}")
 
     data["mesh"] = mesh_record(results["beta+1_k0.1"])
     data["K_bottom_final"] = {
@@ -684,6 +696,51 @@ def rate_record(rows: list[dict], ids: list[str], x: list[float]) -> dict:
         record["estimate"] = [_number(by_id[i]["error_estimate"]) for i in ids]
         record["effectivity"] = [eta / error for eta, error in zip(record["estimate"], record["error_energy"])]
     return record
+
+
+def adaptive_record(base: Path, plan: Plan, out: Path) -> dict:
+    """Adaptive meshes ([adapt], the residual estimator, Dörfler θ = 0.5, the maximum over the steps) from
+    h = 1/adapt_level with the rate in h's time steps, each cycle's error ‖u − u_ref‖_E at t = 1.1 against
+    that study's reference; and the DOFs the cycles need to reach the error of its finest uniform mesh
+    (log–log interpolation between the two cycles around it; NaN if no cycle reaches it)."""
+    from .rundir import run as run_directory
+    from .studies import snapshots_at
+
+    case = load_case(base, {"mesh.h": level_overrides(plan.adapt_level)["mesh.h"], "time.steps": plan.h_steps,
+                            "output.field_steps": "final", "adapt.cycles": plan.adapt_cycles,
+                            "adapt.max_dofs": plan.adapt_max_dofs})
+    folder = out / "cases" / "adaptive"
+    outcome = run_directory(case, folder)
+    if outcome.status != "complete":
+        raise ReproduceError(f"the adaptive run failed: {outcome.message} (outputs in {folder})")
+    with open(folder / "adapt.csv", newline="") as handle:
+        cycles = list(csv.DictReader(handle))
+    runs = out / "studies" / "h_convergence" / "runs"
+    reference = snapshots_at(runs / f"h=1_{plan.h_reference_level}" / "solution.npz", [T])[T]
+    errors = [differences(snapshots_at(folder / "cycles" / row["cycle"] / "solution.npz", [T])[T], reference)
+              for row in cycles]
+    dofs = [int(row["dofs"]) for row in cycles]
+    energy = [e["energy"] for e in errors]
+    finest = json.loads((runs / f"h=1_{plan.h_levels[-1]}" / "summary.json").read_text())["dofs"]
+    uniform_error = differences(snapshots_at(runs / f"h=1_{plan.h_levels[-1]}" / "solution.npz", [T])[T],
+                                reference)["energy"]
+    return {"dofs": dofs, "estimate": [float(row["estimate"]) for row in cycles], "error_energy": energy,
+            "error_V": [e["V"] for e in errors], "message": outcome.message,
+            "uniform_finest": {"level": plan.h_levels[-1], "dofs": finest, "error_energy": uniform_error},
+            "dofs_at_uniform_error": dofs_reaching(dofs, energy, uniform_error)}
+
+
+def dofs_reaching(dofs: list[int], errors: list[float], target: float) -> float:
+    """The DOFs at which a sequence of meshes reaches the error ``target``: interpolated log–log between
+    the last mesh above it and the first at or below it; NaN if none reaches it."""
+    below = [i for i, error in enumerate(errors) if error <= target]
+    if not below:
+        return math.nan
+    i = below[0]
+    if i == 0:
+        return float(dofs[0])
+    x0, x1, y0, y1 = (math.log(v) for v in (dofs[i - 1], dofs[i], errors[i - 1], errors[i]))
+    return float(math.exp(x0 + (math.log(target) - y0) * (x1 - x0) / (y1 - y0)))
 
 
 # --- the pictures' data ----------------------------------------------------------------------------
@@ -1028,6 +1085,9 @@ def settings(plan: Plan) -> dict:
         "k_steps": list(plan.k_steps),
         "k_reference_steps": plan.k_reference_steps,
         "k_level": plan.k_level,
+        "adapt_level": plan.adapt_level,
+        "adapt_cycles": plan.adapt_cycles,
+        "adapt_max_dofs": plan.adapt_max_dofs,
         "printed_load": PRINTED_LOAD,
         "calibrated_load": CALIBRATED_LOAD,
         "figure_times": list(FIGURE_TIMES),

@@ -433,15 +433,20 @@ def _cell(value):
 def _snapshots(study: Study, run_id: str) -> dict[float, Snapshot]:
     """The run's fields at the compared times, from its solution.npz."""
     spec = next(s for s in study.runs if s.id == run_id)
+    return snapshots_at(spec.out / "solution.npz", study.times)
+
+
+def snapshots_at(path: Path, times: Collection[float]) -> dict[float, Snapshot]:
+    """The fields of a run's solution.npz at those of ``times`` it holds (none if it is missing or damaged)."""
     try:
-        with np.load(spec.out / "solution.npz") as solution:
+        with np.load(path) as solution:
             data = {key: solution[key] for key in ("times", "points", "displacement", "stress")}
             data["elements"] = solution[CELLS[data["points"].shape[0]][2]]
             data["lame"] = solution["lame"] if "lame" in solution else None  # runs of earlier versions lack it
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):  # missing or damaged: no norms
         return {}
     found = {}
-    for t in study.times:
+    for t in times:
         index = np.flatnonzero(np.isclose(data["times"], t, rtol=1e-9, atol=1e-12))
         if index.size:
             i = index[0]
