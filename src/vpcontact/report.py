@@ -600,7 +600,7 @@ def _effectivity(data):
 
 def _adaptive(data):
     """Adaptive meshes against the uniform ones of the rate in h (the same time grid and reference)."""
-    s, a, h = data["settings"], data["adaptive"], data["rates"]["h"]
+    s, a = data["settings"], data["adaptive"]
     rows = [[str(i + 1), f"{dofs:,}", _f(eta), _f(error)]
             for i, (dofs, eta, error) in enumerate(zip(a["dofs"], a["estimate"], a["error_energy"]))]
     finest = a["uniform_finest"]

@@ -92,7 +92,8 @@ class Fields:
     def __repr__(self) -> str:
         """The shapes, not the values."""
         shapes = ", ".join(f"{name}{getattr(self, name).shape}" for name in
-                           ("displacement", "stress", "stress33", "von_mises", "z", "error_indicator") if getattr(self, name) is not None)
+                           ("displacement", "stress", "stress33", "von_mises", "z", "error_indicator")
+                           if getattr(self, name) is not None)
         return f"Fields({shapes})"
 
 
