@@ -1,6 +1,9 @@
 """Command-line usage mistakes get the same refusal as every other bad input: exit 2, one line naming
 the problem and where to look, nothing written."""
 
+import subprocess
+import sys
+
 import pytest
 
 from conftest import assert_refused, run_cli, snapshot_tree
@@ -37,3 +40,17 @@ def test_help_and_version_still_work():
     assert status == 0 and "run" in out and err == ""
     status, out, _ = run_cli("--version")
     assert status == 0 and out.startswith("vpcontact ")
+
+
+def test_help_and_import_load_no_numerics():
+    """`vpcontact --help` and `import vpcontact` import neither NumPy, SciPy, scikit-fem nor pydantic (the
+    API's names load on first use): start-up is the interpreter's."""
+    script = ("import sys, contextlib, io, vpcontact, vpcontact.cli\n"
+              "with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
+              "    vpcontact.cli.main(['--help'])\n"
+              "print(sorted({'numpy', 'scipy', 'skfem', 'pydantic', 'matplotlib'} & set(sys.modules)))")
+    loaded = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True).stdout
+    assert loaded.strip() == "[]"
+    script = "import vpcontact; print(vpcontact.load_case.__module__, type(vpcontact.solve).__name__)"
+    assert subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          check=True).stdout.split() == ["vpcontact.case", "function"]

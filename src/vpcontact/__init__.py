@@ -6,8 +6,12 @@ hardens or softens with the history of penetration (Barboteu, Han, Sofonea).
     >>> result = vpcontact.solve(case)
     >>> result.series("K_probe")[-1]
 
-The submodules (``vpcontact.norms``, ``vpcontact.contact``, ...) are loaded on first use.
+The names of the API (``vpcontact.solve``, ``vpcontact.Case``, ...) and the submodules
+(``vpcontact.norms``, ``vpcontact.contact``, ...) are loaded on first use: ``import vpcontact`` (and
+``vpcontact --help``) imports no numerics.
 """
+
+from __future__ import annotations
 
 import importlib
 from importlib import metadata
@@ -17,11 +21,9 @@ try:
 except metadata.PackageNotFoundError:  # running from a source tree
     __version__ = "0+unknown"
 
-from .case import Case, load_case  # noqa: E402
-from .errors import CaseError  # noqa: E402
-from .problem import Problem, build_problem  # noqa: E402
-from .results import Result  # noqa: E402
-from .stepping import solve_problem  # noqa: E402
+#: The names of the API, by the module that defines them.
+API = {"Case": "case", "load_case": "case", "CaseError": "errors", "Problem": "problem", "build_problem": "problem",
+       "Result": "results", "solve_problem": "stepping"}
 
 #: The modules of the package a user may reach as ``vpcontact.<name>`` after ``import vpcontact``.
 SUBMODULES = ("assembly", "case", "checkpoint", "contact", "errors", "expressions", "figures", "material", "mesh",
@@ -30,14 +32,18 @@ SUBMODULES = ("assembly", "case", "checkpoint", "contact", "errors", "expression
 
 
 def __getattr__(name: str):
-    """``vpcontact.norms`` and the other SUBMODULES, imported when first used."""
+    """The names of the API and the SUBMODULES, imported when first used."""
+    if name in API:
+        value = getattr(importlib.import_module(f".{API[name]}", __name__), name)
+        globals()[name] = value  # once
+        return value
     if name in SUBMODULES:
         return importlib.import_module(f".{name}", __name__)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(SUBMODULES))
+    return sorted(set(globals()) | set(API) | set(SUBMODULES))
 
 
 def solve(case, *, progress: bool = False, **laws) -> Result:
@@ -51,6 +57,10 @@ def solve(case, *, progress: bool = False, **laws) -> Result:
     (nodes, d), ``initial_stress`` (elements, d, d) or (d, d), ``initial_xi`` (contact nodes,).
     Bad objects are a :class:`CaseError` before the first step.
     """
+    from .case import Case, load_case
+    from .problem import build_problem
+    from .stepping import solve_problem
+
     if not isinstance(case, Case):
         case = load_case(case)
     return solve_problem(build_problem(case, **laws), progress=progress)

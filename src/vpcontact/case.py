@@ -21,7 +21,7 @@ import tomli_w
 from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, ValidationError,
                       field_validator, model_validator)
 
-from .errors import CaseError, quoted, shown
+from .errors import CaseError, one_line, quoted, shown
 from .expressions import parse_expression
 from .inputs import MAX_TOML_BYTES, check_regular_file
 from .solvers.factorization import BACKENDS, installed_backends
@@ -649,17 +649,6 @@ def load_case(source: str | Path | dict, overrides: dict | list[str] | None = No
         return _load_case(source, overrides)
     except CaseError as error:
         raise CaseError(one_line(str(error))) from None
-
-
-#: Longest message of a refusal (the command line cuts longer ones): a user's values are shown
-#: shortened (errors.shown), so this cuts only the explanations of the longest mesh diagnoses.
-LONGEST_MESSAGE = 800
-
-
-def one_line(message: str) -> str:
-    """The message on one line: control and separator characters escaped, at most LONGEST_MESSAGE long."""
-    text = "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in message)
-    return text if len(text) <= LONGEST_MESSAGE else text[: LONGEST_MESSAGE - 3] + "..."
 
 
 def _load_case(source, overrides) -> Case:

@@ -3,6 +3,8 @@
     vpcontact run CASE.toml [--set key=value ...] --out DIR [--resume | --overwrite]
     vpcontact study STUDY.toml --out DIR [--workers N | --scheduler tcp://HOST:PORT]
 
+Only what a command uses is imported when it runs (``--help`` imports no numerics).
+
 Exit status: 0 complete; 2 bad input or an unusable --out (one line on stderr, nothing written); 3 a
 step failed even after its cuts (the converged steps are written, summary.json has "status":
 "failed") or, for a study, a run failed; 4 the run directory was removed or replaced during the run,
@@ -18,8 +20,7 @@ import sys
 from pathlib import Path
 
 from . import __version__
-from .case import load_case, one_line
-from .errors import CaseError
+from .errors import CaseError, one_line
 
 EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OUTPUT = 2, 3, 4
 
@@ -78,6 +79,7 @@ def _refuse(error) -> int:
 
 
 def _run(args) -> int:
+    from .case import load_case
     from .rundir import EXIT_SIGNAL, run
 
     try:

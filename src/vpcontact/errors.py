@@ -30,3 +30,14 @@ def quoted(text: str) -> str:
     if len(escaped) <= SHOWN:
         return f'"{escaped}"'
     return f'"{escaped[:SHOWN]}…" ({len(text)} characters)'
+
+
+#: Longest message of a refusal (the command line cuts longer ones): a user's values are shown
+#: shortened (:func:`shown`), so this cuts only the explanations of the longest mesh diagnoses.
+LONGEST_MESSAGE = 800
+
+
+def one_line(message: str) -> str:
+    """The message on one line: control and separator characters escaped, at most LONGEST_MESSAGE long."""
+    text = "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in message)
+    return text if len(text) <= LONGEST_MESSAGE else text[: LONGEST_MESSAGE - 3] + "..."
