@@ -15,6 +15,10 @@ from __future__ import annotations
 
 import importlib
 from importlib import metadata
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .results import Result
 
 try:
     __version__ = metadata.version("vpcontact")
