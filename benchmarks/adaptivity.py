@@ -15,10 +15,11 @@ the reference at t = 0.5 and 1.1, on the reference mesh (the solution interpolat
 The adaptive cycles go on until the next mesh would have more than twice the dofs of the uniform 1/256 mesh
 (or --cycles), so that the adaptive curve passes that mesh's dofs. The target is that mesh's error: for
 each error the script reports the dofs the adaptive method needs to reach the target, interpolated linearly
-in log error against log dofs between the two cycles around it, and its ratio to the uniform mesh's dofs,
-and the convergence rates in dofs (least-squares slopes of log error against log dofs, for the meshes with
-at least the dofs of the uniform 1/32 mesh, or all of them if it is not in --levels; −1/2 is first order in h). The last adaptive mesh's element
-sizes are summarized by region. With --out DIR it writes the JSON and a log–log figure of error against
+in log error against log dofs between the two cycles around it, and its ratio to the uniform mesh's dofs
+("target"; "reach": the same for every uniform level), and the convergence rates in dofs (least-squares
+slopes of log error against log dofs over the meshes with at least the dofs of the uniform 1/32 mesh, all of
+them without it in --levels; −1/2 is first order in h). The last adaptive mesh's element sizes are summarized
+by region. With --out DIR it writes the JSON and a log–log figure of error against
 dofs (DIR/adaptivity_<estimator>.png).
 
     python benchmarks/adaptivity.py --out docs/figures          # β = 1 and −1, residual estimator
@@ -98,6 +99,18 @@ def dofs_to_reach(target: float, dofs: list[int], errors: list[float]) -> float 
     return float(np.exp(x0 + (np.log(target) - y0) * (x1 - x0) / (y1 - y0)))
 
 
+def reach(uniform: dict, cycles: list[dict]) -> dict:
+    """For each error: the uniform mesh's, the dofs the adaptive cycles need to reach it (`dofs_to_reach`) and
+    their ratio to the uniform mesh's dofs."""
+    found = {"uniform_level": uniform["level"], "uniform_dofs": uniform["dofs"], "errors": {}}
+    for name in ERRORS:
+        target = uniform["errors"][name]
+        needed = dofs_to_reach(target, [c["dofs"] for c in cycles], [c["errors"][name] for c in cycles])
+        found["errors"][name] = {"uniform_error": target, "adaptive_dofs": needed,
+                                 "ratio": None if needed is None else needed / uniform["dofs"]}
+    return found
+
+
 def rate(dofs: list[int], errors: list[float], least: int) -> float | None:
     """The least-squares slope of log error against log dofs over the entries with at least ``least`` dofs."""
     chosen = [(np.log(n), np.log(e)) for n, e in zip(dofs, errors) if n >= least]
@@ -142,7 +155,6 @@ def study(beta: float, args) -> dict:
         log(f"  uniform 1/{level}: {row['dofs']} dofs, estimate {row['estimate']:.4g}, "
             + ", ".join(f"{name} {value:.4g}" for name, value in row["errors"].items()))
     last = found["uniform"][-1]
-    targets = last["errors"]
 
     found["adaptive"] = []
 
@@ -157,11 +169,8 @@ def study(beta: float, args) -> dict:
     log(f"  {found['stopped']}")
 
     cycles = found["adaptive"]
-    found["target"] = {"uniform_level": last["level"], "uniform_dofs": last["dofs"], "errors": {}}
-    for name in ERRORS:
-        needed = dofs_to_reach(targets[name], [c["dofs"] for c in cycles], [c["errors"][name] for c in cycles])
-        found["target"]["errors"][name] = {"uniform_error": targets[name], "adaptive_dofs": needed,
-                                           "ratio": None if needed is None else needed / last["dofs"]}
+    found["reach"] = [reach(uniform, cycles) for uniform in found["uniform"]]
+    found["target"] = found["reach"][-1]
     least = min((u["dofs"] for u in found["uniform"] if u["level"] >= RATE_FROM), default=0)
     found["rates"] = {"from_dofs": least, "uniform": {}, "adaptive": {}}
     for kind in ("uniform", "adaptive"):
