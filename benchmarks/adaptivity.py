@@ -1,74 +1,245 @@
-"""Adaptive against uniform refinement on the paper's example (docs/adaptivity.md, "Adaptive meshes").
+"""Adaptive against uniform refinement on the paper's example: prints JSON (docs/adaptivity.md, "Measured on
+the paper's example").
 
-Solves examples/paper_ball.toml on a fine uniform reference mesh, on the uniform meshes h = 1/8 ... 1/64
-and in the adaptive cycles of [adapt] from h = 1/8 (recovery estimator), and prints for each the dofs,
-the estimate (adaptive), the errors ‖ε(u_h − u_ref)‖ (V) at t = 0.5 and 1.1 and ‖σ_h − σ_ref‖ (Q) at
-t = 1.1 against the reference (vpcontact.norms.differences), the wall time, and where the last adaptive
-mesh is fine.
+For each β, examples/paper_ball.toml is solved on a uniform reference mesh (h = 1/512: 477,194 dofs), on the
+uniform meshes h = 1/8 … 1/256 and in the adaptive cycles of [adapt] from h = 1/8, all on the example's own
+time grid (k = 0.1, 11 steps): the same time steps everywhere, so the errors compared are spatial. A mesh
+"h = 1/n" has the element edge √2/n, the paper's sizes (`vpcontact.reproduce.level_overrides`: its 1/512
+is the paper's 472k-dof reference). For every uniform level and adaptive cycle it reports the dofs, the
+estimate of the chosen estimator ((Σ_K F_K)^½ with the time functional of [adapt]) and the errors against
+the reference at t = 0.5 and 1.1, on the reference mesh (the solution interpolated at its nodes):
 
-    python benchmarks/adaptivity.py --beta 1 --functional max --reference 256 --cycles 9
+    E = ‖I_ref u_h − u_ref‖_E   the energy norm (∫ ℰε:ε, vpcontact.norms.element_energies),
+    V = ‖ε(I_ref u_h − u_ref)‖   and Q = ‖Π_ref σ_h − σ_ref‖, the paper's norms (vpcontact.norms.differences).
+
+The adaptive cycles go on until the next mesh would have more than twice the dofs of the uniform 1/256 mesh
+(or --cycles), so that the adaptive curve passes that mesh's dofs. The target is that mesh's error: for
+each error the script reports the dofs the adaptive method needs to reach the target, interpolated linearly
+in log error against log dofs between the two cycles around it, and its ratio to the uniform mesh's dofs
+("target"; "reach": the same for every uniform level), and the convergence rates in dofs (least-squares
+slopes of log error against log dofs over the meshes with at least the dofs of the uniform 1/32 mesh, all of
+them without it in --levels; −1/2 is first order in h). The last adaptive mesh's element sizes are summarized
+by region. With --out DIR it writes the JSON and a log–log figure of error against
+dofs (DIR/adaptivity_<estimator>.png).
+
+    python benchmarks/adaptivity.py --out docs/figures          # β = 1 and −1, residual estimator
+    python benchmarks/adaptivity.py --estimator recovery --beta 1
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 import vpcontact
-from vpcontact.adapt import adapt
-from vpcontact.norms import differences
+from vpcontact.adapt import adapt, solve_and_estimate
+from vpcontact.norms import differences, element_energies, transfer
 from vpcontact.problem import build_problem
 from vpcontact.refinement import signed_measures
+from vpcontact.reproduce import level_overrides
 
 CASE = Path(__file__).resolve().parent.parent / "examples" / "paper_ball.toml"
-STEPS = (5, 11)  # t = 0.5 and 1.1
+TIMES = {5: 0.5, 11: 1.1}  # step → t on the example's grid
+ERRORS = ("E(0.5)", "E(1.1)", "V(0.5)", "V(1.1)", "Q(0.5)", "Q(1.1)")
+RATE_FROM = 32  # the rates are fitted over the meshes with at least the dofs of the uniform 1/32 mesh (all without it)
+
+
+def log(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def load(level: int, beta: float, settings: dict):
+    """The example at h = 1/level (element edge √2/level) on its own 11 steps, with [adapt] ``settings``."""
+    return vpcontact.load_case(CASE, {"mesh.h": level_overrides(level)["mesh.h"], "contact.stiffness.beta": beta,
+                                      "output.field_steps": list(TIMES), "output.progress": False,
+                                      **{f"adapt.{key}": value for key, value in settings.items()}})
+
+
+def complete(result):
+    if result.status != "complete":
+        raise SystemExit(f"the run failed: {result.message}")
+    return result
+
+
+class Reference:
+    """The reference solution's snapshots at the compared steps, and the errors of a run against them."""
+
+    def __init__(self, result):
+        self.snapshots = {step: result.snapshot(step) for step in TIMES}
+        self.lame = result.problem.elasticity.lame
+
+    def errors(self, result) -> dict[str, float]:
+        found = {}
+        for step, t in TIMES.items():
+            theirs = self.snapshots[step]
+            moved = transfer(result.snapshot(step), theirs.points, theirs.elements)
+            energy = element_energies(theirs.points, theirs.elements, moved.displacement - theirs.displacement,
+                                      self.lame)
+            norms = differences(moved, theirs)
+            found |= {f"E({t})": float(np.sqrt(energy.sum())), f"V({t})": norms["V"], f"Q({t})": norms["Q"]}
+        return found
+
+
+def dofs_to_reach(target: float, dofs: list[int], errors: list[float]) -> float | None:
+    """The dofs at which the adaptive error first reaches ``target``: linear in (log dofs, log error) between the
+    last cycle above it and the first at or below it (that cycle's own dofs if it is the first); None if no
+    cycle reaches it."""
+    below = [i for i, error in enumerate(errors) if error <= target]
+    if not below:
+        return None
+    i = below[0]
+    if i == 0:
+        return float(dofs[0])
+    x0, x1, y0, y1 = np.log(dofs[i - 1]), np.log(dofs[i]), np.log(errors[i - 1]), np.log(errors[i])
+    return float(np.exp(x0 + (np.log(target) - y0) * (x1 - x0) / (y1 - y0)))
+
+
+def reach(uniform: dict, cycles: list[dict]) -> dict:
+    """For each error: the uniform mesh's, the dofs the adaptive cycles need to reach it (`dofs_to_reach`) and
+    their ratio to the uniform mesh's dofs."""
+    found = {"uniform_level": uniform["level"], "uniform_dofs": uniform["dofs"], "errors": {}}
+    for name in ERRORS:
+        target = uniform["errors"][name]
+        needed = dofs_to_reach(target, [c["dofs"] for c in cycles], [c["errors"][name] for c in cycles])
+        found["errors"][name] = {"uniform_error": target, "adaptive_dofs": needed,
+                                 "ratio": None if needed is None else needed / uniform["dofs"]}
+    return found
+
+
+def rate(dofs: list[int], errors: list[float], least: int) -> float | None:
+    """The least-squares slope of log error against log dofs over the entries with at least ``least`` dofs."""
+    chosen = [(np.log(n), np.log(e)) for n, e in zip(dofs, errors) if n >= least]
+    if len(chosen) < 2:
+        return None
+    x, y = np.array(chosen).T
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def where_fine(mesh) -> dict:
+    """The median and least element size (√(2|K|), about the edge) in bands of height and near (1, 1)."""
+    size = np.sqrt(2.0 * np.abs(signed_measures(mesh.mesh.p, mesh.mesh.t)))
+    x, y = mesh.centroids
+    bands = {f"y in [{low}, {high})": (y >= low) & (y < high)
+             for low, high in ((0.0, 0.1), (0.1, 0.3), (0.3, 0.6), (0.6, 1.0), (1.0, 2.0))}
+    bands["within 0.05 of (1, 1)"] = np.hypot(x - 1.0, y - 1.0) < 0.05
+    return {name: {"elements": int(inside.sum()), "median_size": float(np.median(size[inside])),
+                   "min_size": float(size[inside].min())} for name, inside in bands.items() if inside.any()}
+
+
+def study(beta: float, args) -> dict:
+    """Reference, uniform levels and adaptive cycles for one β."""
+    settings = {"cycles": args.cycles, "theta": args.theta, "functional": args.functional,
+                "estimator": args.estimator}
+    started = time.perf_counter()
+    reference_run = complete(vpcontact.solve(load(args.reference, beta, {})))
+    reference = Reference(reference_run)
+    found = {"beta": beta, "reference": {"level": args.reference, "dofs": int(reference_run.dofs),
+                                         "solve_s": time.perf_counter() - started}}
+    log(f"β = {beta}: reference h = 1/{args.reference}, {reference_run.dofs} dofs, "
+        f"{found['reference']['solve_s']:.1f} s")
+    del reference_run
+
+    found["uniform"] = []
+    for level in args.levels:
+        started = time.perf_counter()
+        result, functional = solve_and_estimate(build_problem(load(level, beta, settings)))
+        row = {"level": level, "dofs": int(complete(result).dofs), "contact_nodes": int(result.contact_nodes),
+               "estimate": float(np.sqrt(functional.sum())), "errors": reference.errors(result),
+               "wall_time_s": time.perf_counter() - started}
+        found["uniform"].append(row)
+        log(f"  uniform 1/{level}: {row['dofs']} dofs, estimate {row['estimate']:.4g}, "
+            + ", ".join(f"{name} {value:.4g}" for name, value in row["errors"].items()))
+    last = found["uniform"][-1]
+
+    found["adaptive"] = []
+
+    def report(cycle) -> None:
+        row = {**cycle.row, "errors": reference.errors(complete(cycle.result))}
+        found["adaptive"].append(row)
+        log(f"  cycle {row['cycle']}: {row['dofs']} dofs, estimate {row['estimate']:.4g}, "
+            + ", ".join(f"{name} {value:.4g}" for name, value in row["errors"].items()) + f", {row['wall_time_s']:.1f} s")
+
+    adaptation = adapt(build_problem(load(args.start, beta, {**settings, "max_dofs": 2 * last["dofs"]})), after_cycle=report)
+    found["stopped"] = adaptation.message
+    log(f"  {found['stopped']}")
+
+    cycles = found["adaptive"]
+    found["reach"] = [reach(uniform, cycles) for uniform in found["uniform"]]
+    found["target"] = found["reach"][-1]
+    least = min((u["dofs"] for u in found["uniform"] if u["level"] >= RATE_FROM), default=0)
+    found["rates"] = {"from_dofs": least, "uniform": {}, "adaptive": {}}
+    for kind in ("uniform", "adaptive"):
+        rows = found[kind]
+        dofs = [r["dofs"] for r in rows]
+        found["rates"][kind] = {name: rate(dofs, [r["errors"][name] for r in rows], least) for name in ERRORS}
+        found["rates"][kind]["estimate"] = rate(dofs, [r["estimate"] for r in rows], least)
+    found["last_mesh"] = where_fine(adaptation.mesh)
+    return found
+
+
+def figure(studies: list[dict], estimator: str, out: Path) -> Path:
+    """Error (E and V at t = 1.1) and estimate against dofs, uniform and adaptive, log–log, one panel per β."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(studies), figsize=(6.2 * len(studies), 4.6), squeeze=False)
+    for ax, found in zip(axes[0], studies):
+        for kind, marker in (("uniform", "o-"), ("adaptive", "s-")):
+            rows = found[kind]
+            dofs = [r["dofs"] for r in rows]
+            ax.loglog(dofs, [r["errors"]["E(1.1)"] for r in rows], marker, ms=4, label=f"{kind}: energy error E(1.1)")
+            ax.loglog(dofs, [r["estimate"] for r in rows], marker.replace("-", ":"), ms=3, alpha=0.6,
+                      label=f"{kind}: estimate ({estimator})")
+        target = found["target"]
+        ax.axhline(target["errors"]["E(1.1)"]["uniform_error"], color="grey", lw=0.7, ls="--",
+                   label=f"uniform 1/{target['uniform_level']} error")
+        ax.set_xlabel("dofs")
+        ax.set_ylabel("energy norm")
+        ax.set_title(f"β = {found['beta']:g}: against the uniform 1/{found['reference']['level']} reference")
+        ax.grid(True, which="both", lw=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    path = out / f"adaptivity_{estimator}.png"
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--beta", type=float, default=1.0)
+    parser.add_argument("--beta", type=float, nargs="+", default=[1.0, -1.0])
+    parser.add_argument("--estimator", choices=("residual", "recovery"), default="residual")
     parser.add_argument("--functional", choices=("max", "l2"), default="max")
     parser.add_argument("--theta", type=float, default=0.5)
-    parser.add_argument("--reference", type=int, default=256, help="1/h of the uniform reference mesh")
-    parser.add_argument("--cycles", type=int, default=9)
+    parser.add_argument("--reference", type=int, default=512, help="1/h of the uniform reference mesh")
+    parser.add_argument("--levels", type=int, nargs="+", default=[8, 16, 32, 64, 128, 256],
+                        help="1/h of the uniform meshes; the last one's errors are the adaptive target")
+    parser.add_argument("--start", type=int, default=8, help="1/h of the first adaptive mesh")
+    parser.add_argument("--cycles", type=int, default=30, help="at most this many adaptive cycles")
+    parser.add_argument("--out", type=Path, help="write adaptivity_<estimator>.json and .png there")
     args = parser.parse_args()
-    base = {"contact.stiffness.beta": args.beta, "output.field_steps": list(STEPS)}
+    if args.reference <= max(args.levels):
+        parser.error(f"--reference 1/{args.reference} must be finer than the finest uniform level 1/{max(args.levels)}")
 
     started = time.perf_counter()
-    reference = vpcontact.solve(vpcontact.load_case(CASE, {**base, "mesh.h": 1 / args.reference}))
-    print(f"reference h = 1/{args.reference}: {reference.dofs} dofs, {time.perf_counter() - started:.1f} s")
-    snapshots = {step: reference.snapshot(step) for step in STEPS}
-
-    def errors(result) -> str:
-        found = {step: differences(result.snapshot(step), snapshots[step]) for step in STEPS}
-        return f"V(0.5) = {found[5]['V']:.4g}  V(1.1) = {found[11]['V']:.4g}  Q(1.1) = {found[11]['Q']:.4g}"
-
-    for n in (8, 16, 32, 64):
-        started = time.perf_counter()
-        result = vpcontact.solve(vpcontact.load_case(CASE, {**base, "mesh.h": 1 / n}))
-        print(f"uniform h = 1/{n}: {result.dofs} dofs  {errors(result)}  {time.perf_counter() - started:.1f} s")
-
-    case = vpcontact.load_case(CASE, {**base, "mesh.h": 1 / 8, "adapt.cycles": args.cycles,
-                                      "adapt.theta": args.theta, "adapt.functional": args.functional})
-
-    def report(cycle) -> None:
-        print(f"cycle {cycle.number}: {cycle.result.dofs} dofs, {cycle.result.contact_nodes} contact nodes, "
-              f"estimate {cycle.estimate:.4g}  {errors(cycle.result)}  {cycle.wall_time_s:.2f} s", flush=True)
-
-    adaptation = adapt(build_problem(case), after_cycle=report)
-    print(adaptation.message)
-    mesh = adaptation.mesh
-    size = np.sqrt(2.0 * np.abs(signed_measures(mesh.mesh.p, mesh.mesh.t)))  # about the edge length
-    y = mesh.centroids[1]
-    for low, high in ((0.0, 0.1), (0.1, 0.3), (0.3, 0.6), (0.6, 1.0), (1.0, 2.0)):
-        inside = (y >= low) & (y < high)
-        print(f"y in [{low}, {high}): {inside.sum()} triangles, size median {np.median(size[inside]):.4f}, "
-              f"min {size[inside].min():.4f}")
-    corner = np.hypot(mesh.centroids[0] - 1.0, y - 1.0) < 0.05
-    print(f"within 0.05 of (1, 1), where Γ3 meets Γ2: {corner.sum()} triangles, size min {size[corner].min():.4f}")
+    studies = [study(beta, args) for beta in args.beta]
+    report = {"case": "examples/paper_ball.toml", "time_steps": 11, "times": list(TIMES.values()),
+              "estimator": args.estimator, "functional": args.functional, "theta": args.theta,
+              "mesh_convention": "h = 1/n: element edge √2/n (vpcontact.reproduce.level_overrides)",
+              "studies": studies, "wall_time_s": time.perf_counter() - started}
+    text = json.dumps(report, indent=1)
+    print(text)
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / f"adaptivity_{args.estimator}.json").write_text(text + "\n")
+        log(f"wrote {figure(studies, args.estimator, args.out)}")
 
 
 if __name__ == "__main__":
