@@ -1,0 +1,197 @@
+"""Adaptive against uniform refinement in 3D, on the quarter ball: prints a table and JSON.
+
+examples/quarter_ball.toml (elastic, β = 1, 11 steps; every run on the same time grid, so the errors
+are spatial) is solved on a fine uniform reference mesh (mesh.h = 0.05, 176k dofs), on uniform meshes
+(mesh.h = 0.3, 0.2, 0.15, 0.1) and in the adaptive cycles of [adapt] (residual estimator, Dörfler θ, time
+functional "max") from the coarsest uniform mesh, up to half the reference's dofs. For each run, at
+t = 0.5 and t = 1.1:
+
+    error         ‖I_ref u_h − u_ref‖_E, the energy norm on the reference mesh (vpcontact.norms.differences;
+                  u_h interpolated at the reference's nodes, extrapolated from the nearest element for the
+                  nodes outside the run's inscribed polyhedron), and V = ‖ε(I_ref u_h − u_ref)‖;
+    η(t)          the residual estimator of the run's solution (vpcontact.residual_estimate);
+    effectivity   η(t) / error;
+
+and for the adaptive cycles their estimate (the time functional's, adapt.csv's column). Then: the dofs
+at which the cycles reach the finest uniform mesh's error at t = 1.1 (log–log interpolation between the
+two cycles around it) and their ratio to that mesh's dofs, and where the last adaptive mesh and the
+finest uniform one are fine (longest edge of the tetrahedra by distance from the bottom point, and at the
+equator z = 1 where Γ3 meets the loaded Γ2).
+
+    python benchmarks/adaptivity_3d.py                 # h = 0.3 … 0.1 against 0.05, 12 cycles from 0.3
+    python benchmarks/adaptivity_3d.py --quick         # h = 0.6, 0.4 against 0.2, 3 cycles (seconds)
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import vpcontact
+from vpcontact.adapt import adapt
+from vpcontact.indicators import Level
+from vpcontact.norms import differences
+from vpcontact.problem import build_problem
+from vpcontact.residual_estimate import ResidualEstimator
+
+CASE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
+STEPS = {0.5: 5, 1.1: 11}
+SETTINGS = {
+    "full": {"levels": (0.3, 0.2, 0.15, 0.1), "reference": 0.05, "cycles": 12},
+    "quick": {"levels": (0.6, 0.4), "reference": 0.2, "cycles": 3},
+}
+#: Shells around the bottom point (0, 0, 0) where the element sizes are reported.
+SHELLS = ((0.0, 0.1), (0.1, 0.3), (0.3, 0.6), (0.6, 1.0), (1.0, 2.0))
+
+
+def load(h: float, **overrides):
+    """The example on the mesh of edge h, its fields kept at t = 0.5 and 1.1."""
+    return vpcontact.load_case(CASE, {"mesh.h": h, "output.field_steps": sorted(STEPS.values()),
+                                      "output.figures": False, "output.progress": False, **overrides})
+
+
+def solved(case):
+    result = vpcontact.solve(case)
+    if result.status != "complete":
+        raise SystemExit(f"the run failed: {result.message}")
+    return result
+
+
+def with_lame(result, step: int):
+    """The run's Snapshot at ``step`` with the Lamé parameters of its elements (for the energy norm)."""
+    snapshot = result.snapshot(step)
+    elements = snapshot.elements.shape[1]
+    lame = np.array([np.broadcast_to(np.asarray(value, dtype=float), (elements,))
+                     for value in result.problem.elasticity.lame])
+    return dataclasses.replace(snapshot, lame=lame)
+
+
+def measured(result, references: dict) -> dict:
+    """dofs, contact nodes, and per time η(t), the energy error, V and the effectivity of one run."""
+    estimator = ResidualEstimator(result.problem)
+    row = {"dofs": int(result.dofs), "contact_nodes": int(result.contact_nodes),
+           "elements": int(result.problem.mesh.mesh.t.shape[1])}
+    for t, step in STEPS.items():
+        found = differences(result.snapshot(step), references[t])
+        eta = float(estimator(Level.of(result, step)).total)
+        row[f"t={t:g}"] = {"estimate": eta, "error": found["energy"], "V": found["V"],
+                           "effectivity": eta / found["energy"]}
+    return row
+
+
+def longest_edges(mesh) -> np.ndarray:
+    """The longest edge of each tetrahedron."""
+    p, t = mesh.p, mesh.t
+    pairs = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+    return np.max([np.linalg.norm(p[:, t[a]] - p[:, t[b]], axis=0) for a, b in pairs], axis=0)
+
+
+def sizes(mesh) -> dict:
+    """Median and smallest longest edge of the tetrahedra in shells around the bottom point, and of those
+    near the equator (the circle z = 1 on the sphere, where the contact part Γ3 meets the loaded part)."""
+    edge = longest_edges(mesh)
+    centroids = mesh.p[:, mesh.t].mean(axis=1)
+    distance = np.linalg.norm(centroids, axis=0)
+    zones = {f"r in [{low:g}, {high:g})": (distance >= low) & (distance < high) for low, high in SHELLS}
+    to_sphere = 1.0 - np.linalg.norm(centroids - np.array([[0.0], [0.0], [1.0]]), axis=0)
+    zones["equator (|z - 1| < 0.1, within 0.1 of the sphere)"] = (np.abs(centroids[2] - 1.0) < 0.1) & (to_sphere < 0.1)
+    return {name: {"elements": int(inside.sum()), "median": float(np.median(edge[inside])),
+                   "min": float(edge[inside].min())} for name, inside in zones.items() if inside.any()}
+
+
+def crossing(cycles: list[dict], target: float, t: str) -> float | None:
+    """The dofs at which the cycles' error at ``t`` falls to ``target``: log–log interpolation between the
+    last cycle above it and the first at or below it; None when no cycle reaches it."""
+    for before, after in zip(cycles, cycles[1:]):
+        high, low = before[t]["error"], after[t]["error"]
+        if high > target >= low:
+            fraction = np.log(high / target) / np.log(high / low)
+            return float(np.exp(np.log(before["dofs"]) + fraction * np.log(after["dofs"] / before["dofs"])))
+    return None
+
+
+HEADER = (f"{'run':14} {'dofs':>7} {'Γ3 nodes':>8} {'estimate':>9} "
+          + " ".join(f"{'η(' + t + ')':>9} {'err(' + t + ')':>10} {'eff':>5}" for t in ("0.5", "1.1")) + f" {'s':>6}")
+
+
+def line(row: dict) -> str:
+    """A run's line of the table (a uniform level or an adaptive cycle)."""
+    name = f"h = {row['h']:g}" if "h" in row else f"cycle {row['cycle']}"
+    estimate = f"{row['cycle_estimate']:9.4g}" if "cycle_estimate" in row else " " * 9
+    return (f"{name:14} {row['dofs']:>7} {row['contact_nodes']:>8} {estimate} "
+            + " ".join(f"{row[t]['estimate']:9.4g} {row[t]['error']:10.4g} {row[t]['effectivity']:5.2f}"
+                       for t in ("t=0.5", "t=1.1"))
+            + f" {row['wall_time_s']:6.1f}")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="coarse meshes (seconds)")
+    parser.add_argument("--theta", type=float, default=0.5, help="Dörfler fraction")
+    parser.add_argument("--cycles", type=int, help="adaptive cycles (default: 12, quick 3)")
+    parser.add_argument("--out", type=Path, help="write the JSON there too (a file)")
+    arguments = parser.parse_args(argv)
+    setting = SETTINGS["quick" if arguments.quick else "full"]
+    levels, cycles = setting["levels"], arguments.cycles or setting["cycles"]
+    started = time.perf_counter()
+
+    reference = solved(load(setting["reference"], **{"solver.method": "condensed"}))
+    references = {t: with_lame(reference, step) for t, step in STEPS.items()}
+    reference_s = time.perf_counter() - started
+    print(f"reference h = {setting['reference']:g}: {reference.dofs} dofs, {reference_s:.0f} s", file=sys.stderr)
+    print(HEADER, file=sys.stderr)
+
+    uniform = []
+    for h in levels:
+        begun = time.perf_counter()
+        result = solved(load(h))
+        uniform.append({"h": h, **measured(result, references), "wall_time_s": time.perf_counter() - begun})
+        print(line(uniform[-1]), file=sys.stderr, flush=True)
+    finest = result
+
+    adaptive = []
+
+    def record(cycle) -> None:
+        adaptive.append({"cycle": cycle.number, **measured(cycle.result, references),
+                         "cycle_estimate": cycle.estimate, "wall_time_s": cycle.wall_time_s})
+        print(line(adaptive[-1]), file=sys.stderr, flush=True)
+
+    case = load(levels[0], **{"adapt.cycles": cycles, "adapt.theta": arguments.theta, "adapt.functional": "max",
+                              "adapt.max_dofs": int(reference.dofs) // 2})
+    adaptation = adapt(build_problem(case), after_cycle=record)
+    if adaptation.status != "complete":
+        raise SystemExit(f"the adaptation failed: {adaptation.message}")
+
+    target = uniform[-1]
+    reached = {t: crossing(adaptive, target[t]["error"], t) for t in ("t=0.5", "t=1.1")}
+    bottom = adaptation.mesh.mesh.p[:, adaptation.mesh.nodes("bottom")]
+    report = {
+        "case": "examples/quarter_ball.toml", "steps": 11, "theta": arguments.theta, "functional": "max",
+        "reference": {"h": setting["reference"], "dofs": int(reference.dofs), "wall_time_s": reference_s},
+        "uniform": uniform, "adaptive": adaptive,
+        "effectivity_uniform": {t: [row[t]["effectivity"] for row in uniform] for t in ("t=0.5", "t=1.1")},
+        "finest_uniform": {"h": target["h"], "dofs": target["dofs"]},
+        "adaptive_dofs_at_finest_uniform_error": reached,
+        "dofs_ratio": {t: None if dofs is None else dofs / target["dofs"] for t, dofs in reached.items()},
+        "contact_nodes_off_sphere": float(np.abs(np.linalg.norm(bottom - np.array([[0.0], [0.0], [1.0]]), axis=0)
+                                                 - 1.0).max()),
+        "sizes": {"last_cycle": sizes(adaptation.mesh.mesh), "finest_uniform": sizes(finest.problem.mesh.mesh)},
+        "message": adaptation.message,
+        "wall_time_s": time.perf_counter() - started,
+    }
+    print(f"adaptive reaches the h = {target['h']:g} error ({target['dofs']} dofs) at: {reached}", file=sys.stderr)
+    text = json.dumps(report, indent=1)
+    if arguments.out is not None:
+        arguments.out.write_text(text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
