@@ -210,3 +210,23 @@ def test_the_energy_norm_of_a_difference_uses_the_references_lame_parameters():
     result = differences(solution, Snapshot(p, t, reference.displacement, reference.stress, stiffer))
     assert result["energy"] == pytest.approx(math.sqrt(5.0 * (lam * 1.5**2 + 2 * mu * 3.25)), rel=1e-12)
     assert "energy" not in differences(reference, solution)  # a reference without (λ, μ): no energy norm
+
+
+def test_points_outside_a_graded_mesh_take_the_nearest_element():
+    """A quarter ball graded from h = 0.6 to 0.1 at its bottom (elements of four sizes): the nodes of a
+    finer mesh outside its inscribed polyhedron take the element nearest to them, as a search over every
+    element finds it (the candidates are bounded per element size, not by the largest element)."""
+    from vpcontact.mesh import quarter_ball
+    from vpcontact.norms import Locator
+
+    coarse, fine = quarter_ball(0.6, h_bottom=0.1).mesh, quarter_ball(0.3).mesh
+    locator = Locator(coarse.p, coarse.t)
+    assert len(locator.groups) > 1
+    element, coordinates = locator.locate(fine.p.T.copy())
+    outside = np.flatnonzero(coordinates.min(axis=1) < -1e-10)
+    assert outside.size > 20
+    outside = outside[:: max(1, outside.size // 40)]  # 40 of them against every element
+    every = np.broadcast_to(np.arange(coarse.t.shape[1]), (outside.size, coarse.t.shape[1]))
+    nearest = locator.distance(fine.p.T[outside], every).min(axis=1)
+    np.testing.assert_allclose(locator.distance(fine.p.T[outside], element[outside][:, None])[:, 0], nearest,
+                               rtol=0, atol=1e-14)

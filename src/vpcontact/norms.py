@@ -116,8 +116,12 @@ class Locator:
         centroids = self.points[:, self.elements].mean(axis=1).T
         self.tree = cKDTree(centroids)
         vertices = self.points[:, self.elements].transpose(2, 1, 0)  # (m, d + 1, d)
-        # the largest distance from an element's centroid to one of its vertices
-        self.reach = float(np.linalg.norm(vertices - centroids[:, None, :], axis=2).max())
+        # each element's reach: the largest distance from its centroid to one of its vertices; the
+        # elements grouped by reach within a factor 2, each group with its own tree (see `_nearest`)
+        reach = np.linalg.norm(vertices - centroids[:, None, :], axis=2).max(axis=1)
+        group = np.floor(np.log2(np.maximum(reach, np.finfo(float).tiny))).astype(np.int64)
+        self.groups = [(members, cKDTree(centroids[members]), float(reach[members].max()))
+                       for members in (np.flatnonzero(group == g) for g in np.unique(group))]
 
     def barycentric(self, x: np.ndarray, elements: np.ndarray) -> np.ndarray:
         """Barycentric coordinates (d + 1, *elements.shape) of points x (q, d) in elements (q,) or
@@ -162,17 +166,24 @@ class Locator:
     def _nearest(self, x: np.ndarray, radius: np.ndarray) -> np.ndarray:
         """For points x (q, d) whose nearest element centroid is at distance `radius` (q,): an
         element containing the point if any (largest smallest barycentric coordinate), else the
-        element nearest to it. Both have their centroid within radius + reach of the point
-        (the element of the nearest centroid is itself within `radius`), so the candidates are
-        all elements with a centroid in that ball."""
-        q, m = x.shape[0], self.elements.shape[1]
-        bound = (radius + self.reach) * (1.0 + 1e-12)
-        k = min(4 * _CANDIDATES, m)
-        while True:
-            gap, candidates = self.tree.query(x, np.arange(1, k + 1))  # always (q, k)
-            if k == m or np.all(gap[:, -1] > bound):
-                break
-            k = min(2 * k, m)
+        element nearest to it. Both are at most `radius` away (as is the element of the nearest
+        centroid), so an element of reach r among them has its centroid within radius + r: the
+        candidates are, in each group of elements, those with a centroid within radius + the group's
+        largest reach (on a graded mesh the small elements' groups search small balls)."""
+        q = x.shape[0]
+        found = []
+        for members, tree, reach in self.groups:
+            m = members.size
+            bound = (radius + reach) * (1.0 + 1e-12)
+            k = min(4 * _CANDIDATES, m)
+            while True:
+                gap, nearest = tree.query(x, np.arange(1, k + 1))  # always (q, k)
+                if k == m or np.all(gap[:, -1] > bound):
+                    break
+                k = min(2 * k, m)
+            found.append(np.where(gap <= bound[:, None], members[nearest], -1))
+        candidates = np.concatenate(found, axis=1)
+        candidates = np.where(candidates < 0, candidates.max(axis=1, keepdims=True), candidates)  # a real one
         worst = self.worst(x, candidates)
         # inside candidates rank by −1 − worst (< 0), the others by their distance (≥ 0)
         key = np.where(worst >= -_INSIDE, -1.0 - worst, self.distance(x, candidates))
