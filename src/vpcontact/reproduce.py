@@ -428,7 +428,7 @@ def run(
 
     log("beyond the paper: adaptive meshes against uniform ones ...")
     t0 = clock()
-    data["adaptive"] = adaptive_record(base, plan, out)
+    data["adaptive"] = adaptive_record(base, plan, out, data["rates"]["h"])
     cycles = len(data["adaptive"]["dofs"])
     log(f"  {timer.part(f'beyond the paper: adaptive meshes ({cycles} cycles)', t0)}")
 
@@ -698,11 +698,12 @@ def rate_record(rows: list[dict], ids: list[str], x: list[float]) -> dict:
     return record
 
 
-def adaptive_record(base: Path, plan: Plan, out: Path) -> dict:
+def adaptive_record(base: Path, plan: Plan, out: Path, uniform: dict) -> dict:
     """Adaptive meshes ([adapt], the residual estimator, Dörfler θ = 0.5, the maximum over the steps) from
     h = 1/adapt_level with the rate in h's time steps, each cycle's error ‖u − u_ref‖_E at t = 1.1 against
     that study's reference; and the DOFs the cycles need to reach the error of its finest uniform mesh
-    (log–log interpolation between the two cycles around it; NaN if no cycle reaches it)."""
+    (``uniform``: the rate in h's record; log–log interpolation between the two cycles around it; NaN if
+    no cycle reaches it)."""
     from .rundir import run as run_directory
     from .studies import snapshots_at
 
@@ -721,9 +722,7 @@ def adaptive_record(base: Path, plan: Plan, out: Path) -> dict:
               for row in cycles]
     dofs = [int(row["dofs"]) for row in cycles]
     energy = [e["energy"] for e in errors]
-    finest = json.loads((runs / f"h=1_{plan.h_levels[-1]}" / "summary.json").read_text())["dofs"]
-    uniform_error = differences(snapshots_at(runs / f"h=1_{plan.h_levels[-1]}" / "solution.npz", [T])[T],
-                                reference)["energy"]
+    finest, uniform_error = uniform["dofs"][-1], uniform["error_energy"][-1]
     return {"dofs": dofs, "estimate": [float(row["estimate"]) for row in cycles], "error_energy": energy,
             "error_V": [e["V"] for e in errors], "message": outcome.message,
             "uniform_finest": {"level": plan.h_levels[-1], "dofs": finest, "error_energy": uniform_error},
