@@ -14,13 +14,16 @@ from conftest import half_disc_case
 
 
 def test_solved_span_reuses_solutions_of_combinations():
+    """N A0⁻¹ b of right-hand sides in the span of those solved: the same as a solve, and no solve."""
     rng = np.random.default_rng(0)
     A = sp.random(40, 40, density=0.2, random_state=1) + 40 * sp.eye(40)
     lu = sp.linalg.splu(A.tocsc())
-    span = SolvedSpan(lu.solve)
+    N = sp.random(5, 40, density=0.3, random_state=2).tocsr()
+    span = SolvedSpan(lu.solve, N.__matmul__, N.shape)
     a, b = rng.standard_normal(40), rng.standard_normal(40)
+    np.testing.assert_array_equal(span(np.zeros(40)), np.zeros(5))
     for t in (0.1, 0.2, 0.7, 3.0):
-        np.testing.assert_allclose(A @ span(a + t * b), a + t * b, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(span(a + t * b), N @ lu.solve(a + t * b), rtol=1e-12, atol=1e-12)
     assert span.solves == 2  # a + 0.1 b and a + 0.2 b span every later right-hand side
     span(rng.standard_normal(40))
     assert span.solves == 3

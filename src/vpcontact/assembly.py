@@ -73,14 +73,17 @@ class NonFiniteLoad(CaseError):
 CHECK_CHUNK = 2**20
 
 
-def _load_map(basis: AbstractBasis) -> sp.csr_matrix:
-    """M (nodes × cells·points) with (M f)_i = Σ_q φ_i(x_q) f(x_q) w_q of a scalar P1 ``basis`` (of facets
-    or elements): the integral ∫ f φ_i of a density known at the quadrature points x_q."""
+def _load_map(basis: AbstractBasis) -> tuple[np.ndarray, sp.csr_matrix]:
+    """The nodes of a scalar P1 ``basis`` (of facets or elements) and M (those nodes × cells·points)
+    with (M f)_i = Σ_q φ_i(x_q) f(x_q) w_q: the integral ∫ f φ_i of a density known at the quadrature
+    points x_q. Only the nodes the cells touch are rows, so a load on a boundary part costs its own
+    nodes, not the mesh's."""
     cells, points = basis.dx.shape
     values = np.stack([np.asarray(basis.basis[i][0]) * basis.dx for i in range(basis.Nbfun)])  # (functions, cells, points)
-    nodes = np.broadcast_to(basis.element_dofs[:, :, None], values.shape)
+    nodes, rows = np.unique(basis.element_dofs, return_inverse=True)
+    rows = np.broadcast_to(rows.reshape(basis.element_dofs.shape)[:, :, None], values.shape)
     columns = np.broadcast_to(np.arange(cells * points).reshape(cells, points), values.shape)
-    return sp.csr_matrix((values.ravel(), (nodes.ravel(), columns.ravel())), shape=(basis.mesh.p.shape[1], cells * points))
+    return nodes, sp.csr_matrix((values.ravel(), (rows.ravel(), columns.ravel())), shape=(nodes.size, cells * points))
 
 
 class _Term:
@@ -96,7 +99,7 @@ class _Term:
         if not callable(density):
             raise CaseError(f"{name} = {type(density).__name__}: expected a function {self.signature} -> {self.returns}")
         self.name, self.density = name, density
-        self.map = _load_map(basis)
+        self.nodes, self.map = _load_map(basis)
 
     def values(self, t: float, step: int | None = None) -> np.ndarray:
         """The density's components at the quadrature points at time t (of time step ``step``, if
@@ -203,17 +206,15 @@ class LoadVector:
         self._terms = [_Term(name, FacetBasis(mesh.mesh, scalar, facets=mesh.facets(part), intorder=4), f)
                        for name, part, f in tractions]
         self._terms += [_Term(name, Basis(mesh.mesh, scalar, intorder=4), f) for name, f in body_forces]
+        self._everywhere = self.on(np.arange(self._ndofs))
 
     def __call__(self, t: float) -> np.ndarray:
-        F = np.zeros(self._ndofs)
-        with np.errstate(all="ignore"):  # an overflow is reported below
-            for term in self._terms:
-                for dofs, f in zip(self._nodal_dofs, term.values(t)):
-                    F[dofs] += term.map @ f.ravel()
-        if not np.all(np.isfinite(F)):
-            raise NonFiniteLoad(f"the load vector F(t) at t = {t:.10g} is not finite: its densities are finite but "
-                                f"too large for float64 once integrated")
-        return F
+        """F(t) at every nodal dof."""
+        return self._everywhere(t)
+
+    def on(self, dofs: np.ndarray) -> "LoadOnDofs":
+        """t ↦ F(t)[dofs], computed at the dofs the loads reach only."""
+        return LoadOnDofs(self._terms, self._nodal_dofs, self._ndofs, dofs)
 
     def check(self, times: Sequence[float]) -> None:
         """Refuse (NonFiniteLoad) a density that is not finite at a point where it is applied at one of
@@ -221,6 +222,36 @@ class LoadVector:
         step it cuts, which ``F(t)`` checks as they come)."""
         for term in self._terms:
             term.check(times)
+
+
+class LoadOnDofs:
+    """t ↦ F(t)[dofs]: the load vector of (2.24) at chosen dofs (the free ones of a time step).
+
+    Each term adds its nodal loads at the dofs of its own nodes only, so a traction on a boundary part
+    costs that part's nodes, not the mesh's; ``support`` holds the positions (in ``dofs``) where F can
+    be nonzero, ascending: a solver may skip the rest (the condensed method's right-hand side reuse).
+    """
+
+    def __init__(self, terms: list[_Term], nodal_dofs: np.ndarray, ndofs: int, dofs: np.ndarray):
+        position = np.full(ndofs, -1)
+        position[dofs] = np.arange(len(dofs))
+        self._size, self._terms, self._targets = len(dofs), terms, []
+        for term in terms:  # per component: the term's rows that land on ``dofs``, and where
+            at = [position[component[term.nodes]] for component in nodal_dofs]
+            self._targets.append([(np.flatnonzero(p >= 0), p[p >= 0]) for p in at])
+        reached = [p for targets in self._targets for _, p in targets]
+        self.support = np.unique(np.concatenate(reached)) if reached else np.zeros(0, dtype=int)
+
+    def __call__(self, t: float) -> np.ndarray:
+        F = np.zeros(self._size)
+        with np.errstate(all="ignore"):  # an overflow is reported below
+            for term, targets in zip(self._terms, self._targets):
+                for (rows, positions), f in zip(targets, term.values(t)):
+                    F[positions] += (term.map @ f.ravel())[rows]
+        if not np.all(np.isfinite(F[self.support])):
+            raise NonFiniteLoad(f"the load vector F(t) at t = {t:.10g} is not finite: its densities are finite but "
+                                f"too large for float64 once integrated")
+        return F
 
 
 def element_strain(basis: Basis, u: np.ndarray) -> np.ndarray:

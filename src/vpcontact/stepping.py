@@ -125,6 +125,7 @@ class TimeLoop:
                                   max_iterations=options.max_iterations, length_scale=problem.mesh.diameter,
                                   factorization=options.factorization, layout=layout)
         self.max_cuts = options.max_step_cuts
+        self._loads = problem.loads.on(free)  # F(t) at the free dofs
         self.result = Result.start(problem, self.solver)
         self.estimator = ResidualEstimator(problem) if case.output.error_estimate else None
         self._created = started
@@ -228,12 +229,12 @@ class TimeLoop:
         """Solve the step problem of the level at time t, h after the last one (the state is unchanged)."""
         problem, state = self.problem, self.state
         z = state.z_after(h)
-        b = problem.loads(t)
+        b = self._loads(t)
         try:
             with np.errstate(all="ignore"):  # the solvers report iterates that are not finite
                 if z is not None:
-                    b -= stress_force(problem.basis, z)
-                step = StepData(b[problem.free], problem.law, state.xi, h)
+                    b -= stress_force(problem.basis, z)[problem.free]
+                step = StepData(b, problem.law, state.xi, h, None if z is not None else self._loads.support)
                 solution = self.solver.solve(step, state.start(h))
         except SingularMatrixError as error:
             solution = self._failed(f"the Newton matrix is singular ({error})",

@@ -9,6 +9,7 @@ with d = N u − g0. C / r = min(λ / r, g − d) is the complementarity error i
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -17,12 +18,20 @@ from ..contact import ContactLaw
 
 @dataclass(frozen=True)
 class StepData:
-    """The data of one step problem: right-hand side b_n = F(t_n) − Bᵀz_n, law, history ξ^{n−1}, k."""
+    """The data of one step problem: right-hand side b_n = F(t_n) − Bᵀz_n, law, history ξ^{n−1}, k;
+    ``support``: the positions where b may be nonzero, ascending (None: anywhere), so that a solver
+    can skip the rest of a load that reaches few dofs."""
 
     b: np.ndarray
     law: ContactLaw
     xi_prev: np.ndarray
     k: float
+    support: np.ndarray | None = None
+
+    @cached_property
+    def b_norm(self) -> float:
+        """‖b‖, over the support only."""
+        return float(np.linalg.norm(self.b if self.support is None else self.b[self.support]))
 
 
 @dataclass(frozen=True)

@@ -9,8 +9,8 @@ step problem of ``base`` reduces to the m contact nodes:
     d = d_free − S q(d, λ),    q = f(d) + λ − c0 (d + g0),    C(d, λ) = 0,
 
 solved by the same semi-smooth Newton iteration as the full system, now with a dense m × m matrix
-(:class:`NewtonSystems`: a dense LU per iteration for small m, GMRES preconditioned by the LU of an
-earlier iteration's matrix from KRYLOV_FROM contact nodes on); u = A0⁻¹ (b − Nᵀ q) is recovered by
+(:class:`NewtonSystems`: a dense LU per iteration for small m, GMRES preconditioned by the inverse of
+an earlier iteration's matrix from KRYLOV_FROM contact nodes on); u = A0⁻¹ (b − Nᵀ q) is recovered by
 one solve, only when it is asked for. Right-hand sides that are combinations of ones already solved
 (loads proportional to t, for instance) cost no solve at all.
 
@@ -44,30 +44,51 @@ from .newton import ROUNDOFF, STAGNATION, Evaluation, SemismoothNewton
 
 
 class SolvedSpan:
-    """A0⁻¹ b, reusing the solutions of earlier right-hand sides when b lies in their span."""
+    """N A0⁻¹ b, reusing the solutions of earlier right-hand sides when b lies in their span.
 
-    def __init__(self, solve, capacity: int = 4, tolerance: float = 1e-13):
-        self._solve, self.capacity, self.tolerance = solve, capacity, tolerance
-        self._basis: list[np.ndarray] = []  # orthonormal right-hand sides
-        self._images: list[np.ndarray] = []  # A0⁻¹ of each
+    ``solve`` is b ↦ A0⁻¹ b and ``observe`` x ↦ N x; the span keeps an orthonormal basis Q of the
+    right-hand sides solved (rows, at most ``capacity``) and N A0⁻¹ of each, so a right-hand side in
+    their span (loads proportional to t, for instance) costs two products with Q and no solve: about
+    five passes over n entries instead of a solve with the factor.
+    """
+
+    def __init__(self, solve, observe, shape: tuple[int, int], capacity: int = 4, tolerance: float = 1e-13):
+        """``shape``: (m, n) of N."""
+        self._solve, self._observe, self.tolerance = solve, observe, tolerance
+        self._basis = np.empty((capacity, shape[1]))  # orthonormal right-hand sides (the first ``size`` rows)
+        self._images = np.empty((capacity, shape[0]))  # N A0⁻¹ of each
+        self.size = 0
+        self._support = None  # the support every right-hand side in the basis had (None: not one)
         self.solves = 0
 
-    def __call__(self, b: np.ndarray) -> np.ndarray:
-        norm = np.linalg.norm(b)
+    def __call__(self, b: np.ndarray, support: np.ndarray | None = None) -> np.ndarray:
+        """N A0⁻¹ b; ``support``: the positions where b may be nonzero (None: anywhere). While every
+        right-hand side solved had the same support, the basis vanishes off it, and the products
+        with Q only run over it."""
+        on = support if support is not None and support is self._support else slice(None)
+        b_on = b[on]
+        norm = np.linalg.norm(b_on)
+        basis = self._basis[: self.size, on]
+        coefficients = basis @ b_on
+        combination = coefficients @ self._images[: self.size]
         if norm == 0.0:
-            return np.zeros_like(b)
-        coefficients = np.array([q @ b for q in self._basis])
-        remainder = b - sum((c * q for c, q in zip(coefficients, self._basis)), np.zeros_like(b))
-        combination = sum((c * x for c, x in zip(coefficients, self._images)), np.zeros_like(b))
+            return combination
+        remainder = b_on - coefficients @ basis
         rest = np.linalg.norm(remainder)
         if rest <= self.tolerance * norm:
             return combination
-        x = self._solve(b)
+        observed = self._observe(self._solve(b))
         self.solves += 1
-        if len(self._basis) < self.capacity:
-            self._basis.append(remainder / rest)
-            self._images.append((x - combination) / rest)
-        return x
+        if self.size < self._basis.shape[0]:
+            if self.size == 0:
+                self._support = support
+            elif support is not self._support:
+                self._support = None  # the basis may no longer vanish off one support
+            self._basis[self.size] = 0.0
+            self._basis[self.size, on] = remainder / rest
+            self._images[self.size] = (observed - combination) / rest
+            self.size += 1
+        return observed
 
 
 #: Rounds of iterative refinement at most (each multiplies the imbalance by about ε E/K √n; one or
@@ -75,15 +96,15 @@ class SolvedSpan:
 MAX_REFINEMENTS = 4
 
 
-#: Contact nodes from which the Newton systems are solved by GMRES rather than by a dense LU each: the
-#: size from which one LU of the m × m Newton matrix costs more than 20 GMRES iterations (each a product
-#: with S and a solve with the kept factor). Measured on one BLAS thread (docs/performance.md, "3D: the
-#: quarter ball"), LU against 20 iterations: 2.8 against 5.5 ms at m = 500, 6.5 against 6.6 ms at 600,
-#: 10 against 8.8 ms at 800, 24 against 14 ms at 1,000, 453 against 165 ms at 3,000 (a run needs about
-#: 6 per Newton iteration). The paper's 2D half disc (at most 570 contact nodes) keeps the dense path.
-KRYLOV_FROM = 800
-#: GMRES iterations at most with the factor of an earlier Newton matrix; a system that needs more is
-#: solved again with the factor of its own matrix (which then serves the next systems).
+#: Contact nodes from which the Newton systems are solved by GMRES rather than by a dense LU each. The
+#: GMRES iterations are preconditioned by the inverse of an earlier Newton matrix (one matrix–vector
+#: product each), and a run needs about 5 per Newton iteration (the paper's half disc, 2D) to 6 (the
+#: quarter ball, 3D); one LU is m³ work. Measured on the paper's example (β = 1, CPU time of the time
+#: loop, one BLAS thread, docs/performance.md): dense LU against GMRES 0.46 against 0.50 s at m = 144
+#: (1/128), 1.47 against 1.13 s at 285 (1/256), 6.4 against 3.1 s at 570 (1/512).
+KRYLOV_FROM = 200
+#: GMRES iterations at most with the inverse of an earlier Newton matrix; a system that needs more is
+#: solved again with the inverse of its own matrix (which then serves the next systems).
 MAX_KRYLOV_ITERATIONS = 20
 #: Relative residual ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ at which GMRES stops: the directions are those of
 #: the dense LU to about this relative accuracy, far below what changes a Newton iteration (the
@@ -104,10 +125,10 @@ class NewtonSystems:
         K = diag(1_ℐ) + S diag(w),    w_i = T_i − c0 (i ∈ ℐ),  w_i = 1 (i ∈ 𝒜).
 
     ``solve_direct`` factors K (an LU, O(m³)); ``solve_iterative`` runs GMRES on K applied as
-    z ↦ 1_ℐ z + S (w z) (O(m²) per iteration, S being formed), preconditioned by the LU factors of the
-    K of an earlier iteration, kept across Newton iterations and time steps, and made again only when
-    GMRES needed more than MAX_KRYLOV_ITERATIONS with them (the system is then solved with the factor of
-    its own K).
+    z ↦ 1_ℐ z + S (w z) (O(m²) per iteration, S being formed), preconditioned by the inverse of the
+    K of an earlier iteration (from its LU), kept across Newton iterations and time steps, and made again
+    only when GMRES needed more than MAX_KRYLOV_ITERATIONS with it (the system is then solved with the
+    inverse of its own K).
 
     Why node order: the dense path's layout [inactive columns | active columns] is a permutation that
     changes with the active set, so a factor made for one layout is no preconditioner for another. In
@@ -115,14 +136,15 @@ class NewtonSystems:
     columns of K and nothing else: K = K₀ + U Vᵀ with U, V of k columns, K₀⁻¹ K = I + K₀⁻¹ U Vᵀ, and
     GMRES preconditioned by K₀ converges in at most k + 1 iterations whatever the layouts of K and K₀
     (fewer when the changes are small: the tangents of nodes in compliance drift from step to step).
-    On the quarter ball the factor of the first Newton matrix (no node in contact yet) serves every Newton
-    iteration of the run, at about 6 GMRES iterations each (docs/performance.md).
+    On the quarter ball the inverse of the first Newton matrix (no node in contact yet) serves every
+    Newton iteration of the run, at about 6 GMRES iterations each; on the paper's half disc at 1/512, at
+    about 5 (docs/performance.md).
     """
 
     def __init__(self, S: np.ndarray, S_row_sums: np.ndarray, max_iterations: int = MAX_KRYLOV_ITERATIONS):
         self.S, self._S_row_sum = S, S_row_sums.max(initial=0.0)  # the largest row sum of |S|
         self.max_iterations = max_iterations
-        self._factor = None  # (lu, piv) of the K of an earlier iteration
+        self._inverse = None  # K⁻¹ of an earlier iteration's K
         self.iterations = 0  # GMRES iterations, in total
         self.factorizations = 0  # LU factorizations of Newton matrices (dense solves included)
 
@@ -142,7 +164,7 @@ class NewtonSystems:
 
     def solve_iterative(self, inactive: np.ndarray, w: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         """z with ‖r − K z‖ ≤ KRYLOV_TOLERANCE ‖r‖ + KRYLOV_ROUNDING ‖K‖ ‖z‖ by GMRES, preconditioned by the
-        kept factor, or by the factor of this K when the kept one needs more than ``max_iterations`` (or
+        kept inverse, or by the inverse of this K when the kept one needs more than ``max_iterations`` (or
         there is none). NotConvergedError when even that one does not reach the tolerance (an LU too
         unstable for GMRES to correct in so few iterations); a K or r that is not finite: z is not finite,
         as the dense solve's (the Newton iteration reports iterates that are not finite)."""
@@ -154,34 +176,34 @@ class NewtonSystems:
 
         norm_K = 1.0 + np.abs(w).max(initial=0.0) * self._S_row_sum  # ≥ ‖K‖₁ and ‖K‖∞ (S symmetric), so ≥ ‖K‖₂
         floor = KRYLOV_ROUNDING * norm_K
-        if self._factor is not None:
+        if self._inverse is not None:
             solution = self._gmres(K, rhs, floor)
             if solution.converged:
                 return solution.x
         self._factorize(inactive, w)
         solution = self._gmres(K, rhs, floor)
         if not solution.converged:
-            raise NotConvergedError(f"GMRES preconditioned by the LU factors of the condensed Newton matrix itself "
+            raise NotConvergedError(f"GMRES preconditioned by the inverse of the condensed Newton matrix itself "
                                     f"did not reach the relative residual {KRYLOV_TOLERANCE:g} (nor the rounding "
                                     f"level of the matrix) in {self.max_iterations} iterations")
         return solution.x
 
     def _factorize(self, inactive: np.ndarray, w: np.ndarray) -> None:
-        """Keep the LU factors of K (SingularMatrixError for an exactly zero pivot, as the dense solve)."""
+        """Keep the inverse of K, from its LU factors (SingularMatrixError for an exactly zero pivot, as
+        the dense solve): applying it is one matrix–vector product, faster than the two triangular
+        solves with the factors, and as good a preconditioner."""
         self.factorizations += 1
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", la.LinAlgWarning)  # an exactly zero pivot: checked below
             lu, piv = la.lu_factor(self.matrix(inactive, w), overwrite_a=True, check_finite=False)
         if np.any(np.diagonal(lu) == 0.0):
-            self._factor = None
+            self._inverse = None
             raise SingularMatrixError("the condensed Newton matrix is singular (an exactly zero pivot)")
-        self._factor = lu, piv
+        self._inverse, _ = la.lapack.dgetri(lu, piv, overwrite_lu=True)
 
     def _gmres(self, K, rhs: np.ndarray, floor: float):
-        """GMRES preconditioned by the kept factor, at most ``max_iterations`` iterations (counted)."""
-        factor = self._factor
-        solution = gmres(K, lambda v: la.lu_solve(factor, v, check_finite=False), rhs, KRYLOV_TOLERANCE,
-                         self.max_iterations, floor)
+        """GMRES preconditioned by the kept inverse, at most ``max_iterations`` iterations (counted)."""
+        solution = gmres(K, self._inverse.__matmul__, rhs, KRYLOV_TOLERANCE, self.max_iterations, floor)
         self.iterations += solution.iterations
         return solution
 
@@ -202,6 +224,8 @@ class CondensedNewton(SemismoothNewton):
         m = N.shape[0]
         check_condensed_memory(N, A.shape[0])
         self.A, self.N, self.gap0, self.Z = A, N.tocsr(), gap0, rigid
+        #: Nᵀ on N's nonzero columns (the contact dofs): ‖Nᵀx‖ without a vector of every dof
+        self._N_contact_T = self.N[:, np.unique(self.N.indices)].T.tocsr()
         self.reference = np.full(m, r)
         started = time.perf_counter()
         self.factorization = factorize(A + self.N.T @ sp.diags(self.reference) @ self.N, self.N, factorization)
@@ -210,7 +234,7 @@ class CondensedNewton(SemismoothNewton):
         self._S_row_sums = np.abs(self.S).sum(axis=1)  # bounds |S| |q| by its rows' sums times max |q|
         self.timings = {"factorization": factored - started, "condensation": time.perf_counter() - factored}
         self.systems, self.krylov_from = NewtonSystems(self.S, self._S_row_sums), krylov_from
-        self.span = SolvedSpan(self.factorization.solve)
+        self.span = SolvedSpan(self.factorization.solve, self.N.__matmul__, self.N.shape)
         self.recoveries = self.refinements = 0
         self._step, self._load_vector, self._d_free, self._b_norm = None, None, None, 0.0
 
@@ -249,8 +273,8 @@ class CondensedNewton(SemismoothNewton):
         """d_free = N A0⁻¹ b − g0 of this step (computed once per step; b corrected by refinements)."""
         if self._step is not step:
             self._step, self._load_vector = step, step.b
-            self._d_free = self.N @ self.span(step.b) - self.gap0
-            self._b_norm = np.linalg.norm(step.b)
+            self._d_free = self.span(step.b, step.support) - self.gap0
+            self._b_norm = step.b_norm
         return self._d_free
 
     def _recover(self, solution: StepSolution) -> np.ndarray:
@@ -291,8 +315,8 @@ class CondensedNewton(SemismoothNewton):
         state = ContactState.evaluate(step, self.weights, d, lam, self.r)
         d_u = self._free_penetration(step) - self.S @ self._load(state, d, lam)
         recovered = ContactState.evaluate(step, self.weights, d_u, lam, self.r)
-        R_u = self.N.T @ (recovered.force - state.force - self.reference * (d_u - d))
-        scale = max(self._b_norm, np.linalg.norm(self.N.T @ (recovered.force + lam)))
+        R_u = self._N_contact_T @ (recovered.force - state.force - self.reference * (d_u - d))
+        scale = max(self._b_norm, np.linalg.norm(self._N_contact_T @ (recovered.force + lam)))
         load_size = np.abs(state.force) + np.abs(lam) + self.reference * np.abs(d + self.gap0)
         d_size = np.abs(self._d_free) + self._S_row_sums * load_size.max(initial=0.0) + np.abs(d)
         floor = ROUNDOFF * np.linalg.norm((self.reference + np.abs(recovered.tangent)) * d_size)
