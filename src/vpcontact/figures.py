@@ -435,47 +435,37 @@ TITLES = {
 }
 
 
-def draw_all(data: dict, frames: dict, folder: Path) -> dict:
-    """Every figure into ``folder``; returns {id: {"title", "png", "pdf"}} (paths relative to its parent)."""
+def draw_all(data: dict, frames: dict, folder: Path, executor=None) -> dict:
+    """Every figure into ``folder``; returns {id: {"title", "png", "pdf"}} (paths relative to its parent).
+    With an ``executor`` (concurrent.futures), the figures are drawn by its workers side by side: each is
+    a function of ``data`` and ``frames`` alone."""
     from .reproduce import CONTACT_CONDITIONS, FIGURE_TIMES
 
     folder = Path(folder)
     contact = [frames[f"beta{s}_t{t:g}"] for s in ("+1", "-1") for t in FIGURE_TIMES]
     contact += [frames[f"final_{name}"] for name in CONTACT_CONDITIONS]
     scale = max(float(np.max(f.pressure, initial=0.0)) for f in contact) / ARROW  # one scale for Figs. 2, 3, 5
-    drawn = {
-        "fig02": deformed_figure(
-            [frames[f"beta+1_t{t:g}"] for t in FIGURE_TIMES], TITLES["fig02"], folder, "fig02", scale
-        ),
-        "fig03": deformed_figure(
-            [frames[f"beta-1_t{t:g}"] for t in FIGURE_TIMES], TITLES["fig03"], folder, "fig03", scale
-        ),
-        "fig04": stiffness_figure(data, folder),
-        "fig05": deformed_figure(
-            [frames[f"final_{name}"] for name in CONTACT_CONDITIONS], TITLES["fig05"], folder, "fig05", scale
-        ),
-        "fig06": probe_figure(
-            data,
-            folder,
-            "penetration_probe",
-            "fig06",
-            "Fig. 6: penetration at the bottom point (0, 0)",
-            r"penetration $u_\nu$ (m)",
-        ),
-        "fig07": probe_figure(
-            data,
-            folder,
-            "normal_stress_probe",
-            "fig07",
-            "Fig. 7: normal contact stress at the bottom point (0, 0)",
-            r"$|\sigma_\nu|$ (N/m)",
-            sign=-1.0,
-        ),
-        "fig08": rho_figure(data, folder),
-        "fig09": deformed_figure(
-            [frames[f"rho_{rho:g}"] for rho in data["settings"]["fig9_rho"]], TITLES["fig09"], folder, "fig09"
-        ),
-        "fig10": hk_figure(data, folder),
-        "fig11": adaptive_figure(data, folder),
+    jobs = {
+        "fig02": (deformed_figure, [frames[f"beta+1_t{t:g}"] for t in FIGURE_TIMES], TITLES["fig02"], folder, "fig02",
+                  scale),
+        "fig03": (deformed_figure, [frames[f"beta-1_t{t:g}"] for t in FIGURE_TIMES], TITLES["fig03"], folder, "fig03",
+                  scale),
+        "fig04": (stiffness_figure, data, folder),
+        "fig05": (deformed_figure, [frames[f"final_{name}"] for name in CONTACT_CONDITIONS], TITLES["fig05"], folder,
+                  "fig05", scale),
+        "fig06": (probe_figure, data, folder, "penetration_probe", "fig06",
+                  "Fig. 6: penetration at the bottom point (0, 0)", r"penetration $u_\nu$ (m)"),
+        "fig07": (probe_figure, data, folder, "normal_stress_probe", "fig07",
+                  "Fig. 7: normal contact stress at the bottom point (0, 0)", r"$|\sigma_\nu|$ (N/m)", -1.0),
+        "fig08": (rho_figure, data, folder),
+        "fig09": (deformed_figure, [frames[f"rho_{rho:g}"] for rho in data["settings"]["fig9_rho"]], TITLES["fig09"],
+                  folder, "fig09"),
+        "fig10": (hk_figure, data, folder),
+        "fig11": (adaptive_figure, data, folder),
     }
+    if executor is None:
+        drawn = {key: draw(*arguments) for key, (draw, *arguments) in jobs.items()}
+    else:
+        futures = {key: executor.submit(draw, *arguments) for key, (draw, *arguments) in jobs.items()}
+        drawn = {key: future.result() for key, future in futures.items()}
     return {key: {"title": TITLES[key], **paths} for key, paths in drawn.items()}

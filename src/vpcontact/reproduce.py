@@ -379,29 +379,28 @@ def run(
     }
     workers = workers or os.cpu_count() or 1
 
-    log(f"reproduce ({plan.mode}): Figs. 2–7, the four contact conditions with k = 0.1 and k ≈ 1/128 ...")
-    t0 = clock()
-    specs = figure_cases(plan)
-    results = {spec.name: solve_case(base, spec, out / "cases" / spec.name) for spec in specs}
-    data["cases"] = {spec.name: case_record(spec, results[spec.name]) for spec in specs}
-    frames = figure_frames(results, plan)
-    log(f"  {timer.part('Figs. 2–7: contact conditions (8 runs)', t0)}")
-
-    log("the load: printed load, and the load recalibrated for k ≈ 1/128 ...")
-    t0 = clock()
-    printed = {
-        spec.name: case_record(spec, solve_case(base, spec, out / "cases" / spec.name)) for spec in load_cases(plan)
-    }
-    data["cases"].update(printed)
-    data["calibration"] = {
-        "printed_load": PRINTED_LOAD,
-        "calibrated_load": CALIBRATED_LOAD,
-        "k_fine": calibrate(base, plan),
-    }
-    log(f"  {timer.part('load: printed load (3 runs), recalibration for k ≈ 1/128', t0)}")
-
     context = multiprocessing.get_context("spawn")  # the MKL threads of this process are not fork-safe
     with ProcessPoolExecutor(max_workers=workers, mp_context=context) as executor:
+        log(f"reproduce ({plan.mode}): Figs. 2–7, the four contact conditions with k = 0.1 and k ≈ 1/128, and in "
+            f"{workers} workers beside them the printed load and the load recalibrated for k ≈ 1/128 ...")
+        t0 = clock()
+        printed = {spec.name: executor.submit(recorded_case, base, spec, out / "cases" / spec.name)
+                   for spec in load_cases(plan)}
+        calibration = executor.submit(calibrate, base, plan)
+        specs = figure_cases(plan)
+        results = {spec.name: solve_case(base, spec, out / "cases" / spec.name) for spec in specs}
+        data["cases"] = {spec.name: case_record(spec, results[spec.name]) for spec in specs}
+        frames = figure_frames(results, plan)
+        log(f"  {timer.part('Figs. 2–7: contact conditions (8 runs)', t0)}")
+        t0 = clock()
+        data["cases"].update({name: future.result() for name, future in printed.items()})
+        data["calibration"] = {
+            "printed_load": PRINTED_LOAD,
+            "calibrated_load": CALIBRATED_LOAD,
+            "k_fine": calibration.result(),
+        }
+        log(f"  {timer.part('load: printed load (3 runs), recalibration for k ≈ 1/128 (after Figs. 2–7)', t0)}")
+
         log(f"Figs. 8, 9: ρ study ({len(plan.rho) + 1} runs, {workers} workers) ...")
         t0 = clock()
         rho_rows = run_named_study(out, "rho_sweep", rho_study_text(plan), executor)
@@ -426,30 +425,30 @@ def run(
         runs = len(plan.h_levels) + len(plan.k_steps) + 2
         log(f"  {timer.part(f'beyond the paper: rates in h and in k ({runs} runs)', t0)}")
 
-    log("beyond the paper: adaptive meshes against uniform ones ...")
-    t0 = clock()
-    data["adaptive"] = adaptive_record(base, plan, out, data["rates"]["h"])
-    cycles = len(data["adaptive"]["dofs"])
-    log(f"  {timer.part(f'beyond the paper: adaptive meshes ({cycles} cycles)', t0)}")
+        log("beyond the paper: adaptive meshes against uniform ones ...")
+        t0 = clock()
+        data["adaptive"] = adaptive_record(base, plan, out, data["rates"]["h"])
+        cycles = len(data["adaptive"]["dofs"])
+        log(f"  {timer.part(f'beyond the paper: adaptive meshes ({cycles} cycles)', t0)}")
 
-    data["mesh"] = mesh_record(results["beta+1_k0.1"])
-    data["K_bottom_final"] = {
-        suffix: {
-            "beta=1": data["cases"][f"beta+1_{suffix}"]["K_probe"][-1],
-            "beta=-1": data["cases"][f"beta-1_{suffix}"]["K_probe"][-1],
+        data["mesh"] = mesh_record(results["beta+1_k0.1"])
+        data["K_bottom_final"] = {
+            suffix: {
+                "beta=1": data["cases"][f"beta+1_{suffix}"]["K_probe"][-1],
+                "beta=-1": data["cases"][f"beta-1_{suffix}"]["K_probe"][-1],
+            }
+            for suffix in ("k0.1", "k1_128")
         }
-        for suffix in ("k0.1", "k1_128")
-    }
-    data["penetration_ordering"] = {
-        suffix: penetration_ordering(data["cases"], suffix) for suffix in ("k0.1", "k1_128")
-    }
-    data["node_states"] = node_states(data["cases"], results, plan)
-    data["claims"] = assess(data)
+        data["penetration_ordering"] = {
+            suffix: penetration_ordering(data["cases"], suffix) for suffix in ("k0.1", "k1_128")
+        }
+        data["node_states"] = node_states(data["cases"], results, plan)
+        data["claims"] = assess(data)
 
-    log("figures ...")
-    t0 = clock()
-    data["figures"] = figures.draw_all(data, frames, out / "figures")
-    log(f"  {timer.part('figures (PNG and PDF)', t0)}")
+        log("figures ...")
+        t0 = clock()
+        data["figures"] = figures.draw_all(data, frames, out / "figures", executor)
+        log(f"  {timer.part('figures (PNG and PDF)', t0)}")
 
     t0 = clock()
     data["wall_time_s"], data["cpu_time_s"] = timer.totals()
@@ -463,6 +462,11 @@ def run(
         f"-> {out / 'report.html'}"
     )
     return data
+
+
+def recorded_case(base: Path, spec: CaseSpec, out: Path) -> dict:
+    """``case_record`` of ``solve_case``: what a worker returns of a run."""
+    return case_record(spec, solve_case(base, spec, out))
 
 
 def solve_case(base: Path, spec: CaseSpec, out: Path):
