@@ -55,6 +55,9 @@ def main() -> None:
     parser.add_argument("--g", type=float, default=0.2, help="the layer's thickness (the rigid limit u·ν ≤ g)")
     parser.add_argument("--traction", type=float, default=17.977, help="c in the traction (0, −c t) on top_arc")
     parser.add_argument("--tolerance", type=float, default=1e-10)
+    parser.add_argument("--contact-rule", choices=("trapezoidal", "midpoint"), default="trapezoidal",
+                        help="quadrature of the contact terms on each facet of Γ3: trapezoidal (vpcontact's lumped "
+                             "nodal law) or midpoint (one Gauss point: how far another quadrature moves the solution)")
     parser.add_argument("--record", type=int, nargs="*", default=[], help="steps written to --out")
     parser.add_argument("--out", help="the .npz file of the recorded steps")
     args = parser.parse_args()
@@ -71,6 +74,7 @@ def main() -> None:
     mf_scalar.set_classical_fem(1)
     bulk = gf.MeshIm(mesh, gf.Integ("IM_TRIANGLE(1)"))
     trapezoidal = gf.MeshIm(mesh, gf.Integ("IM_NC(2,1)"))
+    on_facets = trapezoidal if args.contact_rule == "trapezoidal" else bulk
 
     model = gf.Model("real")
     model.add_fem_variable("u", mf_u)
@@ -96,8 +100,8 @@ def main() -> None:
     model.add_initialized_data("g", [args.g])
     model.add_initialized_data("r", [r])
     model.add_filtered_fem_variable("lam", mf_scalar, contact)
-    model.add_nonlinear_term(trapezoidal, "(K*pos_part(u.nu_) + pos_part(lam + r*(u.nu_ - g)))*(nu_.Test_u)", contact)
-    model.add_nonlinear_term(trapezoidal, "(1/r)*(lam - pos_part(lam + r*(u.nu_ - g)))*Test_lam", contact)
+    model.add_nonlinear_term(on_facets, "(K*pos_part(u.nu_) + pos_part(lam + r*(u.nu_ - g)))*(nu_.Test_u)", contact)
+    model.add_nonlinear_term(on_facets, "(1/r)*(lam - pos_part(lam + r*(u.nu_ - g)))*Test_lam", contact)
 
     nodes = mf_u.basic_dof_nodes()[:, ::2]  # (2, nodes): the x and y dofs of a node are consecutive
     contact_nodes = np.flatnonzero(on_contact)
