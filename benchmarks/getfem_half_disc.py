@@ -18,8 +18,9 @@ The problem is vpcontact's, term by term:
 
 Each time step is one call of GetFEM's Newton solver (`Model.solve`, its default line search, MUMPS)
 from the last step's solution, to the residual `tolerance`, which GetFEM measures relative to the norm
-of the external loads (its residual is 1 at u = 0), as vpcontact's relative equilibrium residual. The steps in --record are written to --out (NumPy .npz): the nodes and
-displacements, and at the contact nodes the penetration u·ν, the compliance and rigid pressures.
+of the external loads (its residual is 1 at u = 0), as vpcontact's relative equilibrium residual. The
+steps in --record are written to --out (NumPy .npz): the nodes and displacements, and at the contact
+nodes the penetration u·ν, the compliance and rigid pressures (forces per unit length).
 """
 
 from __future__ import annotations

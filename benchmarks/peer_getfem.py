@@ -90,7 +90,8 @@ def write_case(mesh: Path, steps: int, folder: Path) -> tuple[Path, dict, list[i
 
 
 def getfem_arguments(case: dict) -> list[str]:
-    """The law, loads and time grid of `case` as options of getfem_half_disc.py (K = c_v: β = 0)."""
+    """The law, loads, time grid and Newton tolerance of `case` as options of getfem_half_disc.py (K = c_v:
+    β = 0); refused (SystemExit) where the case is not what that model solves."""
     from vpcontact.expressions import parse_expression
 
     (traction,) = case["boundary"]["traction"]
@@ -99,11 +100,13 @@ def getfem_arguments(case: dict) -> list[str]:
     if horizontal(x=0.0, y=0.0, t=1.0) != 0 or vertical(x=0.5, y=0.5, t=2.0) != -2 * c:
         raise SystemExit("peer_getfem: the example's traction is not (0, -c t): getfem_half_disc.py models only that")
     contact, material = case["contact"], case["material"]
-    if (contact["stiffness"]["law"], contact["stiffness"]["beta"], contact["p"], contact.get("rho", 1.0)) != (
-            "power", 0.0, "positive_part", 1.0):
-        raise SystemExit("peer_getfem: getfem_half_disc.py models K = c_v (the power law with beta = 0), p = r+, rho = 1")
+    if (contact["stiffness"]["law"], contact["stiffness"]["beta"], contact["p"], contact.get("rho", 1.0),
+            material.get("hypothesis", "plane_strain")) != ("power", 0.0, "positive_part", 1.0, "plane_strain"):
+        raise SystemExit("peer_getfem: getfem_half_disc.py models K = c_v (the power law with beta = 0), p = r+, "
+                         "rho = 1 and plane strain")
     return ["--E", repr(material["E"]), "--nu", repr(material["nu"]), "--K", repr(contact["stiffness"]["c_v"]),
-            "--g", repr(contact["g"]), "--traction", repr(c), "--T", repr(case["time"]["T"])]
+            "--g", repr(contact["g"]), "--traction", repr(c), "--T", repr(case["time"]["T"]),
+            "--tolerance", repr(case.get("solver", {}).get("tolerance", 1e-10))]
 
 
 def timed(command: list[str], env: dict | None = None) -> float:
