@@ -147,7 +147,8 @@ def processor() -> str:
     count = sum(line.startswith("processor") for line in lines)
     if "model name" not in fields:
         return "unknown"
-    return f"{fields['model name']} (family {fields.get('cpu family', '?')}, model {fields.get('model', '?')}; {count} processors)"
+    family, model = fields.get("cpu family", "?"), fields.get("model", "?")
+    return f"{fields['model name']} (family {family}, model {model}; {count} processors)"
 
 
 def _plain_env() -> dict:
@@ -171,38 +172,38 @@ def _match(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def agreement(run: Path, peer: Path) -> list[dict]:
-    """vpcontact's run directory against GetFEM's .npz at their common recorded steps."""
+    """vpcontact's run directory against GetFEM's .npz at the steps GetFEM recorded: at the probe and at a
+    few nodes the two values, and the largest differences over the contact nodes and over every node."""
     solution, other = np.load(run / "solution.npz"), np.load(peer)
     ia, ib = _match(solution["points"], other["nodes"])
+    points = solution["points"][:, ia]
+    nearest = [int(np.argmin(np.hypot(points[0] - x, points[1] - y))) for x, y in REPORTED_POINTS]
     with open(run / "contact.csv", newline="") as file:
         rows = list(csv.DictReader(file))
-    ours = {name: np.array([[float(row[c]) for c in columns] for row in rows]) for name, columns in
-            (("step", ["step"]), ("xy", ["x", "y"]), ("values", ["penetration", "pressure_compliance", "pressure_rigid"]))}
-    contact_points = other["nodes"][:, other["contact_nodes"]]
+    table = {column: np.array([float(row[column]) for row in rows])
+             for column in ("step", "x", "y", "penetration", "pressure_compliance", "pressure_rigid")}
     records = []
     for k, step in enumerate(other["steps"]):
-        here = ours["step"][:, 0] == step
-        ca, cb = _match(ours["xy"][here].T, contact_points)
-        d_ours, compliance, rigid = ours["values"][here][ca].T
-        d_peer = other["penetration"][k][cb]
-        p_ours, p_peer = compliance + rigid, (other["pressure_compliance"][k] + other["pressure_rigid"][k])[cb]
-        u_ours = solution["displacement"][list(solution["steps"]).index(step)][ia]
-        u_peer = other["displacement"][k][ib]
-        points = solution["points"][:, ia]
-        nearest = [int(np.argmin(np.hypot(points[0] - x, points[1] - y))) for x, y in REPORTED_POINTS]
-        probe = int(np.argmin(np.hypot(*(ours["xy"][here][ca].T - np.reshape(PROBE, (2, 1))))))
+        here = table["step"] == step
+        xy = np.vstack((table["x"][here], table["y"][here]))
+        ca, cb = _match(xy, other["nodes"][:, other["contact_nodes"]])
+        probe = int(np.argmin(np.hypot(*(xy[:, ca] - np.reshape(PROBE, (2, 1))))))
+        d = table["penetration"][here][ca], other["penetration"][k][cb]
+        rigid = table["pressure_rigid"][here][ca], other["pressure_rigid"][k][cb]
+        pressure = table["pressure_compliance"][here][ca] + rigid[0], other["pressure_compliance"][k][cb] + rigid[1]
+        u = solution["displacement"][list(solution["steps"]).index(step)][ia], other["displacement"][k][ib]
         records.append({
             "step": int(step), "t": float(other["times"][k]),
-            "probe": {"point": ours["xy"][here][ca][probe].tolist(),
-                      "penetration": [float(d_ours[probe]), float(d_peer[probe])],
-                      "pressure": [float(p_ours[probe]), float(p_peer[probe])],
-                      "pressure_rigid": [float(rigid[probe]), float(other["pressure_rigid"][k][cb][probe])]},
-            "displacements": [{"point": points[:, i].tolist(), "vpcontact": u_ours[i].tolist(),
-                               "getfem": u_peer[i].tolist()} for i in nearest],
-            "max_penetration_difference": float(np.abs(d_ours - d_peer).max()),
-            "max_pressure_difference_relative": float(np.abs(p_ours - p_peer).max() / np.abs(p_ours).max()),
-            "max_displacement_difference_relative": float(np.abs(u_ours - u_peer).max() / np.abs(u_ours).max()),
-            "nodes_at_limit": [int((rigid > 0).sum()), int((other["pressure_rigid"][k][cb] > 0).sum())],
+            "probe": {"point": xy[:, ca][:, probe].tolist(), "penetration": [float(v[probe]) for v in d],
+                      "pressure": [float(v[probe]) for v in pressure],
+                      "pressure_rigid": [float(v[probe]) for v in rigid]},
+            "displacements": [{"point": points[:, i].tolist(), "vpcontact": u[0][i].tolist(),
+                               "getfem": u[1][i].tolist()} for i in nearest],
+            "max_penetration_difference": float(np.abs(d[0] - d[1]).max()),
+            "max_pressure_difference_relative":
+                float(np.abs(pressure[0] - pressure[1]).max() / np.abs(pressure[0]).max()),
+            "max_displacement_difference_relative": float(np.abs(u[0] - u[1]).max() / np.abs(u[0]).max()),
+            "nodes_at_limit": [int((v > 0).sum()) for v in rigid],
         })
     return records
 
@@ -213,7 +214,9 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=141)
     parser.add_argument("--runs", type=int, default=3, help="pairs of whole processes; medians are reported")
     parser.add_argument("--getfem-python", default="/usr/bin/python3", help="the Python that imports getfem")
-    parser.add_argument("--mesher", choices=("gmsh", "vpcontact"), default="gmsh" if shutil.which("gmsh") else "vpcontact")
+    parser.add_argument("--mesher", choices=("gmsh", "vpcontact"),
+                        default="gmsh" if shutil.which("gmsh") else "vpcontact",
+                        help="what meshes the half disc (default: gmsh when it is on the PATH)")
     args = parser.parse_args()
     getfem = has_getfem(args.getfem_python)
     load_before = os.getloadavg()
@@ -234,8 +237,10 @@ def main() -> None:
             "level": f"1/{args.level}", "h": H_TIMES_LEVEL / args.level, "mesher": mesher,
             "dofs": summary["dofs"], "elements": summary["elements"], "contact_nodes": summary["contact_nodes"],
             "steps": summary["steps"], "T": case["time"]["T"], "processor": processor(),
-            "load_average_before": list(load_before), "load_average_after": list(os.getloadavg()), "runs": args.runs,
-            "vpcontact": {"command": "vpcontact run CASE --out DIR", "wall_s": ours, "median_s": statistics.median(ours),
+            "load_average_before": list(load_before), "load_average_after": list(os.getloadavg()),
+            "runs": args.runs,
+            "vpcontact": {"command": "vpcontact run CASE --out DIR", "wall_s": ours,
+                          "median_s": statistics.median(ours),
                           "solver_method": summary["solver_method"], "newton_iterations": summary["newton_iterations"],
                           "timings_s": summary["timings_s"]},
             "getfem": None, "ratio": None, "ratio_of_pairs": None, "agreement": None,
