@@ -435,10 +435,8 @@ TITLES = {
 }
 
 
-def draw_all(data: dict, frames: dict, folder: Path, executor=None) -> dict:
-    """Every figure into ``folder``; returns {id: {"title", "png", "pdf"}} (paths relative to its parent).
-    With an ``executor`` (concurrent.futures), the figures are drawn by its workers side by side: each is
-    a function of ``data`` and ``frames`` alone."""
+def draw_all(data: dict, frames: dict, folder: Path) -> dict:
+    """Every figure into ``folder``; returns {id: {"title", "png", "pdf"}} (paths relative to its parent)."""
     from .reproduce import CONTACT_CONDITIONS, FIGURE_TIMES
 
     folder = Path(folder)
@@ -463,9 +461,5 @@ def draw_all(data: dict, frames: dict, folder: Path, executor=None) -> dict:
         "fig10": (hk_figure, data, folder),
         "fig11": (adaptive_figure, data, folder),
     }
-    if executor is None:
-        drawn = {key: draw(*arguments) for key, (draw, *arguments) in jobs.items()}
-    else:
-        futures = {key: executor.submit(draw, *arguments) for key, (draw, *arguments) in jobs.items()}
-        drawn = {key: future.result() for key, future in futures.items()}
+    drawn = {key: draw(*arguments) for key, (draw, *arguments) in jobs.items()}
     return {key: {"title": TITLES[key], **paths} for key, paths in drawn.items()}

@@ -447,7 +447,7 @@ def run(
 
         log("figures ...")
         t0 = clock()
-        data["figures"] = figures.draw_all(data, frames, out / "figures", executor)
+        data["figures"] = figures.draw_all(data, frames, out / "figures")
         log(f"  {timer.part('figures (PNG and PDF)', t0)}")
 
     t0 = clock()
