@@ -46,9 +46,12 @@ class SimplexGeometry:
         return self.gradients.shape[1]
 
 
-def barycentric_gradients(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """∇λ_a (d + 1, d, elements) and |T| (elements,) of the simplices ``cells`` (d + 1, elements) of the
-    nodes ``points`` (d, nodes); a degenerate element (det J = 0) gets infinite or NaN gradients."""
+def affine_inverse(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """J⁻¹ (d, d, elements) and det J (elements,) of J = [x_1 − x_0, …, x_d − x_0] of the simplices
+    ``cells`` (d + 1, elements) of the nodes ``points`` (d, nodes), by the explicit formulas (2 × 2
+    adjugate; in 3D the rows of J⁻¹ are the cross products of the other two columns over det J): row k
+    of J⁻¹ is ∇λ_(k+1), so (λ_1, …, λ_d) = J⁻¹(x − x_0). A degenerate element (det J = 0) gets
+    infinite or NaN entries."""
     d = points.shape[0]
     x = points[:, cells]  # (d, d + 1, elements)
     J = x[:, 1:] - x[:, :1]  # J[i, k]: coordinate i of the edge x_(k+1) − x_0
@@ -56,13 +59,20 @@ def barycentric_gradients(points: np.ndarray, cells: np.ndarray) -> tuple[np.nda
         if d == 2:
             det = J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
             rows = np.stack([np.stack([J[1, 1], -J[0, 1]]), np.stack([-J[1, 0], J[0, 0]])])
-        else:  # the rows of J⁻¹ are the cross products of the other two columns over det J
+        else:
             a, b, c = J[:, 0], J[:, 1], J[:, 2]
             rows = np.stack([_cross(b, c), _cross(c, a), _cross(a, b)])
             det = (a * rows[0]).sum(axis=0)
-        inverse = rows / det  # (d, d, elements): row k is ∇λ_(k+1)
+        return rows / det, det
+
+
+def barycentric_gradients(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """∇λ_a (d + 1, d, elements) and |T| (elements,) of the simplices ``cells`` (d + 1, elements) of the
+    nodes ``points`` (d, nodes); a degenerate element (det J = 0) gets infinite or NaN gradients."""
+    inverse, det = affine_inverse(points, cells)
+    with np.errstate(invalid="ignore"):
         gradients = np.concatenate([-inverse.sum(axis=0, keepdims=True), inverse])
-    return gradients, np.abs(det) / math.factorial(d)
+    return gradients, np.abs(det) / math.factorial(points.shape[0])
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
