@@ -22,8 +22,8 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING
 
-import meshio
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import Delaunay
@@ -35,6 +35,9 @@ from vpcontact.inputs import check_regular_file
 from vpcontact.mesh_checks import check_finite, check_triangles
 from vpcontact.mesh_checks_3d import check_tetrahedra
 from vpcontact.memory import available_memory
+
+if TYPE_CHECKING:
+    import meshio
 
 NormalField = Callable[[np.ndarray], np.ndarray]
 Projection = Callable[[np.ndarray], np.ndarray]
@@ -589,6 +592,8 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     elements of none are in no region, and a file without them has no regions. No exact normals. The
     orientation of the cells in the file is not used. Any problem raises CaseError naming the file.
     """
+    import meshio  # only when a mesh file is read: a run of a built-in shape does without it
+
     label = os.fspath(path)
     check_regular_file(path, "mesh file")
     # meshio prints its per-format failures and then calls sys.exit(1) when no reader
