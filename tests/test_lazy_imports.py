@@ -50,4 +50,5 @@ def test_a_run_of_a_gmsh_2_2_text_file_does_without_meshio(tmp_path):
 
 def test_meshio_reads_the_other_mesh_files():
     """A gmsh 4.1 file (and any other format) is read by meshio, imported then."""
-    assert "meshio" in modules_loaded(f"from vpcontact.mesh import read_mesh\nread_mesh({str(MESHES / 'square.msh')!r})")
+    script = f"from vpcontact.mesh import read_mesh\nread_mesh({str(MESHES / 'square.msh')!r})"
+    assert "meshio" in modules_loaded(script)

@@ -253,8 +253,9 @@ def _write_contact(result: Result, path: Path) -> None:
         for start in range(0, rows, block):
             chosen = slice(start, min(rows, start + block))
             count = chosen.stop - start
-            row_cells = _joined(steps[chosen], times[chosen])
-            columns = [itertools.chain.from_iterable(itertools.repeat(cells, m) for cells in row_cells), node_cells * count]
+            row_cells = _joined(steps[chosen], times[chosen])  # step and t
+            columns = [itertools.chain.from_iterable(itertools.repeat(cells, m) for cells in row_cells),
+                       node_cells * count]
             columns += [_texts(np.array(result.contact[name][chosen]).ravel()) for name in CONTACT_ARRAYS[:-1]]
             columns.append(status_names[np.array(result.contact["status"][chosen]).ravel().astype(int)].tolist())
             columns.append(_texts(np.repeat(substeps[chosen], m)))
@@ -302,6 +303,7 @@ def _write_fields(result: Result, folder: Path) -> None:
         if "part" in layer:  # VTU point data are numbers: the index in contact.parts
             layer["part"] = surface.owner
         layer = {key: np.asarray(value, dtype=float) for key, value in layer.items()}
+        end_rows = _end_of_step_rows(result)
     body, contact = [], []
     materials = {"material": problem.materials.owner.astype(np.int32), "E": np.array(problem.materials.E),
                  "nu": np.array(problem.materials.nu)}
@@ -320,7 +322,7 @@ def _write_fields(result: Result, folder: Path) -> None:
         body.append((t, name))
         if surface.size:
             name = f"contact_{step:05d}.vtu"
-            row = _end_of_step_row(result, step)
+            row = end_rows[step]
             data = {key: np.asarray(result.contact[key][row], dtype=float) for key in CONTACT_ARRAYS}
             pressure = data["pressure_compliance"] + data["pressure_rigid"]
             with replacing(folder / name) as temporary:
@@ -351,9 +353,10 @@ def _tensors_in_space(tensors: np.ndarray, t33: np.ndarray | None = None) -> np.
     return full.reshape(n, 9)
 
 
-def _end_of_step_row(result: Result, step: int) -> int:
-    """The history row at t_n of step n."""
-    return int(np.flatnonzero(result.ends_step() & (result.series("step") == step))[0])
+def _end_of_step_rows(result: Result) -> dict[int, int]:
+    """Step n -> the history row at t_n."""
+    ends = np.flatnonzero(result.ends_step())
+    return dict(zip(result.series("step")[ends].astype(int).tolist(), ends.tolist()))
 
 
 def write_solution(result: Result, path: Path) -> None:
@@ -376,10 +379,9 @@ def write_solution(result: Result, path: Path) -> None:
         arrays["z"] = np.array([result.fields[s].z for s in steps])
     surface = result.problem.surface
     if surface.size:
-        ends = np.flatnonzero(result.ends_step())
-        row_of_step = dict(zip(result.series("step")[ends].tolist(), ends.tolist()))
+        end_rows = _end_of_step_rows(result)
         arrays["contact_nodes"] = surface.nodes
-        arrays["xi"] = np.array([result.contact["xi"][row_of_step[s]] for s in steps]).reshape(len(steps), surface.size)
+        arrays["xi"] = np.array([result.contact["xi"][end_rows[s]] for s in steps]).reshape(len(steps), surface.size)
     with replacing(path) as temporary:
         np.savez(temporary, **arrays)
 
