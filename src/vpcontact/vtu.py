@@ -27,9 +27,11 @@ class Grid:
     elements of a VTU file, encoded once for every file written on this grid."""
 
     def __init__(self, points: np.ndarray, cell_type: str, cells: np.ndarray):
-        cells = np.asarray(cells, dtype=np.int64)
         self.points, self.cells = len(points), len(cells)
-        offsets = np.arange(1, self.cells + 1, dtype=np.int64) * cells.shape[1]
+        fits = max(self.points, self.cells * np.shape(cells)[1]) < 2**31
+        index = np.int32 if fits else np.int64  # connectivity and offsets in 4 bytes if they fit
+        cells = np.asarray(cells, dtype=index)
+        offsets = np.arange(1, self.cells + 1, dtype=index) * cells.shape[1]
         types = np.full(self.cells, CELL_TYPES[cell_type], dtype=np.uint8)
         self.xml = "\n".join(["<Points>", _data_array("Points", points), "</Points>", "<Cells>",
                               _data_array("connectivity", cells), _data_array("offsets", offsets),
