@@ -1,5 +1,6 @@
 """What a command imports: a run of a built-in shape or of a gmsh 2.2 text file writes its VTU files
-without meshio and draws no figures without matplotlib; meshio reads the other mesh files."""
+without meshio, draws no figures without matplotlib and loads no adaptive refinement; meshio reads the
+other mesh files."""
 
 import subprocess
 import sys
@@ -14,16 +15,17 @@ MESHES = Path(__file__).parent / "meshes"
 
 
 def modules_loaded(script: str) -> set[str]:
-    """The top-level modules loaded by ``script`` in a fresh process."""
-    script += "\nprint(' '.join(sorted({name.split('.')[0] for name in sys.modules})))"
+    """The modules loaded by ``script`` in a fresh process, and the packages of the top level."""
+    script += "\nprint(' '.join(sorted(sys.modules)))"
     process = subprocess.run([sys.executable, "-c", "import sys\n" + script], capture_output=True, text=True,
                              timeout=120)
     assert process.returncode == 0, process.stderr
-    return set(process.stdout.split("\n")[-2].split())
+    names = process.stdout.split("\n")[-2].split()
+    return set(names) | {name.split(".")[0] for name in names}
 
 
 def modules_after_run(tmp_path, case) -> set[str]:
-    """The top-level modules loaded by a whole ``vpcontact run`` of ``case``."""
+    """The modules loaded by a whole ``vpcontact run`` of ``case``."""
     (tmp_path / "case.toml").write_text(tomli_w.dumps(case))
     return modules_loaded(f"import vpcontact.cli\nassert vpcontact.cli.main(['run', {str(tmp_path / 'case.toml')!r}, "
                           f"'--out', {str(tmp_path / 'out')!r}, '--quiet']) == 0")
@@ -35,6 +37,7 @@ def test_a_run_of_a_built_in_shape_imports_no_mesh_io_and_no_plotting(tmp_path):
     loaded = modules_after_run(tmp_path, case)
     assert {"numpy", "scipy", "skfem", "pydantic"} <= loaded
     assert not set(HEAVY) & loaded
+    assert not {"vpcontact.adapt", "vpcontact.refinement", "vpcontact.norms"} & loaded  # an adaptive run's
     assert len(list((tmp_path / "out" / "fields").glob("*.vtu"))) == 22
 
 
