@@ -81,6 +81,8 @@ def test_node_numbers_with_gaps_in_any_order(tmp_path):
     lambda text: text.replace("\n2 1 0 0\n", "\n2 1 x 0\n", 1),  # not a number
     lambda text: text.replace("$EndElements", "1 2 2 0 1 1 2 99\n$EndElements"),  # no node 99, count off
     lambda text: text.replace("$EndNodes", ""),
+    lambda text: text.replace("22 2 2 5 1 7 9 11\n$EndElements", "22\n$EndElements"),  # a row of one number
+    lambda text: text.replace("\n12\n1 0 0 0\n", "\n12\n100000 0 0 0\n", 1),  # numbers far apart
 ])
 def test_what_is_not_a_plain_2_2_text_file_is_left_to_meshio(tmp_path, change):
     text = (MESHES / "square_msh22.msh").read_text()

@@ -17,6 +17,9 @@ import numpy as np
 
 #: gmsh's element type number -> (meshio's cell type, nodes per cell, dimension).
 ELEMENT_TYPES = {15: ("vertex", 1, 0), 1: ("line", 2, 1), 2: ("triangle", 3, 2), 4: ("tetra", 4, 3)}
+#: The nodes of a cell by gmsh's element type number (0: a type not read here).
+NODES_PER_CELL = np.zeros(max(ELEMENT_TYPES) + 1, dtype=np.int64)
+NODES_PER_CELL[list(ELEMENT_TYPES)] = [size for _, size, _ in ELEMENT_TYPES.values()]
 #: Whether each byte separates numbers in a text file (as whitespace).
 BLANK = np.isin(np.arange(256), np.frombuffer(b" \t\n\r\x0b\x0c", dtype=np.uint8))
 _NAME = re.compile(rb'^\s*(\d+)\s+(\d+)\s+"([^"]*)"\s*$', re.MULTILINE)
@@ -98,7 +101,8 @@ def _nodes(section: bytes) -> tuple[np.ndarray, np.ndarray] | None:
         return None
     rows = numbers.reshape(-1, 4)
     numbers = rows[:, 0]
-    if not numbers.size or (numbers != np.round(numbers)).any() or numbers.min() < 1 or numbers.max() > 2**31:
+    if not numbers.size or (numbers != np.round(numbers)).any() or numbers.min() < 1 or \
+            numbers.max() > 4 * numbers.size + 1024:  # far sparser numbers: left to meshio
         return None
     numbers = numbers.astype(np.int64)
     index = np.full(numbers.max() + 1, -1, dtype=np.int64)
@@ -119,16 +123,13 @@ def _elements(section: bytes, index: np.ndarray) -> list[tuple[CellBlock, np.nda
     row = np.searchsorted(np.flatnonzero(text == ord("\n")), starts)  # row 0: the count
     lengths = np.bincount(row)[1:]  # numbers per row
     lengths = lengths[lengths > 0]
-    if lengths.size != count or not count or lengths.sum() != tokens.size:
+    if lengths.size != count or not count or lengths.sum() != tokens.size or lengths.min() < 5:
         return None
     first = np.cumsum(lengths) - lengths
     kinds, tags = tokens[first + 1], tokens[first + 2]
-    nodes_per_cell = np.zeros(max(ELEMENT_TYPES) + 1, dtype=np.int64)
-    for number, (_, size, _) in ELEMENT_TYPES.items():
-        nodes_per_cell[number] = size
-    known = (kinds >= 0) & (kinds < nodes_per_cell.size)
-    if not known.all() or (nodes_per_cell[kinds] == 0).any() or (tags != 2).any() or \
-            (lengths != 5 + nodes_per_cell[kinds]).any():
+    if not ((kinds >= 0) & (kinds < NODES_PER_CELL.size)).all():
+        return None
+    if (NODES_PER_CELL[kinds] == 0).any() or (tags != 2).any() or (lengths != 5 + NODES_PER_CELL[kinds]).any():
         return None
     blocks = []
     for start, stop in _runs(kinds):
