@@ -22,19 +22,22 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING
 
-import meshio
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import Delaunay
 import skfem
 
-from vpcontact import ball
+from vpcontact import ball, msh22
 from vpcontact.errors import CaseError, shown
 from vpcontact.inputs import check_regular_file
 from vpcontact.mesh_checks import check_finite, check_triangles
 from vpcontact.mesh_checks_3d import check_tetrahedra
 from vpcontact.memory import available_memory
+
+if TYPE_CHECKING:
+    import meshio
 
 NormalField = Callable[[np.ndarray], np.ndarray]
 Projection = Callable[[np.ndarray], np.ndarray]
@@ -591,19 +594,9 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     """
     label = os.fspath(path)
     check_regular_file(path, "mesh file")
-    # meshio prints its per-format failures and then calls sys.exit(1) when no reader
-    # accepts the file; other problems surface as assorted exceptions.
-    with contextlib.redirect_stdout(io.StringIO()) as said, contextlib.redirect_stderr(said):
-        try:
-            data = meshio.read(path)
-        except (Exception, SystemExit) as exc:
-            failure = exc
-        else:
-            failure = None
-    if failure is not None:
-        reason = str(failure) if isinstance(failure, Exception) else said.getvalue()
-        reason = " ".join(reason.replace("Error:", "").split()) or type(failure).__name__
-        raise CaseError(f"cannot read mesh file '{label}': {reason}") from failure
+    data = msh22.read(path)  # a plain gmsh 2.2 text file, read with NumPy
+    if data is None:
+        data = _read_with_meshio(path, label)
 
     names = _physical_names(label) or [(int(v[1]), int(v[0]), k) for k, v in data.field_data.items() if np.size(v) == 2]
     dim = 3 if any(block.dim == 3 for block in data.cells) else 2
@@ -662,6 +655,22 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
                 )
             parts[name] = parts[str(tag)]
     return Mesh(mesh.with_boundaries(parts), parts, {}, label, _regions(label, names, dim, members))
+
+
+def _read_with_meshio(path: str | os.PathLike, label: str) -> meshio.Mesh:
+    """meshio's reading of a mesh file; CaseError naming the file if meshio cannot read it."""
+    import meshio  # only for the files msh22 does not read
+
+    # meshio prints its per-format failures and then calls sys.exit(1) when no reader
+    # accepts the file; other problems surface as assorted exceptions.
+    with contextlib.redirect_stdout(io.StringIO()) as said, contextlib.redirect_stderr(said):
+        try:
+            return meshio.read(path)
+        except (Exception, SystemExit) as exc:
+            failure = exc
+    reason = str(failure) if isinstance(failure, Exception) else said.getvalue()
+    reason = " ".join(reason.replace("Error:", "").split()) or type(failure).__name__
+    raise CaseError(f"cannot read mesh file '{label}': {reason}") from failure
 
 
 def _regions(label: str, names: list[tuple[int, int, str]], dim: int, members: np.ndarray) -> dict[str, np.ndarray]:

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import os
 
-import meshio
 import numpy as np
 
 from .mesh import CELLS, Mesh
@@ -22,6 +21,8 @@ from .mesh import CELLS, Mesh
 
 def write_mesh(mesh: Mesh, path: str | os.PathLike) -> None:
     """Write `mesh` to `path` as a gmsh 2.2 text file (see the module docstring)."""
+    import meshio  # only when a mesh is written (the last mesh of an adaptive run)
+
     dim = mesh.dim
     body, facet = CELLS[dim]
     points = np.vstack((mesh.mesh.p, np.zeros((3 - dim, mesh.mesh.p.shape[1])))).T

@@ -38,9 +38,9 @@ import threading
 import time as clock
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import checkpoint, directory
-from .adapt import COLUMNS, Adaptation, Cycle, adapt, check_start
 from .case import Case, load_case
 from .errors import CaseError
 from .mesh_file import write_mesh
@@ -49,6 +49,9 @@ from .results import Result
 from .stepping import TimeLoop
 from .writers import (check_room, json_safe, remove_files, remove_outputs, remove_temporaries, replacing, versions,
                       write_outputs, write_resolved_case, write_text)
+
+if TYPE_CHECKING:
+    from .adapt import Adaptation, Cycle
 
 SIGNAL_NAMES = {signal.SIGINT: "SIGINT", signal.SIGTERM: "SIGTERM"}
 EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
@@ -96,6 +99,8 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
         with StopOnSignals() as stopper:
             problem = build_problem(case)
             if case.adapt is not None:
+                from .adapt import check_start  # an adaptive run only (as _adapt_locked)
+
                 check_start(problem)
                 started = True  # from here on the directory is written to: nothing above wrote to it
                 adaptation = _adapt_locked(problem, held, clear=overwrite and used, stopper=stopper, progress=progress)
@@ -150,6 +155,8 @@ def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool
 
 def _adapt_locked(problem: Problem, held: directory.Held, *, clear: bool, stopper, progress: bool) -> Adaptation:
     """The adaptive cycles of ``problem.case`` in a directory this process holds (see the module docstring)."""
+    from .adapt import COLUMNS, adapt
+
     out, case = held.path, problem.case
     if clear:
         remove_outputs(out)

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import csv
 import functools
+import io
+import itertools
 import json
 import math
 import os
@@ -30,7 +32,6 @@ from contextlib import contextmanager
 from importlib import metadata
 from pathlib import Path
 
-import meshio
 import numpy as np
 
 from . import directory
@@ -39,6 +40,7 @@ from .errors import CaseError
 from .plots import DPI, FIGURES
 from .results import CONTACT_ARRAYS, Result
 from .space import CELLS, coordinates
+from .vtu import Grid, write_vtu
 
 PACKAGES = ("vpcontact", "numpy", "scipy", "scikit-fem", "meshio", "pydantic")
 
@@ -232,30 +234,58 @@ def layer_columns(problem) -> dict[str, np.ndarray]:
 
 
 def _write_contact(result: Result, path: Path) -> None:
+    """contact.csv, in blocks of rows: each number turned into text once (the columns of a node, such as its
+    coordinates, once for all the steps; those of a row, such as t, once for all its nodes), as csv.writer
+    writes it (floats as repr, an empty cell for None or a NaN layer parameter, text quoted if need be)."""
     surface = result.problem.surface
     rows, m = len(result.rows), surface.size
     steps, substeps, times = result.series("step").astype(int), result.series("substep").astype(int), result.times
     axes = coordinates(result.dim)
     layer = layer_columns(result.problem)
-    layer_text = [np.where(np.isnan(values), None, values) if values.dtype.kind == "f" else values
-                  for values in layer.values()]  # None: an empty cell
     names = ["step", "t", "node", *axes, *(f"normal_{c}" for c in axes), "weight", *CONTACT_ARRAYS, "substep",
              *layer]
+    node_cells = _joined(surface.nodes, *surface.coordinates, *surface.normals, surface.weights)
+    layer_cells = _joined(*layer.values(), nan="") if layer else None  # a parameter a node's law has not: empty
+    status_names = np.asarray(STATUS_NAMES)
     block = max(1, CONTACT_BLOCK // max(m, 1))
     with replacing(path) as temporary, temporary.open("w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(names)
+        csv.writer(handle).writerow(names)
         for start in range(0, rows, block):
             chosen = slice(start, min(rows, start + block))
             count = chosen.stop - start
-            per_node = (surface.nodes, *surface.coordinates, *surface.normals, surface.weights)
-            columns = [np.repeat(steps[chosen], m), np.repeat(times[chosen], m),
-                       *(np.tile(values, count) for values in per_node)]
-            columns += [np.array(result.contact[name][chosen]).ravel() for name in CONTACT_ARRAYS]
-            columns[-1] = np.asarray(STATUS_NAMES)[columns[-1].astype(int)]
-            columns.append(np.repeat(substeps[chosen], m))
-            columns += [np.tile(values, count) for values in layer_text]
-            writer.writerows(zip(*(c.tolist() for c in columns)))
+            row_cells = _joined(steps[chosen], times[chosen])  # step and t
+            columns = [itertools.chain.from_iterable(itertools.repeat(cells, m) for cells in row_cells),
+                       node_cells * count]
+            columns += [_texts(np.array(result.contact[name][chosen]).ravel()) for name in CONTACT_ARRAYS[:-1]]
+            columns.append(status_names[np.array(result.contact["status"][chosen]).ravel().astype(int)].tolist())
+            columns.append(_texts(np.repeat(substeps[chosen], m)))
+            if layer_cells is not None:
+                columns.append(layer_cells * count)
+            handle.writelines(",".join(cells) + "\r\n" for cells in zip(*columns))
+
+
+def _joined(*columns: np.ndarray, nan: str = "nan") -> list[str]:
+    """The cells of ``columns`` (arrays of one length) as the text of each row, comma-separated."""
+    return [",".join(cells) for cells in zip(*(_texts(column, nan) for column in columns))]
+
+
+def _texts(values: np.ndarray, nan: str = "nan") -> list[str]:
+    """The cells of a CSV column as csv.writer writes them: integers as str, floats as repr (NaN as ``nan``),
+    text quoted where it holds a comma, a quote or a line break."""
+    if values.dtype.kind == "f":
+        texts = list(map(repr, values.tolist()))
+        return texts if nan == "nan" else [nan if text == "nan" else text for text in texts]
+    if values.dtype.kind in "iub":
+        return list(map(str, values.tolist()))
+    quoted = {text: _quoted(text) for text in set(values.tolist())}
+    return [quoted[text] for text in values.tolist()]
+
+
+def _quoted(text: str) -> str:
+    """One text cell as csv.writer writes it."""
+    buffer = io.StringIO()
+    csv.writer(buffer, lineterminator="").writerow([text])
+    return buffer.getvalue()
 
 
 def _write_fields(result: Result, folder: Path) -> None:
@@ -264,44 +294,42 @@ def _write_fields(result: Result, folder: Path) -> None:
     directory.mkdir(folder)
     problem = result.problem
     element_cells, facet_cells, _ = CELLS[result.dim]
-    points = _in_space(problem.mesh.mesh.p.T)
-    elements = [(element_cells, problem.mesh.mesh.t.T)]
+    body_grid = Grid(_in_space(problem.mesh.mesh.p.T), element_cells, problem.mesh.mesh.t.T)
     surface = problem.surface
-    contact_points = _in_space(surface.coordinates.T)
-    facets = [(facet_cells, surface.facets.T)]
-    layer = layer_columns(problem)
-    if "part" in layer:  # VTU point data are numbers: the index in contact.parts
-        layer["part"] = surface.owner
+    if surface.size:
+        contact_grid = Grid(_in_space(surface.coordinates.T), facet_cells, surface.facets.T)
+        normal = _in_space(surface.normals.T)
+        layer = layer_columns(problem)
+        if "part" in layer:  # VTU point data are numbers: the index in contact.parts
+            layer["part"] = surface.owner
+        layer = {key: np.asarray(value, dtype=float) for key, value in layer.items()}
+        end_rows = _end_of_step_rows(result)
     body, contact = [], []
-    materials = {"material": [problem.materials.owner.astype(np.int32)], "E": [np.array(problem.materials.E)],
-                 "nu": [np.array(problem.materials.nu)]}
+    materials = {"material": problem.materials.owner.astype(np.int32), "E": np.array(problem.materials.E),
+                 "nu": np.array(problem.materials.nu)}
     for step, fields in sorted(result.fields.items()):
         t = problem.times[step - 1]
         displacement = _in_space(fields.displacement)
         name = f"body_{step:05d}.vtu"
-        cell_data = {"stress": [_tensors_in_space(fields.stress, fields.stress33)], "von_mises": [fields.von_mises],
+        cell_data = {"stress": _tensors_in_space(fields.stress, fields.stress33), "von_mises": fields.von_mises,
                      **materials}
         if fields.z is not None:
-            cell_data["z"] = [_tensors_in_space(fields.z)]
+            cell_data["z"] = _tensors_in_space(fields.z)
         if fields.error_indicator is not None:
-            cell_data["error_indicator"] = [fields.error_indicator]
+            cell_data["error_indicator"] = fields.error_indicator
         with replacing(folder / name) as temporary:
-            meshio.write(temporary, meshio.Mesh(points, elements, point_data={"displacement": displacement},
-                                                cell_data=cell_data))
+            write_vtu(temporary, body_grid, {"displacement": displacement}, cell_data)
         body.append((t, name))
         if surface.size:
-            normal = _in_space(surface.normals.T)
             name = f"contact_{step:05d}.vtu"
-            row = _end_of_step_row(result, step)
-            data = {key: result.contact[key][row] for key in CONTACT_ARRAYS}
+            row = end_rows[step]
+            data = {key: np.asarray(result.contact[key][row], dtype=float) for key in CONTACT_ARRAYS}
             pressure = data["pressure_compliance"] + data["pressure_rigid"]
             with replacing(folder / name) as temporary:
-                meshio.write(temporary, meshio.Mesh(contact_points, facets, point_data={
-                    **{key: np.asarray(value, dtype=float) for key, value in data.items()},
-                    "pressure": pressure, "normal": normal,
+                write_vtu(temporary, contact_grid, {
+                    **data, "pressure": pressure, "normal": normal,
                     "contact_force": -normal * (surface.weights * pressure)[:, None],
-                    "displacement": displacement[surface.nodes],
-                    **{key: np.asarray(value, dtype=float) for key, value in layer.items()}}))
+                    "displacement": displacement[surface.nodes], **layer})
             contact.append((t, name))
     _write_pvd(folder / "body.pvd", body)
     if contact:
@@ -325,9 +353,10 @@ def _tensors_in_space(tensors: np.ndarray, t33: np.ndarray | None = None) -> np.
     return full.reshape(n, 9)
 
 
-def _end_of_step_row(result: Result, step: int) -> int:
-    """The history row at t_n of step n."""
-    return int(np.flatnonzero(result.ends_step() & (result.series("step") == step))[0])
+def _end_of_step_rows(result: Result) -> dict[int, int]:
+    """Step n -> the history row at t_n."""
+    ends = np.flatnonzero(result.ends_step())
+    return dict(zip(result.series("step")[ends].astype(int).tolist(), ends.tolist()))
 
 
 def write_solution(result: Result, path: Path) -> None:
@@ -350,12 +379,11 @@ def write_solution(result: Result, path: Path) -> None:
         arrays["z"] = np.array([result.fields[s].z for s in steps])
     surface = result.problem.surface
     if surface.size:
-        ends = np.flatnonzero(result.ends_step())
-        row_of_step = dict(zip(result.series("step")[ends].tolist(), ends.tolist()))
+        end_rows = _end_of_step_rows(result)
         arrays["contact_nodes"] = surface.nodes
-        arrays["xi"] = np.array([result.contact["xi"][row_of_step[s]] for s in steps]).reshape(len(steps), surface.size)
+        arrays["xi"] = np.array([result.contact["xi"][end_rows[s]] for s in steps]).reshape(len(steps), surface.size)
     with replacing(path) as temporary:
-        np.savez_compressed(temporary, **arrays)
+        np.savez(temporary, **arrays)
 
 
 def _write_figures(result: Result, folder: Path) -> None:

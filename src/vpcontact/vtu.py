@@ -1,0 +1,70 @@
+"""VTK XML unstructured grids (``.vtu``, read by ParaView, VTK and meshio), written with NumPy alone.
+
+Every array is written inline in VTK's uncompressed binary format: base64 of its length in bytes (a
+UInt64) followed by its little-endian bytes. Without compression, writing costs little more than
+copying the arrays to disk. (Raw appended data would be smaller, but meshio's reader can mix up its
+arrays.) The points and cells of a body are the same at every field step: a :class:`Grid` encodes them
+once, and each file written on it encodes only its data.
+"""
+
+from __future__ import annotations
+
+import base64
+from collections.abc import Mapping
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+#: VTK's number of each cell type (named as meshio and ``space.CELLS`` name them).
+CELL_TYPES = {"line": 3, "triangle": 5, "tetra": 10}
+#: VTK's name of each NumPy type written.
+VTK_TYPES = {np.dtype("<f8"): "Float64", np.dtype("<i8"): "Int64", np.dtype("<i4"): "Int32", np.dtype("u1"): "UInt8"}
+
+
+class Grid:
+    """The points (n, 3) and cells (k, nodes per cell) of one cell type: the ``Points`` and ``Cells``
+    elements of a VTU file, encoded once for every file written on this grid."""
+
+    def __init__(self, points: np.ndarray, cell_type: str, cells: np.ndarray):
+        self.points, self.cells = len(points), len(cells)
+        fits = max(self.points, self.cells * np.shape(cells)[1]) < 2**31
+        index = np.int32 if fits else np.int64  # connectivity and offsets in 4 bytes if they fit
+        cells = np.asarray(cells, dtype=index)
+        offsets = np.arange(1, self.cells + 1, dtype=index) * cells.shape[1]
+        types = np.full(self.cells, CELL_TYPES[cell_type], dtype=np.uint8)
+        self.xml = "\n".join(["<Points>", _data_array("Points", points), "</Points>", "<Cells>",
+                              _data_array("connectivity", cells), _data_array("offsets", offsets),
+                              _data_array("types", types), "</Cells>"])
+
+
+def write_vtu(path: str | Path, grid: Grid, point_data: Mapping[str, np.ndarray] = {},
+              cell_data: Mapping[str, np.ndarray] = {}) -> None:
+    """Write ``grid`` with ``point_data`` (arrays of grid.points rows) and ``cell_data`` (of grid.cells rows)
+    to ``path``: an array of shape (rows,) is a scalar, (rows, c) a vector or tensor of c components;
+    floats are written as Float64, integers as Int32 (if they are) or Int64, booleans as UInt8."""
+    for data, rows in ((point_data, grid.points), (cell_data, grid.cells)):
+        for name, values in data.items():
+            if len(values) != rows:
+                raise ValueError(f"'{name}': {len(values)} values for {rows} points or cells")
+    with open(path, "w", encoding="utf-8") as handle:
+        handle.write("\n".join([
+            '<?xml version="1.0"?>',
+            '<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">',
+            "<UnstructuredGrid>", f'<Piece NumberOfPoints="{grid.points}" NumberOfCells="{grid.cells}">',
+            "<PointData>", *(_data_array(name, values) for name, values in point_data.items()), "</PointData>",
+            "<CellData>", *(_data_array(name, values) for name, values in cell_data.items()), "</CellData>",
+            grid.xml, "</Piece>", "</UnstructuredGrid>", "</VTKFile>", ""]))
+
+
+def _data_array(name: str, values: np.ndarray) -> str:
+    """One DataArray element: ``values`` in VTK's uncompressed binary format (see the module docstring)."""
+    values = np.asarray(values)
+    kind = values.dtype.kind
+    dtype = "<f8" if kind == "f" else "u1" if kind in "bu" and values.itemsize == 1 else \
+        "<i4" if values.dtype == np.int32 else "<i8"
+    values = np.ascontiguousarray(values, dtype=dtype)
+    components = f' NumberOfComponents="{values.shape[1]}"' if values.ndim == 2 else ""
+    encoded = base64.b64encode(np.uint64(values.nbytes).tobytes() + values.tobytes()).decode("ascii")
+    return (f'<DataArray type="{VTK_TYPES[values.dtype]}" Name={quoteattr(name)}{components} format="binary">'
+            f"{encoded}</DataArray>")
