@@ -118,6 +118,23 @@ def test_the_load_vector_is_scikit_fems_to_rounding(mesh_and_basis):
         assert relative(loads(t), old) <= 1e-13
 
 
+def test_the_load_on_chosen_dofs_is_the_load_vector_there_and_vanishes_off_its_support(mesh_and_basis):
+    """F(t)[dofs] computed at the dofs the loads reach (a traction alone: the nodes of the elements on its
+    part) is the whole vector restricted to the dofs, and zero off the support it reports, which holds
+    the part's dofs and not every dof."""
+    name, mesh, basis = mesh_and_basis
+    part = {"half disc": "top_arc", "quarter ball": "top", "block": "top"}[name]
+    loads = LoadVector(basis, mesh, [("traction", part, traction)], [])
+    dofs = np.setdiff1d(np.arange(basis.N), basis.nodal_dofs[0, mesh.nodes(part)][::2])  # some of them held
+    on = loads.on(dofs)
+    part_dofs = np.unique(basis.nodal_dofs[:, mesh.nodes(part)])
+    assert np.isin(np.flatnonzero(np.isin(dofs, part_dofs)), on.support).all() and on.support.size < dofs.size
+    for t in (0.4, 1.3):
+        F = on(t)
+        np.testing.assert_array_equal(F, loads(t)[dofs])
+        assert not np.any(np.delete(F, on.support))
+
+
 @pytest.mark.parametrize("make", [lambda: half_disc(0.2), lambda: quarter_ball(0.4)], ids=["2D", "3D"])
 def test_a_chunk_of_seven_elements_gives_the_same_matrix(make, monkeypatch):
     basis = displacement_basis(make())

@@ -29,6 +29,25 @@ def test_solved_span_reuses_solutions_of_combinations():
     assert span.solves == 3
 
 
+def test_solved_span_on_a_support_projects_there_only_and_falls_back_off_it():
+    """Right-hand sides that vanish off a support: the same N A0⁻¹ b as a solve, no solve for their
+    combinations; one that does not vanish there (given without the support) is solved."""
+    rng = np.random.default_rng(1)
+    A = sp.random(40, 40, density=0.2, random_state=3) + 40 * sp.eye(40)
+    lu = sp.linalg.splu(A.tocsc())
+    N = sp.random(5, 40, density=0.3, random_state=4).tocsr()
+    support = np.array([2, 7, 11, 30])
+    a, b = np.zeros(40), np.zeros(40)
+    a[support], b[support] = rng.standard_normal(4), rng.standard_normal(4)
+    span = SolvedSpan(lu.solve, N.__matmul__, N.shape)
+    for t in (0.1, 0.2, 0.7, 3.0):
+        np.testing.assert_allclose(span(a + t * b, support), N @ lu.solve(a + t * b), rtol=1e-12, atol=1e-12)
+    assert span.solves == 2
+    c = a + rng.standard_normal(40)
+    np.testing.assert_allclose(span(c), N @ lu.solve(c), rtol=1e-12, atol=1e-12)
+    assert span.solves == 3
+
+
 def test_loads_linear_in_time_cost_one_solve_plus_the_recovered_steps():
     case = half_disc_case(h=0.1, load=20.0)
     case["output"]["field_steps"] = [4, 11]
