@@ -54,3 +54,14 @@ def test_help_and_import_load_no_numerics():
     script = "import vpcontact; print(vpcontact.load_case.__module__, type(vpcontact.solve).__name__)"
     assert subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                           check=True).stdout.split() == ["vpcontact.case", "function"]
+
+
+def test_python_dash_m_vpcontact_is_the_command_line(tmp_path):
+    """`python -m vpcontact ARGS` is `vpcontact ARGS`: the same help, and the same one-line refusal."""
+    status, out, err = run_cli("--help")
+    module = subprocess.run([sys.executable, "-m", "vpcontact", "--help"], capture_output=True, text=True, timeout=120)
+    assert (module.returncode, module.stdout, module.stderr) == (status, out, err)
+    before = snapshot_tree(tmp_path)
+    refused = subprocess.run([sys.executable, "-m", "vpcontact", "run", str(tmp_path / "case.toml")],
+                             capture_output=True, text=True, timeout=120)
+    assert_refused(refused.returncode, refused.stderr, "required: --out", untouched=[(tmp_path, before)])
