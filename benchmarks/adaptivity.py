@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -41,7 +42,7 @@ from vpcontact.adapt import adapt, solve_and_estimate
 from vpcontact.norms import differences, element_energies, transfer
 from vpcontact.problem import build_problem
 from vpcontact.refinement import signed_measures
-from vpcontact.reproduce import level_overrides
+from vpcontact.reproduce import dofs_reaching, level_overrides
 
 CASE = Path(__file__).resolve().parent.parent / "examples" / "paper_ball.toml"
 TIMES = {5: 0.5, 11: 1.1}  # step → t on the example's grid
@@ -85,27 +86,14 @@ class Reference:
         return found
 
 
-def dofs_to_reach(target: float, dofs: list[int], errors: list[float]) -> float | None:
-    """The dofs at which the adaptive error first reaches ``target``: linear in (log dofs, log error) between the
-    last cycle above it and the first at or below it (that cycle's own dofs if it is the first); None if no
-    cycle reaches it."""
-    below = [i for i, error in enumerate(errors) if error <= target]
-    if not below:
-        return None
-    i = below[0]
-    if i == 0:
-        return float(dofs[0])
-    x0, x1, y0, y1 = np.log(dofs[i - 1]), np.log(dofs[i]), np.log(errors[i - 1]), np.log(errors[i])
-    return float(np.exp(x0 + (np.log(target) - y0) * (x1 - x0) / (y1 - y0)))
-
-
 def reach(uniform: dict, cycles: list[dict]) -> dict:
-    """For each error: the uniform mesh's, the dofs the adaptive cycles need to reach it (`dofs_to_reach`) and
-    their ratio to the uniform mesh's dofs."""
+    """For each error: the uniform mesh's, the dofs the adaptive cycles need to reach it
+    (`vpcontact.reproduce.dofs_reaching`; None if no cycle does) and their ratio to the uniform mesh's dofs."""
     found = {"uniform_level": uniform["level"], "uniform_dofs": uniform["dofs"], "errors": {}}
     for name in ERRORS:
         target = uniform["errors"][name]
-        needed = dofs_to_reach(target, [c["dofs"] for c in cycles], [c["errors"][name] for c in cycles])
+        needed = dofs_reaching([c["dofs"] for c in cycles], [c["errors"][name] for c in cycles], target)
+        needed = None if math.isnan(needed) else needed
         found["errors"][name] = {"uniform_error": target, "adaptive_dofs": needed,
                                  "ratio": None if needed is None else needed / uniform["dofs"]}
     return found

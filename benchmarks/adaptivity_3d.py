@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -38,6 +39,7 @@ from vpcontact.adapt import adapt
 from vpcontact.indicators import Level
 from vpcontact.norms import differences
 from vpcontact.problem import build_problem
+from vpcontact.reproduce import dofs_reaching
 from vpcontact.residual_estimate import ResidualEstimator
 
 CASE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
@@ -106,14 +108,11 @@ def sizes(mesh) -> dict:
 
 
 def crossing(cycles: list[dict], target: float, t: str) -> float | None:
-    """The dofs at which the cycles' error at ``t`` falls to ``target``: log–log interpolation between the
-    last cycle above it and the first at or below it; None when no cycle reaches it."""
-    for before, after in zip(cycles, cycles[1:]):
-        high, low = before[t]["error"], after[t]["error"]
-        if high > target >= low:
-            fraction = np.log(high / target) / np.log(high / low)
-            return float(np.exp(np.log(before["dofs"]) + fraction * np.log(after["dofs"] / before["dofs"])))
-    return None
+    """The dofs at which the cycles' error at ``t`` falls to ``target`` (`vpcontact.reproduce.dofs_reaching`:
+    log–log interpolation between the last cycle above it and the first at or below it); None when no
+    cycle reaches it."""
+    found = dofs_reaching([c["dofs"] for c in cycles], [c[t]["error"] for c in cycles], target)
+    return None if math.isnan(found) else found
 
 
 HEADER = (f"{'run':14} {'dofs':>7} {'Γ3 nodes':>8} {'estimate':>9} "

@@ -247,3 +247,16 @@ def test_overwrite_removes_the_reproduction_and_nothing_else(quick, tmp_path):
     assert left == set(mine)
     assert all((out / name).read_text() == text for name, text in mine.items())
     assert not (out / "studies" / "hk_convergence").exists()  # emptied folders go
+
+
+def test_dofs_reaching_interpolates_log_log_between_the_meshes_around_the_target():
+    """On errors that fall as a power of the DOFs the interpolation is exact; a first mesh already below
+    the target gives its own DOFs; no mesh reaching it, NaN."""
+    from vpcontact.reproduce import dofs_reaching
+
+    dofs = [100, 400, 1600, 6400]
+    errors = [3.0 * n**-0.6 for n in dofs]
+    target = 3.0 * 1000**-0.6
+    assert math.isclose(dofs_reaching(dofs, errors, target), 1000.0, rel_tol=1e-12)
+    assert dofs_reaching(dofs, errors, errors[0]) == 100.0
+    assert math.isnan(dofs_reaching(dofs, errors, 0.5 * errors[-1]))

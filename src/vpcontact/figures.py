@@ -443,23 +443,23 @@ def draw_all(data: dict, frames: dict, folder: Path) -> dict:
     contact = [frames[f"beta{s}_t{t:g}"] for s in ("+1", "-1") for t in FIGURE_TIMES]
     contact += [frames[f"final_{name}"] for name in CONTACT_CONDITIONS]
     scale = max(float(np.max(f.pressure, initial=0.0)) for f in contact) / ARROW  # one scale for Figs. 2, 3, 5
-    jobs = {
-        "fig02": (deformed_figure, [frames[f"beta+1_t{t:g}"] for t in FIGURE_TIMES], TITLES["fig02"], folder, "fig02",
-                  scale),
-        "fig03": (deformed_figure, [frames[f"beta-1_t{t:g}"] for t in FIGURE_TIMES], TITLES["fig03"], folder, "fig03",
-                  scale),
-        "fig04": (stiffness_figure, data, folder),
-        "fig05": (deformed_figure, [frames[f"final_{name}"] for name in CONTACT_CONDITIONS], TITLES["fig05"], folder,
-                  "fig05", scale),
-        "fig06": (probe_figure, data, folder, "penetration_probe", "fig06",
-                  "Fig. 6: penetration at the bottom point (0, 0)", r"penetration $u_\nu$ (m)"),
-        "fig07": (probe_figure, data, folder, "normal_stress_probe", "fig07",
-                  "Fig. 7: normal contact stress at the bottom point (0, 0)", r"$|\sigma_\nu|$ (N/m)", -1.0),
-        "fig08": (rho_figure, data, folder),
-        "fig09": (deformed_figure, [frames[f"rho_{rho:g}"] for rho in data["settings"]["fig9_rho"]], TITLES["fig09"],
-                  folder, "fig09"),
-        "fig10": (hk_figure, data, folder),
-        "fig11": (adaptive_figure, data, folder),
+    drawn = {
+        "fig02": deformed_figure([frames[f"beta+1_t{t:g}"] for t in FIGURE_TIMES], TITLES["fig02"], folder, "fig02",
+                                 scale),
+        "fig03": deformed_figure([frames[f"beta-1_t{t:g}"] for t in FIGURE_TIMES], TITLES["fig03"], folder, "fig03",
+                                 scale),
+        "fig04": stiffness_figure(data, folder),
+        "fig05": deformed_figure([frames[f"final_{name}"] for name in CONTACT_CONDITIONS], TITLES["fig05"], folder,
+                                 "fig05", scale),
+        "fig06": probe_figure(data, folder, "penetration_probe", "fig06",
+                              "Fig. 6: penetration at the bottom point (0, 0)", r"penetration $u_\nu$ (m)"),
+        "fig07": probe_figure(data, folder, "normal_stress_probe", "fig07",
+                              "Fig. 7: normal contact stress at the bottom point (0, 0)", r"$|\sigma_\nu|$ (N/m)",
+                              sign=-1.0),
+        "fig08": rho_figure(data, folder),
+        "fig09": deformed_figure([frames[f"rho_{rho:g}"] for rho in data["settings"]["fig9_rho"]], TITLES["fig09"],
+                                 folder, "fig09"),
+        "fig10": hk_figure(data, folder),
+        "fig11": adaptive_figure(data, folder),
     }
-    drawn = {key: draw(*arguments) for key, (draw, *arguments) in jobs.items()}
     return {key: {"title": TITLES[key], **paths} for key, paths in drawn.items()}
