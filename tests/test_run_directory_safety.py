@@ -392,11 +392,13 @@ def test_a_run_whose_directory_is_replaced_stops_writing(tmp_path, replace):
     process = start_run(slow_case(tmp_path), out)
     try:
         wait_for(lambda: (out / "checkpoint" / "state.npz").exists(), process)
+        os.kill(process.pid, signal.SIGSTOP)  # the swap is two steps: the run must not look in between
         out.rename(tmp_path / "moved")
         if replace:
             out.mkdir()
             (out / "notes.txt").write_text("a new directory of the user")
         before = snapshot_tree(tmp_path / "run")
+        os.kill(process.pid, signal.SIGCONT)
         _, stderr = process.communicate(timeout=60)
     finally:
         if process.poll() is None:
