@@ -129,14 +129,16 @@ class Result:
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
     error_estimate: bool = False  # output.error_estimate: the rows have the ESTIMATE_COLUMNS
+    output: object = None  # the OutputSection the run was made with (what the writers write)
 
     @classmethod
-    def start(cls, problem, solver) -> "Result":
-        wanted = field_step_numbers(problem.case.output.field_steps, len(problem.times))
+    def start(cls, problem, solver, output) -> "Result":
+        """The empty result of a run of ``problem`` by ``solver`` with the options ``output`` (OutputSection)."""
+        wanted = field_step_numbers(output.field_steps, len(problem.times))
         return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
                    contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
                    augmentation=solver.r, method=solver.name, method_reason=solver.reason, problem=problem,
-                   error_estimate=problem.case.output.error_estimate)
+                   output=output, error_estimate=output.error_estimate)
 
     # --- filling in ------------------------------------------------------------------------------
     def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status, substep: int = 1,
@@ -330,13 +332,14 @@ def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, conta
             "fields": (field_steps + 1) * per_field, "writing": WRITING_BYTES}
 
 
-def check_memory(case, nodes: int, elements: int, contact_nodes: int, history: bool, dim: int = 2) -> None:
-    """Refuse, before anything per step is allocated, a run whose outputs would not fit in the memory
-    available now: one line naming time.steps (and output.field_steps when the fields are the most)."""
-    steps = case.time.steps
-    field_steps = len(field_step_numbers(case.output.field_steps, steps))
+def check_memory(steps: int, output, nodes: int, elements: int, contact_nodes: int, history: bool,
+                 dim: int = 2) -> None:
+    """Refuse, before anything per step is allocated, a run of ``steps`` steps whose outputs (``output``, the
+    :class:`~vpcontact.case.OutputSection`) would not fit in the memory available now: one line naming
+    time.steps (and output.field_steps when the fields are the most)."""
+    field_steps = len(field_step_numbers(output.field_steps, steps))
     parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim,
-                          estimate=case.output.error_estimate)
+                          estimate=output.error_estimate)
     needed, available = sum(parts.values()), available_memory()
     if needed <= available:
         return
@@ -347,7 +350,7 @@ def check_memory(case, nodes: int, elements: int, contact_nodes: int, history: b
     key = f"time.steps = {steps}"
     fix = "use fewer steps"
     if parts["fields"] > parts["history rows"] + parts["contact rows"]:
-        chosen = case.output.field_steps
+        chosen = output.field_steps
         key += f" with output.field_steps = {quoted(chosen) if isinstance(chosen, str) else shown(repr(chosen))}"
         fix = "keep the fields at fewer steps (output.field_steps) or use fewer steps"
     raise CaseError(f"{key}: the run's outputs need about {needed / gib:.3g} GiB of memory ({detail}), more than "

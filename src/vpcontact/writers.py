@@ -163,17 +163,19 @@ def write_run(result: Result, out: str | os.PathLike, *, overwrite: bool = False
     held = directory.acquire(out, "output directory")
     try:
         remove_outputs(out)
-        write_resolved_case(result.problem.case, out)
+        if result.problem.source is not None:
+            write_resolved_case(result.problem.source, out)
         write_outputs(result, out)
     finally:
         held.release()
     return out
 
 
-def write_resolved_case(case, out: Path) -> None:
-    """case.resolved.toml: every value used, defaults included, the versions in its header."""
+def write_resolved_case(resolved: str, out: Path) -> None:
+    """case.resolved.toml: ``resolved``, the case with every value used and defaults included
+    (:meth:`~vpcontact.case.Case.to_toml`), the versions in its header."""
     header = "".join(f"# {name} {version}\n" for name, version in versions().items())
-    write_text(Path(out) / "case.resolved.toml", header + case.to_toml())
+    write_text(Path(out) / "case.resolved.toml", header + resolved)
 
 
 def write_outputs(result: Result, out: Path, *, history_only: bool = False) -> None:
@@ -186,7 +188,7 @@ def write_outputs(result: Result, out: Path, *, history_only: bool = False) -> N
         return
     _write_contact(result, out / "contact.csv")
     _write_fields(result, out / "fields")
-    if result.problem.case.output.figures and result.status in ("complete", "failed"):
+    if result.output.figures and result.status in ("complete", "failed"):
         _write_figures(result, out / "figures")
     summary = {**result.summary(), "versions": versions()}
     write_text(out / "summary.json", json.dumps(json_safe(summary), indent=2) + "\n")
