@@ -171,6 +171,25 @@ def test_arc_length_runs_along_the_bottom_arc(run_2d):
     assert np.all(table["arc_length"] <= angle + 1e-14) and table["arc_length"].iloc[-1] > 0.99 * np.pi / 2
 
 
+def test_contact_table_names_the_part_of_each_node(tmp_path):
+    """Γ3 of two contact parts (the half disc's arc split at a node, as in tests/test_contact_parts.py): the
+    part of each node, a category of the parts' names, is contact.csv's."""
+    from vpcontact.mesh import half_disc
+    from test_contact_parts import LAYERS, two_parts_form, write_split_mesh
+
+    mesh = half_disc(0.25)
+    x = mesh.mesh.p[0, mesh.nodes("bottom_arc")]
+    write_split_mesh(tmp_path / "split.msh", mesh, "bottom_arc", float(x[np.argmin(np.abs(x - 0.5))]))
+    case = half_disc_case(h=0.25)
+    case["mesh"] = {"file": str(tmp_path / "split.msh")}
+    result = vpcontact.solve(two_parts_form(case, "bottom_arc", LAYERS["two families"]))
+    table = result.contact_table()
+    assert list(table["part"].cat.categories) == ["bottom_arc_below", "bottom_arc_above"]
+    assert set(table["part"]) == {"bottom_arc_below", "bottom_arc_above"}
+    csv = pd.read_csv(result.write(tmp_path / "out") / "contact.csv")
+    assert table["part"].astype(str).tolist() == csv[csv["step"] == 11]["part"].tolist()
+
+
 @pytest.mark.parametrize("step, words", [(12, "step 12 is not a step the run has done (steps 1 to 11)"),
                                          (0, "step 0 is not a step"), (True, "expected a step number"),
                                          ("5", "expected a step number")])

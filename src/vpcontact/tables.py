@@ -12,6 +12,7 @@ import numpy as np
 
 from .contact import STATUS_NAMES
 from .errors import CaseError
+from .plots import arc_length, step_rows
 from .results import CONTACT_ARRAYS, INTEGER_COLUMNS
 from .space import coordinates
 
@@ -62,8 +63,6 @@ def contact_table(result, step: int | None = None):
 def step_row(result, step: int | None) -> int:
     """The history row at t_n of step n = ``step`` (default: the last step done); CaseError for a step the
     run has not done."""
-    from .plots import step_rows
-
     if step is None:
         if result.completed_steps == 0:
             raise CaseError("the run has done no step: there is no contact table")
@@ -73,8 +72,6 @@ def step_row(result, step: int | None) -> int:
 
 def arc_lengths(surface) -> np.ndarray:
     """The arc length along Γ3 (2D) of each contact node, in their order (see :func:`vpcontact.plots.arc_length`)."""
-    from .plots import arc_length
-
     lengths = np.zeros(surface.size)
     if surface.size:
         order, s, _ = arc_length(surface.coordinates, surface.facets)
