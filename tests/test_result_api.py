@@ -2,6 +2,7 @@
 files the writers write and against Result.series / contact_history, result.plot's figures against the
 numbers they draw, result.to_pyvista, and result.write with the refusals of `vpcontact run --out`."""
 
+import io
 import subprocess
 import sys
 
@@ -281,7 +282,7 @@ def test_the_deformed_2d_body_is_coloured_by_the_field_asked_for(run_2d, field):
 @pytest.mark.parametrize("field", ["displacement", "sigma_yz"])
 def test_the_deformed_3d_body_is_coloured_by_the_field_asked_for(run_3d, field):
     figure = run_3d.plot.deformed(field=field)
-    figure.savefig(__import__("io").BytesIO(), format="png")  # the facets are projected when drawn
+    figure.savefig(io.BytesIO(), format="png")  # the facets are projected when drawn
     (surface,) = [c for c in figure.axes[0].collections if isinstance(c, Poly3DCollection)]
     fields, mesh = run_3d.fields[11], run_3d.problem.mesh.mesh
     boundary = mesh.boundary_facets()
