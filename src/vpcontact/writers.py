@@ -40,7 +40,7 @@ from .errors import CaseError
 from .plots import DPI, FIGURES
 from .results import CONTACT_ARRAYS, Result
 from .space import CELLS, coordinates
-from .vtu import Grid, write_vtu
+from .vtu import Grid, in_space, tensors_in_space, write_vtu
 
 PACKAGES = ("vpcontact", "numpy", "scipy", "scikit-fem", "meshio", "pydantic")
 
@@ -151,15 +151,24 @@ def remove_temporaries(out: Path) -> None:
     remove_files(out, TEMPORARIES)
 
 
+class NotEmpty(CaseError, FileExistsError):
+    """A directory that is not empty, written to without ``overwrite``: a CaseError (one line) and a
+    FileExistsError."""
+
+
 def write_run(result: Result, out: str | os.PathLike, *, overwrite: bool = False) -> Path:
     """Write every output of ``result`` to ``out`` (created; with ``overwrite`` the outputs of an earlier
     run there are removed first, and nothing else), each file atomically and summary.json last, while
-    holding the directory (see :mod:`vpcontact.directory`)."""
+    holding the directory (see :mod:`vpcontact.directory`). Refused as ``vpcontact run`` refuses its
+    ``--out``, before anything is written: CaseError for a path that cannot be a directory or with a file
+    or folder standing where an output goes, NotEmpty for a directory that is not empty without
+    ``overwrite``."""
     out = Path(out)
     directory.usable(out, "output directory")
     check_room(out, "output directory")
     if directory.holds_files(out, "output directory") and not overwrite:
-        raise FileExistsError(f"output directory '{out}' is not empty (use --overwrite to replace it)")
+        raise NotEmpty(f"output directory '{out}' is not empty: overwrite=True replaces the outputs of a run in it "
+                       f"(and nothing else)")
     held = directory.acquire(out, "output directory")
     try:
         remove_outputs(out)
@@ -296,11 +305,11 @@ def _write_fields(result: Result, folder: Path) -> None:
     directory.mkdir(folder)
     problem = result.problem
     element_cells, facet_cells, _ = CELLS[result.dim]
-    body_grid = Grid(_in_space(problem.mesh.mesh.p.T), element_cells, problem.mesh.mesh.t.T)
+    body_grid = Grid(in_space(problem.mesh.mesh.p.T), element_cells, problem.mesh.mesh.t.T)
     surface = problem.surface
     if surface.size:
-        contact_grid = Grid(_in_space(surface.coordinates.T), facet_cells, surface.facets.T)
-        normal = _in_space(surface.normals.T)
+        contact_grid = Grid(in_space(surface.coordinates.T), facet_cells, surface.facets.T)
+        normal = in_space(surface.normals.T)
         layer = layer_columns(problem)
         if "part" in layer:  # VTU point data are numbers: the index in contact.parts
             layer["part"] = surface.owner
@@ -311,12 +320,12 @@ def _write_fields(result: Result, folder: Path) -> None:
                  "nu": np.array(problem.materials.nu)}
     for step, fields in sorted(result.fields.items()):
         t = problem.times[step - 1]
-        displacement = _in_space(fields.displacement)
+        displacement = in_space(fields.displacement)
         name = f"body_{step:05d}.vtu"
-        cell_data = {"stress": _tensors_in_space(fields.stress, fields.stress33), "von_mises": fields.von_mises,
+        cell_data = {"stress": tensors_in_space(fields.stress, fields.stress33), "von_mises": fields.von_mises,
                      **materials}
         if fields.z is not None:
-            cell_data["z"] = _tensors_in_space(fields.z)
+            cell_data["z"] = tensors_in_space(fields.z)
         if fields.error_indicator is not None:
             cell_data["error_indicator"] = fields.error_indicator
         with replacing(folder / name) as temporary:
@@ -337,22 +346,6 @@ def _write_fields(result: Result, folder: Path) -> None:
     if contact:
         _write_pvd(folder / "contact.pvd", contact)
     write_solution(result, folder.parent / "solution.npz")
-
-
-def _in_space(vectors: np.ndarray) -> np.ndarray:
-    """Vectors (n, d) as the 3D vectors (n, 3) of a VTU file (z = 0 in 2D)."""
-    return np.column_stack([vectors, np.zeros((vectors.shape[0], 3 - vectors.shape[1]))])
-
-
-def _tensors_in_space(tensors: np.ndarray, t33: np.ndarray | None = None) -> np.ndarray:
-    """Tensors (n, d, d) as the 3 × 3 tensors (n, 9) of a VTU file; in 2D the out-of-plane entry is
-    ``t33`` (σ33 of the plane reduction), or 0."""
-    n, d = tensors.shape[:2]
-    full = np.zeros((n, 3, 3))
-    full[:, :d, :d] = tensors
-    if t33 is not None:
-        full[:, 2, 2] = t33
-    return full.reshape(n, 9)
 
 
 def _end_of_step_rows(result: Result) -> dict[int, int]:
