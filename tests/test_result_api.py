@@ -318,7 +318,7 @@ def test_a_bad_field_name_is_a_case_error_naming_the_valid_ones(fixture, field, 
 
 # --- pyvista ---------------------------------------------------------------------------------------
 def test_to_pyvista_holds_the_fields_of_the_step(run, dim):
-    pyvista = pytest.importorskip("pyvista")  # in the test extra: skipped only where it is not installed
+    pyvista = pytest.importorskip("pyvista")  # the extra "pyvista" (140 MB of VTK) is not in "test"
     grid = run.to_pyvista(step=5)
     assert isinstance(grid, pyvista.UnstructuredGrid)
     fields, mesh = run.fields[5], run.problem.mesh.mesh
