@@ -168,8 +168,8 @@ def _check_lines(c) -> list[str]:
                  (f"{_bytes(solver)}" if solver is not None else "not estimated") +
                  f"; {_bytes(c.memory_available_bytes)} available")
     t = c.time_seconds
-    lines.append(f"time: about {t['total']:.3g} s (build {t['build']:.3g} s, measured; solver setup "
-                 f"{t['solver setup']:.3g} s and time loop {t['time loop']:.3g} s, estimated: docs/performance.md)")
+    lines.append(f"time: about {t['total']:.2g} s (build {t['build']:.2g} s, measured; solver setup "
+                 f"{t['solver setup']:.2g} s and time loop {t['time loop']:.2g} s, estimated to a factor of 2)")
     return lines
 
 

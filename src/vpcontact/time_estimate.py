@@ -17,8 +17,8 @@ factor of 1.7 of their laws, where absolute rates (seconds for n dofs) missed so
 The constants were fitted to runs of the examples (``python benchmarks/check_estimate.py`` and its
 ``--fit``), whose Newton iterations per step (about 2.6) are in b: a case whose steps take more iterations
 takes longer in proportion, and a mesh file's build (read from disk) is not a built-in shape's. Against
-runs not in the fit (``--validation``) the estimate was 1.0 to 1.4 times the time measured
-(docs/performance.md, "The time estimate of vpcontact check").
+runs not in the fit (``--validation``) the estimate was 0.86 to 2.1 times the time measured, under
+load (docs/performance.md, "The time estimate of vpcontact check").
 """
 
 from __future__ import annotations
