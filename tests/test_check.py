@@ -127,6 +127,7 @@ BAD = [
     ({"time.steps": 100_000_000}, "time.steps = 100000000"),  # the outputs would not fit in memory
     ({"solver.augmentation": 1e-30}, "solver.augmentation"),  # found when the solver would be made
     ({"mesh.h": -1}, "mesh.h"),  # found by the schema
+    ({"adapt.cycles": 2, "adapt.max_dofs": 10}, "adapt.max_dofs = 10"),  # an adaptive run's first mesh
 ]
 
 
