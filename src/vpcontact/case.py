@@ -544,6 +544,7 @@ class OutputSection(_Section):
     checkpoint_every_seconds: NonNegativeFloat = 60.0  # 0: not by time
     figures: bool = False  # figures/*.png at the end of a complete or failed run (vpcontact.plots)
     error_estimate: bool = False  # the residual error estimate at every step (vpcontact.residual_estimate)
+    xdmf: bool = False  # fields/body.xdmf + body.h5 (contact too) beside the VTU files (vpcontact.xdmf)
 
     @field_validator("field_steps")
     @classmethod
