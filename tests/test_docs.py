@@ -57,7 +57,8 @@ def check_built(build: subprocess.CompletedProcess) -> None:
         errors = re.findall(r"^\s*(\w+(?:Error|Exception)\b.*)$", output, flags=re.MULTILINE)
         raise AssertionError(f"gallery examples failed: {', '.join(failed)}\n" + "\n".join(dict.fromkeys(errors)))
     warnings = [line for line in output.splitlines() if "WARNING" in line or "ERROR" in line]
-    assert build.returncode == 0, f"sphinx-build exit status {build.returncode}:\n" + "\n".join(warnings or [output[-3000:]])
+    shown = "\n".join(warnings or [output[-3000:]])
+    assert build.returncode == 0, f"sphinx-build exit status {build.returncode}:\n{shown}"
 
 
 def tree(folder: Path) -> dict[str, tuple[int, int]]:
@@ -78,8 +79,9 @@ def test_the_docs_build_without_warnings_and_run_the_gallery(tmp_path):
         assert (html / f"{page}.html").is_file(), page
     # the API pages hold the public API, from the docstrings
     reference = "".join((html / f"{page}.html").read_text() for page in api)
-    for name in ("vpcontact.solve", "vpcontact.case.load_case", "vpcontact.case.Case", "vpcontact.problem.build_problem",
-                 "vpcontact.problem.Problem", "vpcontact.results.Result", "vpcontact.plots.contact_pressure",
+    for name in ("vpcontact.solve", "vpcontact.case.load_case", "vpcontact.case.Case",
+                 "vpcontact.problem.build_problem", "vpcontact.problem.Problem", "vpcontact.results.Result",
+                 "vpcontact.plots.contact_pressure",
                  "vpcontact.norms.differences", "module-vpcontact.studies", "module-vpcontact.writers"):
         assert f'id="{name}"' in reference, name
     # every example has its page, and the figures it made (our scraper) are on it
