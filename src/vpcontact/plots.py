@@ -326,7 +326,7 @@ def fields_at(result, step, purpose: str):
 def body_fields(fields, dim: int) -> dict[str, tuple[np.ndarray, bool]]:
     """The scalar fields of ``fields`` (a :class:`~vpcontact.results.Fields` of a d-dimensional body) by
     name, each with True for one value per node, False for one per element: ``von_mises``;
-    ``displacement`` (|u|) and ``displacement_x``, …; the stress components ``sigma_xx``, ``sigma_xy``,
+    ``displacement`` (:math:`|u|`) and ``displacement_x``, …; the stress components ``sigma_xx``, ``sigma_xy``,
     … (i ≤ j; in 2D also ``sigma_zz``, σ33 of the elastic response, when the fields have it); with a
     viscoplastic history ``z_xx``, …; with an error estimate ``error_indicator`` (η_K)."""
     axes = coordinates(dim)

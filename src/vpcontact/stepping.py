@@ -1,11 +1,13 @@
 """The quasistatic time loop (Sect. 3 of the paper, DESIGN §2).
 
-At t_n = t_0 + n k (k = (T − t_0) / steps, t_0 = ``time.start``, default 0):
+At t_n = t_0 + n k (k = (T − t_0) / steps, t_0 = ``time.start``, default 0)::
+
     z_n   = σ_0 − ℰε(u_0) + Σ_{j=0}^{n−1} k 𝒢(σ_j, ε(u_j))   (explicit viscoplastic history, per element)
     b_n   = F(t_n) − Bᵀ z_n
     (u_n, λ_n) solves the step problem with ξ^{n−1}             (one solver call)
     ξ_n   = ξ_{n−1} + k (d_n)⁺                                  (implicit rectangle rule for (2.15))
     σ_n   = ℰε(u_n) + z_n                                       (the discrete (2.28))
+
 This is (2.28) as written, σ(t) = ℰε(u(t)) + ∫_0^t 𝒢(σ, ε(u)) ds + σ_0 − ℰε(u_0): z_0 = σ_0 − ℰε(u_0)
 and the j = 0 term is k 𝒢(σ_0, ε(u_0)), so z_1 = σ_0 − ℰε(u_0) + k 𝒢(σ_0, ε(u_0)); ξ starts from ξ_0
 (``problem.initial``: u_0 per node, σ_0 per element, ξ_0 per contact node, see :mod:`vpcontact.initial`;
