@@ -169,3 +169,17 @@ def test_the_readme_example_balances_its_load():
                                          axis=0), axis=0).sum()
     assert result.series("contact_force_z")[-1] == pytest.approx(15.0 * 1.0 * area, rel=1e-8)
     assert finer.basis.N > problem.basis.N
+
+
+def test_a_result_is_sent_between_processes(from_file, tmp_path):
+    """A result pickles (its mesh's exact normals and projections are objects, not closures) and the copy
+    writes the same history: what a process pool or Dask needs to send it back."""
+    import pickle
+
+    copy = pickle.loads(pickle.dumps(from_file))
+    np.testing.assert_array_equal(copy.final.displacement, from_file.final.displacement)
+    np.testing.assert_array_equal(copy.problem.mesh.exact_normals["bottom_arc"](copy.problem.surface.coordinates),
+                                  from_file.problem.surface.normals)
+    from_file.write(tmp_path / "sent")
+    copy.write(tmp_path / "copy")
+    assert (tmp_path / "copy" / "history.csv").read_bytes() == (tmp_path / "sent" / "history.csv").read_bytes()

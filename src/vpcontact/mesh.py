@@ -171,15 +171,47 @@ def _wrap(p: np.ndarray, t: np.ndarray, classify: Callable[[np.ndarray], dict[st
                 curved_parts=curved_parts or {}, curved_interfaces=curved_interfaces or {})
 
 
-def onto_sphere(center: np.ndarray, radius: float) -> Projection:
+@dataclass(frozen=True, eq=False)
+class OntoSphere:
     """The projection of points (d, ...) onto the circle (d = 2) or sphere (d = 3) of `radius` around `center`
-    (along the radius through the point)."""
-    def project(x: np.ndarray) -> np.ndarray:
-        at = center.reshape((-1,) + (1,) * (x.ndim - 1))
-        offset = x - at
-        return at + radius * offset / np.sqrt((offset**2).sum(axis=0))
+    (along the radius through the point). A class, not a closure: a mesh pickles (a result is sent between
+    processes with its mesh)."""
 
-    return project
+    center: np.ndarray
+    radius: float
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        at = self.center.reshape((-1,) + (1,) * (x.ndim - 1))
+        offset = x - at
+        return at + self.radius * offset / np.sqrt((offset**2).sum(axis=0))
+
+
+@dataclass(frozen=True, eq=False)
+class RadialNormal:
+    """The outward unit normal (d, ...) of a circle or sphere around `center` at points (d, ...)."""
+
+    center: np.ndarray
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        d = x - self.center.reshape((-1,) + (1,) * (x.ndim - 1))
+        return d / np.sqrt((d**2).sum(axis=0))
+
+
+@dataclass(frozen=True)
+class ConstantNormal:
+    """The normal field equal to `normal` everywhere."""
+
+    normal: tuple[float, ...]
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        out = np.empty_like(x, dtype=float)
+        out[...] = np.reshape(self.normal, (-1,) + (1,) * (x.ndim - 1))
+        return out
+
+
+def onto_sphere(center: np.ndarray, radius: float) -> Projection:
+    """The projection onto the circle or sphere of `radius` around `center` (:class:`OntoSphere`)."""
+    return OntoSphere(np.asarray(center, dtype=float), float(radius))
 
 
 def _signed_areas(p: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -253,15 +285,7 @@ def half_disc(h: float, radius: float = 1.0, coating: float | None = None) -> Me
         p, t, regions, n_axis = _coated_half_disc(h / R, coating / R, n_arc)  # built for R = 1 too
         p = R * p
     center = np.array([0.0, R])
-
-    def radial(x: np.ndarray) -> np.ndarray:
-        d = x - center.reshape((2,) + (1,) * (x.ndim - 1))
-        return d / np.sqrt((d**2).sum(axis=0))
-
-    def axis_normal(x: np.ndarray) -> np.ndarray:
-        out = np.zeros_like(x, dtype=float)
-        out[0] = -1.0
-        return out
+    radial, axis_normal = RadialNormal(center), ConstantNormal((-1.0, 0.0))
 
     def classify(mid: np.ndarray) -> dict[str, np.ndarray]:
         on_axis = mid[0] < 1e-9 * h
@@ -440,17 +464,7 @@ def rectangle(width: float, height: float, h: float) -> Mesh:
         }
 
     normals = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "bottom": (0.0, -1.0), "top": (0.0, 1.0)}
-    return _wrap(tensor.p, tensor.t, classify, {name: _constant(n) for name, n in normals.items()})
-
-
-def _constant(normal: tuple[float, ...]) -> NormalField:
-    """The normal field equal to `normal` everywhere."""
-    def field(x: np.ndarray) -> np.ndarray:
-        out = np.empty_like(x, dtype=float)
-        out[...] = np.reshape(normal, (-1,) + (1,) * (x.ndim - 1))
-        return out
-
-    return field
+    return _wrap(tensor.p, tensor.t, classify, {name: ConstantNormal(n) for name, n in normals.items()})
 
 
 def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None, coating: float | None = None) -> Mesh:
@@ -523,17 +537,14 @@ def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None, c
     p = radius * p
     h, R = h * radius, radius
     center = np.array([0.0, 0.0, R])
-
-    def radial(x: np.ndarray) -> np.ndarray:
-        d = x - center.reshape((3,) + (1,) * (x.ndim - 1))
-        return d / np.sqrt((d**2).sum(axis=0))
+    radial = RadialNormal(center)
 
     def classify(centroid: np.ndarray) -> dict[str, np.ndarray]:
         on_x, on_y = centroid[0] < 1e-9 * h, centroid[1] < 1e-9 * h
         sphere = ~on_x & ~on_y
         return {"sym_x": on_x, "sym_y": on_y, "top": sphere & (centroid[2] >= R), "bottom": sphere & (centroid[2] < R)}
 
-    normals = {"sym_x": _constant((-1.0, 0.0, 0.0)), "sym_y": _constant((0.0, -1.0, 0.0)), "top": radial,
+    normals = {"sym_x": ConstantNormal((-1.0, 0.0, 0.0)), "sym_y": ConstantNormal((0.0, -1.0, 0.0)), "top": radial,
                "bottom": radial}
     sphere = onto_sphere(center, R)
     interfaces = {} if coating is None else {("core", "coating"): onto_sphere(center, R * (1.0 - coating))}
@@ -567,7 +578,7 @@ def block(width: float, depth: float, height: float, h: float) -> Mesh:
 
     normals = {"left": (-1.0, 0.0, 0.0), "right": (1.0, 0.0, 0.0), "front": (0.0, -1.0, 0.0),
                "back": (0.0, 1.0, 0.0), "bottom": (0.0, 0.0, -1.0), "top": (0.0, 0.0, 1.0)}
-    return _wrap(tensor.p, tensor.t, classify, {name: _constant(n) for name, n in normals.items()})
+    return _wrap(tensor.p, tensor.t, classify, {name: ConstantNormal(n) for name, n in normals.items()})
 
 
 def read_mesh(path: str | os.PathLike) -> Mesh:
