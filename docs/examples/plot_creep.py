@@ -46,7 +46,8 @@ def ball(viscoplastic: bool):
     })
 
 
-creeping, elastic = vpcontact.solve(ball(True)), vpcontact.solve(ball(False))
+viscous = vpcontact.build_problem(ball(True))
+creeping, elastic = vpcontact.solve_problem(viscous), vpcontact.solve(ball(False))
 print(creeping)
 
 # %%
@@ -55,7 +56,7 @@ print(creeping)
 # fall: the layer hardens under the accumulated penetration (β = 1) and carries the same load with less
 # penetration, the more so under the creeping ball, which spreads the load towards the rim.
 t = creeping.times
-bottom = creeping.problem.surface.nearest_node([0.0, 0.0])
+bottom = viscous.surface.nearest_node([0.0, 0.0])  # the contact node at the bottom point
 creep = Figure(figsize=(7.0, 5.0), layout="constrained")
 axes = creep.subplots(2, 1, sharex=True)
 for result, label, style in ((creeping, "Perzyna body", "-"), (elastic, "elastic body", "--")):
@@ -108,10 +109,11 @@ block = vpcontact.load_case({
     "time": {"T": 2.0, "steps": 20},
     "output": {"field_steps": "all", "progress": False},
 })
-square = vpcontact.solve(block)
-top = square.problem.mesh.nodes("top")
+square_problem = vpcontact.build_problem(block)
+square = vpcontact.solve_problem(square_problem)
+top = square_problem.mesh.nodes("top")
 settlement = np.array([square.fields[n].displacement[top, 1].mean() for n in range(1, square.steps + 1)])
-rates = np.diff(settlement) / square.problem.k  # the top's velocity between consecutive steps
+rates = np.diff(settlement) / square_problem.k  # the top's velocity between consecutive steps
 mu = E / (2.0 * (1.0 + NU))
 expected = -(1.0 - np.sqrt(2.0) * YIELD / Q) * Q / (4.0 * mu * ETA)
 holding = square.times[:-1] >= HOLD  # both ends of the interval in the hold

@@ -40,7 +40,13 @@ case = vpcontact.load_case({
     "time": {"T": 1.1, "steps": 11},
     "output": {"field_steps": [2, 5, 8, 11], "progress": False},
 })
-result = vpcontact.solve(case)
+
+# %%
+# Building the problem first shows its sizes before anything is solved; ``vpcontact.solve(case)`` does
+# both steps in one call.
+problem = vpcontact.build_problem(case)
+print(problem)
+result = vpcontact.solve_problem(problem)
 print(result)
 
 # %%
@@ -80,7 +86,7 @@ with tempfile.TemporaryDirectory() as folder:
 # vertical contact force must balance the applied load, c t times the area of the upper half as the
 # mesh represents it (its flat triangles: about π/2, the area of a quarter of a unit hemisphere,
 # short by the facets' sag, O(h²)).
-mesh = result.problem.mesh
+mesh = problem.mesh
 corners = mesh.mesh.p[:, mesh.mesh.facets[:, mesh.facets("top")]]  # (3 coordinates, 3 corners, facets)
 area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0], axis=0),
                             axis=0).sum()
