@@ -92,8 +92,8 @@ convergence = Figure(figsize=(6.0, 4.4), layout="constrained")
 ax = convergence.subplots()
 ax.loglog(dofs, estimates, "o-", label=f"adaptive (θ = 0.5): slope {slope:.2f}")
 ax.loglog(uniform_dofs, uniform_estimates, "s--", label=f"uniform h = 1/4 … 1/32: slope {uniform_slope:.2f}")
-for power, style in ((-0.25, ":"), (-0.5, "-.")):
-    ax.loglog(dofs, estimates[0] * (dofs / dofs[0]) ** power, style, color="0.5", lw=0.8, label=f"N^({power:g})")
+for power, style, text in ((-0.25, ":", "1/4"), (-0.5, "-.", "1/2")):
+    ax.loglog(dofs, estimates[0] * (dofs / dofs[0]) ** power, style, color="0.5", lw=0.8, label=f"$N^{{-{text}}}$")
 ax.set(xlabel="dofs N", ylabel="estimate (Σ_K max_n η_K²)^½")
 ax.legend(fontsize=8)
 ax.grid(alpha=0.3, which="both")
