@@ -135,7 +135,8 @@ def study(beta: float, args) -> dict:
     found["uniform"] = []
     for level in args.levels:
         started = time.perf_counter()
-        result, functional = solve_and_estimate(build_problem(load(level, beta, settings)))
+        case = load(level, beta, settings)
+        result, functional = solve_and_estimate(build_problem(case), case.adapt, case.output)
         row = {"level": level, "dofs": int(complete(result).dofs), "contact_nodes": int(result.contact_nodes),
                "estimate": float(np.sqrt(functional.sum())), "errors": reference.errors(result),
                "wall_time_s": time.perf_counter() - started}
@@ -152,7 +153,8 @@ def study(beta: float, args) -> dict:
         log(f"  cycle {row['cycle']}: {row['dofs']} dofs, estimate {row['estimate']:.4g}, "
             + ", ".join(f"{name} {value:.4g}" for name, value in row["errors"].items()) + f", {row['wall_time_s']:.1f} s")
 
-    adaptation = adapt(build_problem(load(args.start, beta, {**settings, "max_dofs": 2 * last["dofs"]})), after_cycle=report)
+    case = load(args.start, beta, {**settings, "max_dofs": 2 * last["dofs"]})
+    adaptation = adapt(build_problem(case), case.adapt, case.output, after_cycle=report)
     found["stopped"] = adaptation.message
     log(f"  {found['stopped']}")
 

@@ -163,7 +163,7 @@ def main(argv=None) -> int:
 
     case = load(levels[0], **{"adapt.cycles": cycles, "adapt.theta": arguments.theta, "adapt.functional": "max",
                               "adapt.max_dofs": int(reference.dofs) // 2})
-    adaptation = adapt(build_problem(case), after_cycle=record)
+    adaptation = adapt(build_problem(case), case.adapt, case.output, after_cycle=record)
     if adaptation.status != "complete":
         raise SystemExit(f"the adaptation failed: {adaptation.message}")
 

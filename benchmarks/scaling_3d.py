@@ -65,7 +65,7 @@ def run_level(h: float, method: str, steps: int | None = None, beta: float = 1.0
               "contact_dofs": len(set(N.indices)), "steps": case.time.steps,
               "condensed_memory_mb": condensed_memory(N, A.shape[0]) / 2**20}
     try:
-        loop = TimeLoop(problem)
+        loop = TimeLoop(problem, case.output)
     except vpcontact.CaseError as error:  # the memory guard, or a factorization that fails
         return {**record, "status": "refused", "message": str(error), "peak_rss_mb": peak_rss_mb()}
     rss_setup = peak_rss_mb()

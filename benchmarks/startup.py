@@ -85,11 +85,11 @@ def phases(case_path: str, overrides: dict, out: Path) -> dict:
     case = timed("case", lambda: load_case(case_path, overrides))
     problem = build_problem(case)
     seconds |= {"mesh": problem.timings["mesh"], "assembly": problem.timings["assembly"]}
-    loop = TimeLoop(problem)
+    loop = TimeLoop(problem, case.output)
     result = loop.run(progress=False)
     seconds |= {name: result.timings.get(name, 0.0) for name in ("factorization", "condensation", "time_loop")}
     out.mkdir(parents=True, exist_ok=True)
-    timed("case.resolved.toml", lambda: writers.write_resolved_case(case, out))
+    timed("case.resolved.toml", lambda: writers.write_resolved_case(case.to_toml(), out))
     timed("history.csv", lambda: writers._write_history(result, out / "history.csv"))
     timed("contact.csv", lambda: writers._write_contact(result, out / "contact.csv"))
     timed("fields", lambda: writers._write_fields(result, out / "fields"))  # VTU, PVD and solution.npz

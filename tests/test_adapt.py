@@ -44,7 +44,7 @@ def paper_case(**settings):
 @pytest.mark.parametrize("estimator", ["residual", "recovery"])
 def test_the_time_functional_folds_every_steps_indicators(functional, estimator):
     case = paper_case(functional=functional, estimator=estimator)
-    result, folded = solve_and_estimate(build_problem(case))
+    result, folded = solve_and_estimate(build_problem(case), case.adapt, case.output)
     assert sorted(result.fields) == [3, 11]  # the other steps' fields were dropped once folded
     every = vpcontact.solve(case.model_copy(update={"output": case.output.model_copy(update={"field_steps": "all"})}))
     estimate = {"residual": residual_estimate, "recovery": recovery_estimate}[estimator]
@@ -57,7 +57,7 @@ def test_the_time_functional_folds_every_steps_indicators(functional, estimator)
 def test_the_cycles_refine_where_the_indicators_are_large_and_the_estimate_falls():
     case = paper_case(cycles=4, theta=0.4)
     seen = []
-    adaptation = adapt(build_problem(case), after_cycle=seen.append)
+    adaptation = adapt(build_problem(case), case.adapt, case.output, after_cycle=seen.append)
     assert adaptation.status == "complete" and len(adaptation.rows) == 4
     dofs = np.array([row["dofs"] for row in adaptation.rows])
     estimates = np.array([row["estimate"] for row in adaptation.rows])
@@ -73,7 +73,7 @@ def test_the_cycles_refine_where_the_indicators_are_large_and_the_estimate_falls
 
 def test_max_dofs_stops_before_a_mesh_too_large():
     case = paper_case(cycles=10, max_dofs=700)
-    adaptation = adapt(build_problem(case))
+    adaptation = adapt(build_problem(case), case.adapt, case.output)
     assert all(row["dofs"] <= 700 for row in adaptation.rows)
     assert "more than adapt.max_dofs = 700" in adaptation.message
 
@@ -144,7 +144,8 @@ def test_a_quarter_ball_adapts_in_3d(tmp_path):
         "time": {"T": 1.1, "steps": 4},
         "adapt": {"cycles": 3, "theta": 0.5},
     }
-    adaptation = adapt(build_problem(vpcontact.load_case(case)))
+    loaded = vpcontact.load_case(case)
+    adaptation = adapt(build_problem(loaded), loaded.adapt, loaded.output)
     assert adaptation.status == "complete"
     first, _, last = adaptation.rows
     assert last["dofs"] > first["dofs"] and last["contact_nodes"] > first["contact_nodes"]
@@ -208,6 +209,6 @@ def test_a_stopped_cycle_stops_the_adaptation_with_its_status():
         asked.append(1)
         return "stopped by a test" if len(asked) > 14 else None  # in the second cycle (11 steps each)
 
-    adaptation = adapt(build_problem(case), stop=stop)
+    adaptation = adapt(build_problem(case), case.adapt, case.output, stop=stop)
     assert adaptation.status == "interrupted" and len(adaptation.rows) == 2
     assert adaptation.message.startswith("cycle 2: stopped by a test after step 3")

@@ -40,7 +40,8 @@ def test_the_residual_adaptive_mesh_beats_the_uniform_mesh_of_about_the_same_dof
     reference = vpcontact.solve(paper_case(128))
     uniform = vpcontact.solve(paper_case(64))
     cycles = []
-    adaptation = adapt(build_problem(paper_case(8, cycles=8, theta=0.5, estimator="residual")), after_cycle=cycles.append)
+    case = paper_case(8, cycles=8, theta=0.5, estimator="residual")
+    adaptation = adapt(build_problem(case), case.adapt, case.output, after_cycle=cycles.append)
     assert adaptation.status == "complete" and len(cycles) == 8
     last = cycles[-1].result
     assert 0.8 * uniform.dofs <= last.dofs <= 1.25 * uniform.dofs

@@ -193,8 +193,8 @@ def test_a_result_is_shown_in_one_short_line():
     result = vpcontact.solve(rectangle_case())
     text = repr(result)
     assert len(text) < 300 and "\n" not in text, text
-    assert text.startswith("Result(status='complete', steps=11/11, history_rows=11, dofs=90, contact_nodes=9")
-    assert "K_probe=494.742" in text
+    assert text == (f"Result(complete, 2D, 90 dofs, 9 contact nodes, 11/11 steps, method {result.method}, "
+                    f"{result.wall_time_s:.3g} s)")
     assert repr(result.problem) == ("Problem(dofs=90, free_dofs=80, elements=64, nodes=45, contact_nodes=9, steps=11, "
                                     "k=0.1)")
     assert repr(result.final) == "Fields(displacement(45, 2), stress(64, 2, 2), stress33(64,), von_mises(64,))"

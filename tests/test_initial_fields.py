@@ -112,12 +112,13 @@ def test_a_restart_is_resumed_from_its_checkpoint_as_if_never_stopped(tmp_path):
     restart["initial"] = {"from_run": str(tmp_path / "full"), "step": 6}
     restart["time"]["steps"] = 6
     restart["output"]["field_steps"] = "final"
-    whole = TimeLoop(build_problem(load_case(restart))).run()
-    first = TimeLoop(build_problem(load_case(restart)))
+    restart = load_case(restart)
+    whole = TimeLoop(build_problem(restart), restart.output).run()
+    first = TimeLoop(build_problem(restart), restart.output)
     assert first.run(stop=lambda: "stopped" if first.state.step == 2 else None).status == "interrupted"
     (tmp_path / "stopped").mkdir()
     checkpoint.save(first, tmp_path / "stopped")
-    second = TimeLoop(build_problem(load_case(restart)))
+    second = TimeLoop(build_problem(restart), restart.output)
     assert checkpoint.restore(second, tmp_path / "stopped") == 2
     resumed = second.run()
     assert resumed.status == whole.status == "complete"

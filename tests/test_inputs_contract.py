@@ -292,8 +292,8 @@ def test_the_estimate_covers_what_a_run_holds_and_writes(tmp_path):
     case = rectangle_case()
     case["time"]["steps"] = steps = 400
     case["output"] = {"field_steps": "all"}
-    problem = vpcontact.build_problem(vpcontact.load_case(case))
-    loop = vpcontact.stepping.TimeLoop(problem)
+    loaded = vpcontact.load_case(case)
+    loop = vpcontact.stepping.TimeLoop(vpcontact.build_problem(loaded), loaded.output)
     tracemalloc.start()
     try:
         result = loop.run()
@@ -323,8 +323,9 @@ def test_a_million_steps_of_a_small_case_are_accepted_and_start_at_once():
     case["time"] = {"T": 1.1e5, "steps": 10**6}
     case["output"]["field_steps"] = [1, 2, 3, 10**6]
     started = time.perf_counter()
-    problem = vpcontact.build_problem(vpcontact.load_case(case))
-    loop = vpcontact.stepping.TimeLoop(problem)
+    loaded = vpcontact.load_case(case)
+    problem = vpcontact.build_problem(loaded)
+    loop = vpcontact.stepping.TimeLoop(problem, loaded.output)
     assert time.perf_counter() - started < 20
     result = loop.run(stop=lambda: "enough" if loop.state.step >= 3 else None)
     assert result.status == "interrupted" and result.steps == 3

@@ -1,6 +1,6 @@
 """What a command imports: a run of a built-in shape or of a gmsh 2.2 text file writes its VTU files
-without meshio, draws no figures without matplotlib and loads no adaptive refinement; meshio reads the
-other mesh files."""
+without meshio, draws no figures without matplotlib, loads neither pandas nor pyvista (the tables and the
+grids of the Python API) and no adaptive refinement; meshio reads the other mesh files."""
 
 import subprocess
 import sys
@@ -10,7 +10,7 @@ import tomli_w
 
 from conftest import half_disc_case
 
-HEAVY = ("meshio", "matplotlib", "rich")
+HEAVY = ("meshio", "matplotlib", "rich", "pandas", "pyvista")
 MESHES = Path(__file__).parent / "meshes"
 
 

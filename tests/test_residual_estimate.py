@@ -323,10 +323,10 @@ def test_a_resumed_run_keeps_the_estimate_columns_and_indicators(tmp_path):
 
     case = vpcontact.Case.model_validate(estimating_half_disc())
     whole = vpcontact.solve(case)
-    first = TimeLoop(build_problem(case))
+    first = TimeLoop(build_problem(case), case.output)
     first.run(stop=lambda: "stopped" if first.state.step == 6 else None)
     checkpoint.save(first, tmp_path)
-    second = TimeLoop(build_problem(case))
+    second = TimeLoop(build_problem(case), case.output)
     assert checkpoint.restore(second, tmp_path) == 6
     resumed = second.run()
     assert resumed.status == "complete" and resumed.columns == whole.columns

@@ -228,7 +228,7 @@ def test_resume_without_a_checkpoint(tmp_path):
     case = vpcontact.load_case(creeping_case(steps=10, h=0.2))
     out = tmp_path / "run"
     out.mkdir()
-    vpcontact.writers.write_resolved_case(case, out)
+    vpcontact.writers.write_resolved_case(case.to_toml(), out)
     (out / ".history.tmp-99999.csv").write_text("half a file")  # a writer killed midway
     with pytest.raises(vpcontact.CaseError, match=r"different case \(material.E = 1000.0 in the run, 900.0 now\)"):
         rundir.run(vpcontact.load_case(creeping_case(steps=10, h=0.2), {"material.E": 900.0}), out, resume=True)

@@ -106,12 +106,12 @@ def test_the_list_of_outputs_names_every_file_a_run_writes(tmp_path):
     case = rectangle_case()
     case["output"]["field_steps"] = "all"
     case = vpcontact.load_case(case)
-    loop = TimeLoop(build_problem(case))
+    loop = TimeLoop(build_problem(case), case.output)
     result = loop.run(stop=lambda: "stopped" if loop.state.step >= 5 else None)
     out = tmp_path / "run"
     out.mkdir()
     checkpoint.save(loop, out)
-    writers.write_resolved_case(case, out)
+    writers.write_resolved_case(case.to_toml(), out)
     writers.write_outputs(result, out)
     for path in list(out.rglob("*")):
         if path.is_file():
@@ -274,11 +274,11 @@ def killed_run(folder, steps_done=5):
     path = Path(folder) / "case.toml"
     path.write_text(tomli_w.dumps(case))
     loaded = vpcontact.load_case(path)
-    loop = TimeLoop(build_problem(loaded))
+    loop = TimeLoop(build_problem(loaded), loaded.output)
     loop.run(stop=lambda: "killed" if loop.state.step >= steps_done else None)
     out = Path(folder) / "run"
     out.mkdir()
-    writers.write_resolved_case(loaded, out)
+    writers.write_resolved_case(loaded.to_toml(), out)
     checkpoint.save(loop, out)
     writers.write_outputs(loop.result, out, history_only=True)
     return path, out

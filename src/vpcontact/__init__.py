@@ -26,13 +26,13 @@ except metadata.PackageNotFoundError:  # running from a source tree
     __version__ = "0+unknown"
 
 #: The names of the API, by the module that defines them.
-API = {"Case": "case", "load_case": "case", "CaseError": "errors", "Problem": "problem", "build_problem": "problem",
-       "Result": "results", "solve_problem": "stepping"}
+API = {"Case": "case", "Model": "case", "load_case": "case", "CaseError": "errors", "compose": "compose",
+       "Problem": "problem", "build_problem": "problem", "Result": "results", "solve_problem": "stepping"}
 
 #: The modules of the package a user may reach as ``vpcontact.<name>`` after ``import vpcontact``.
-SUBMODULES = ("assembly", "case", "checkpoint", "contact", "errors", "expressions", "figures", "material", "mesh",
-              "norms", "plots", "problem", "report", "reproduce", "results", "rundir", "solvers", "stepping", "studies",
-              "writers")
+SUBMODULES = ("adapt", "assembly", "case", "check", "checkpoint", "compose", "contact", "errors", "expressions",
+              "figures", "material", "mesh", "norms", "plots", "problem", "refinement", "report", "reproduce", "results",
+              "rundir", "solvers", "stepping", "studies", "writers")
 
 
 def __getattr__(name: str):
@@ -67,7 +67,8 @@ def solve(case, *, progress: bool = False, **laws) -> Result:
 
     if not isinstance(case, Case):
         case = load_case(case)
-    return solve_problem(build_problem(case, **laws), progress=progress)
+    return solve_problem(build_problem(case, **laws), output=case.output, progress=progress)
 
 
-__all__ = ["Case", "CaseError", "Problem", "Result", "build_problem", "load_case", "solve", "solve_problem"]
+__all__ = ["Case", "CaseError", "Model", "Problem", "Result", "build_problem", "compose", "load_case", "solve",
+           "solve_problem"]

@@ -1,7 +1,7 @@
 """Adaptive meshes (a case's ``[adapt]``): solve the whole history, estimate, mark, refine; and again.
 
-Each cycle c = 1, 2, … solves the case's whole history on the current mesh (the ordinary ``build_problem``
-/ ``TimeLoop`` path: every option of a case works) and, as the steps go, folds the element indicators
+Each cycle c = 1, 2, … solves the problem's whole history on the current mesh (the ordinary ``TimeLoop``
+path, the problem built again on each refined mesh by ``Problem.on``: every option of a case works) and, as the steps go, folds the element indicators
 η_K²(t_n) of the estimator (``adapt.estimator``, one of ESTIMATORS: "residual" or "recovery") at
 every step into one value per element, the time functional (``adapt.functional``):
 
@@ -24,10 +24,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import recovery_estimate
+from .case import AdaptSection, OutputSection
 from .errors import CaseError
 from .indicators import Indicators, Level
 from .mesh import Mesh
-from .problem import Problem, build_problem
+from .problem import Problem
 from .refinement import refine
 from .residual_estimate import ResidualEstimator
 from .results import Result
@@ -94,14 +95,14 @@ def dorfler(values: np.ndarray, theta: float) -> np.ndarray:
     return np.sort(order[:min(count, order.size)])
 
 
-def solve_and_estimate(problem: Problem, *, stop: Callable[[], str | None] | None = None,
-                       progress: bool = False, after_step: Callable[[TimeLoop], None] | None = None
-                       ) -> tuple[Result, np.ndarray]:
-    """Run the whole history of ``problem`` and fold the indicators of ``adapt.estimator`` at each step into
-    the time functional ``adapt.functional`` (see the module docstring): (the run, F_K per element)."""
-    settings = problem.case.adapt
+def solve_and_estimate(problem: Problem, settings: AdaptSection, output: OutputSection | None = None, *,
+                       stop: Callable[[], str | None] | None = None, progress: bool = False,
+                       after_step: Callable[[TimeLoop], None] | None = None) -> tuple[Result, np.ndarray]:
+    """Run the whole history of ``problem`` (with the outputs ``output``) and fold the indicators of
+    ``settings.estimator`` at each step into the time functional ``settings.functional`` (see the module
+    docstring): (the run, F_K per element)."""
     estimator = ESTIMATORS[settings.estimator](problem)
-    loop = TimeLoop(problem)
+    loop = TimeLoop(problem, output)
     wanted = loop.result.field_steps
     loop.result.field_steps = range(1, len(problem.times) + 1)  # every step's fields, dropped once folded
     functional = np.zeros(problem.mesh.mesh.t.shape[1])
@@ -126,27 +127,27 @@ def solve_and_estimate(problem: Problem, *, stop: Callable[[], str | None] | Non
     return result, functional
 
 
-def check_start(problem: Problem) -> None:
-    """CaseError unless the first mesh of the adaptation of ``problem.case`` is within ``adapt.max_dofs``."""
-    limit = problem.case.adapt.max_dofs
+def check_start(problem: Problem, settings: AdaptSection) -> None:
+    """CaseError unless the first mesh of the adaptation, ``problem``'s, is within ``adapt.max_dofs``."""
+    limit = settings.max_dofs
     if problem.basis.N > limit:
         raise CaseError(f"adapt.max_dofs = {limit} is less than the {problem.basis.N} dofs of the first mesh: raise "
                         f"it, or start from a coarser mesh (mesh.h)")
 
 
-def adapt(problem: Problem, *, after_cycle: Callable[[Cycle], None] | None = None,
-          stop: Callable[[], str | None] | None = None, progress: bool = False,
-          after_step: Callable[[TimeLoop], None] | None = None) -> Adaptation:
-    """The adaptive cycles of ``problem.case.adapt`` from the mesh of ``problem`` (see the module docstring);
+def adapt(problem: Problem, settings: AdaptSection, output: OutputSection | None = None, *,
+          after_cycle: Callable[[Cycle], None] | None = None, stop: Callable[[], str | None] | None = None,
+          progress: bool = False, after_step: Callable[[TimeLoop], None] | None = None) -> Adaptation:
+    """The adaptive cycles of ``settings`` (a case's ``[adapt]``, :class:`~vpcontact.case.AdaptSection`) from
+    the mesh of ``problem``, each run with the outputs ``output`` (see the module docstring);
     ``after_cycle(cycle)`` is called after each (its outputs), ``stop`` and ``after_step`` are the time
     loop's hooks."""
-    case = problem.case
-    settings = case.adapt
-    check_start(problem)
+    check_start(problem, settings)
     adaptation = Adaptation()
     started = clock.perf_counter() - problem.timings["build"]
     for number in range(1, settings.cycles + 1):
-        result, functional = solve_and_estimate(problem, stop=stop, progress=progress, after_step=after_step)
+        result, functional = solve_and_estimate(problem, settings, output, stop=stop, progress=progress,
+                                                after_step=after_step)
         now = clock.perf_counter()
         cycle = Cycle(number, result, functional, now - started)
         adaptation.rows.append(cycle.row)
@@ -171,7 +172,7 @@ def adapt(problem: Problem, *, after_cycle: Callable[[Cycle], None] | None = Non
                 adaptation.message = (f"cycle {number}: the next mesh would have {dofs} dofs, more than adapt.max_dofs "
                                       f"= {settings.max_dofs}")
                 break
-            problem = build_problem(case, mesh=mesh)
+            problem = problem.on(mesh)
         except CaseError as error:
             adaptation.status, adaptation.message = "failed", f"after cycle {number}: {error}"
             break

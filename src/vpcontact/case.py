@@ -14,12 +14,13 @@ import os
 import re
 import tomllib
 import typing
+from collections.abc import Collection
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
 import tomli_w
 from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, ValidationError,
-                      field_validator, model_validator)
+                      ValidationInfo, field_validator, model_validator)
 
 from .errors import CaseError, one_line, quoted, shown
 from .expressions import parse_expression
@@ -443,9 +444,12 @@ class ContactSection(_Section):
         return value
 
     @model_validator(mode="after")
-    def _one_form(self):
+    def _one_form(self, info: ValidationInfo):
+        """One part or several; ``info.context["python_laws"]``: the laws (``p``, ``stiffness``) given as Python
+        objects instead (vpcontact.compose), which the one-part form then leaves out."""
+        python_laws = (info.context or {}).get("python_laws", ())
         if self.parts is None:
-            self._one_part()
+            self._one_part(python_laws)
         else:
             self._several_parts()
         for key, layer in self.layers():
@@ -455,13 +459,14 @@ class ContactSection(_Section):
                 raise ValueError(f"{key}.exponent is only used with {key}.p = \"power\" ({key}.p = \"{layer.p}\")")
         return self
 
-    def _one_part(self) -> None:
+    def _one_part(self, python_laws: Collection[str]) -> None:
         for key in ("part", "g", "stiffness"):
-            if getattr(self, key) is None:
+            if getattr(self, key) is None and key not in python_laws:
                 hint = " (or contact.parts, a list of parts each with its layer)" if key == "part" else ""
                 raise ValueError(f"missing required value 'contact.{key}'{hint}")
         self.gap = 0.0 if self.gap is None else self.gap
-        self.p = "positive_part" if self.p is None else self.p
+        if "p" not in python_laws:
+            self.p = "positive_part" if self.p is None else self.p
 
     def _several_parts(self) -> None:
         given = [key for key in LAYER_KEYS if getattr(self, key) is not None]
@@ -539,6 +544,7 @@ class OutputSection(_Section):
     checkpoint_every_seconds: NonNegativeFloat = 60.0  # 0: not by time
     figures: bool = False  # figures/*.png at the end of a complete or failed run (vpcontact.plots)
     error_estimate: bool = False  # the residual error estimate at every step (vpcontact.residual_estimate)
+    xdmf: bool = False  # fields/body.xdmf + body.h5 (contact too) beside the VTU files (vpcontact.xdmf)
 
     @field_validator("field_steps")
     @classmethod
@@ -564,18 +570,19 @@ class AdaptSection(_Section):
     estimator: Literal["residual", "recovery"] = "residual"  # the keys of vpcontact.adapt.ESTIMATORS
 
 
-class Case(_Section):
-    """A whole case; ``base_dir`` resolves relative file names (the case file's folder)."""
+class Model(_Section):
+    """The problem as a mechanician states it, without its mesh and without the settings of a run: the
+    material(s), the boundary conditions, the contact condition, the initial state, the time grid and the
+    solver options. A :class:`Case` is a Model with a mesh, outputs and adaptive meshes; a problem keeps
+    its Model (``Problem.model``), so that it can be built again on another mesh. ``base_dir`` resolves
+    relative file names (the case file's folder)."""
 
-    mesh: MeshSection
     material: Materials
     boundary: BoundarySection = BoundarySection()
     contact: Optional[ContactSection] = None
     initial: InitialSection = InitialSection()
     time: TimeSection
     solver: SolverSection = SolverSection()
-    output: OutputSection = OutputSection()
-    adapt: Optional[AdaptSection] = None
     base_dir: Annotated[str, Field(exclude=True)] = "."
 
     @model_validator(mode="after")
@@ -600,6 +607,28 @@ class Case(_Section):
         """The material entries: the single ``[material]`` as a list of one."""
         return self.material if isinstance(self.material, list) else [self.material]
 
+    @property
+    def from_run_path(self) -> Path | None:
+        """initial.from_run, relative to the case file's folder."""
+        return None if self.initial.from_run is None else Path(self.base_dir) / self.initial.from_run
+
+
+#: The sections of a case file, in the order case.resolved.toml lists them.
+SECTIONS = ("mesh", "material", "boundary", "contact", "initial", "time", "solver", "output", "adapt")
+
+
+class Case(Model):
+    """A whole case: the :class:`Model`, its mesh (``[mesh]``), the run's outputs and adaptive meshes."""
+
+    mesh: MeshSection
+    output: OutputSection = OutputSection()
+    adapt: Optional[AdaptSection] = None
+
+    @property
+    def model(self) -> Model:
+        """The case without its mesh, outputs and adaptive meshes (the same section objects)."""
+        return Model.model_construct(**{name: getattr(self, name) for name in Model.model_fields})
+
     @model_validator(mode="after")
     def _adapt_from_the_case_mesh(self):
         if self.adapt is not None and self.initial.from_run is not None:
@@ -618,15 +647,11 @@ class Case(_Section):
     def mesh_path(self) -> Path | None:
         return None if self.mesh.file is None else Path(self.base_dir) / self.mesh.file
 
-    @property
-    def from_run_path(self) -> Path | None:
-        """initial.from_run, relative to the case file's folder."""
-        return None if self.initial.from_run is None else Path(self.base_dir) / self.initial.from_run
-
     def resolved(self) -> dict:
         """Every value used, defaults included (the content of case.resolved.toml); a mesh file by its
         absolute path, so that the resolved case runs again from any folder (its run directory too)."""
-        data = self.model_dump(mode="python", exclude_none=True)
+        dumped = self.model_dump(mode="python", exclude_none=True)
+        data = {name: dumped[name] for name in SECTIONS if name in dumped}
         if self.mesh.file is not None:
             data["mesh"]["file"] = os.path.abspath(self.mesh_path)
         if self.initial.from_run is not None:
@@ -792,7 +817,7 @@ def _set_dotted(data: dict, dotted: str, value) -> None:
     node[last] = value
 
 
-def _check_expressions(case: Case) -> None:
+def _check_expressions(case: Model) -> None:
     """Parse every expression once, so that a bad one is reported with its key before any work."""
     for i, traction in enumerate(case.boundary.traction):
         for c, value in enumerate(traction.value):
@@ -816,7 +841,7 @@ def _check_expressions(case: Case) -> None:
         parse_expression(initial.xi, ("x", "y", "z"), where="initial.xi")
 
 
-def _material_keys(case: Case) -> list[tuple[str, MaterialSection]]:
+def _material_keys(case: Model) -> list[tuple[str, MaterialSection]]:
     """(key, entry) of each material: "material" for the single table, "material[i]" in a list."""
     if isinstance(case.material, list):
         return [(f"material[{i}]", entry) for i, entry in enumerate(case.material)]

@@ -101,7 +101,7 @@ def save(loop: TimeLoop, out: Path) -> None:
     rows = len(result.rows)
     arrays = {
         "format": np.array(FORMAT),
-        "case": np.array(loop.problem.case.to_toml()),
+        "case": np.array(loop.problem.source or ""),
         "mesh_digest": np.array(mesh_digest(loop.problem)),
         "step": np.array(state.step),
         "xi": state.xi,
@@ -154,9 +154,10 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
     if int(arrays["format"]) != FORMAT:
         raise ResumeError(f"cannot resume from '{path}': checkpoint format {int(arrays['format'])}, expected {FORMAT}")
     problem = loop.problem
-    if comparable(stored_case) != comparable(tomllib.loads(problem.case.to_toml())):
+    case_now = tomllib.loads(problem.source or "")
+    if comparable(stored_case) != comparable(case_now):
         raise ResumeError(f"cannot resume: the run in '{out}' was started with a different case "
-                          f"({first_difference(stored_case, tomllib.loads(problem.case.to_toml()))})")
+                          f"({first_difference(stored_case, case_now)})")
     if str(arrays["mesh_digest"]) != mesh_digest(problem):
         raise ResumeError(f"cannot resume: the mesh of the run in '{out}' differs from the mesh of the case now")
 

@@ -1,6 +1,7 @@
 """The command line:
 
     vpcontact run CASE.toml [--set key=value ...] --out DIR [--resume | --overwrite]
+    vpcontact check CASE.toml [--set key=value ...] [--json]
     vpcontact study STUDY.toml --out DIR [--workers N | --scheduler tcp://HOST:PORT]
 
 Only what a command uses is imported when it runs (``--help`` imports no numerics).
@@ -49,6 +50,11 @@ def _parser() -> argparse.ArgumentParser:
     replace.add_argument("--overwrite", action="store_true", help="replace a non-empty output directory")
     replace.add_argument("--resume", action="store_true",
                          help="continue the run in --out from its checkpoint (a killed or interrupted run)")
+    check = commands.add_parser("check", help="validate a case without solving it and describe what would run")
+    check.add_argument("case", type=Path, help="case file (TOML)")
+    check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a case value, as for run (repeatable)")
+    check.add_argument("--json", action="store_true", help="the description as JSON")
     study = commands.add_parser("study", help="run a parameter study (rerun to resume)")
     study.add_argument("study", type=Path, help="study file (TOML)")
     study.add_argument("--out", type=Path, required=True, help="study directory")
@@ -69,6 +75,8 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "reproduce":
         return _reproduce(args)
+    if args.command == "check":
+        return _check(args)
     return _study(args) if args.command == "study" else _run(args)
 
 
@@ -112,6 +120,62 @@ def _run(args) -> int:
               f"{final['penetration_probe']:.6g}, nodes separated/compliance/limit = {final['nodes_separated']}/"
               f"{final['nodes_in_compliance']}/{final['nodes_at_limit']}")
     return 0
+
+
+def _check(args) -> int:
+    import json
+
+    from .case import load_case
+    from .check import check_case
+
+    try:
+        checked = check_case(load_case(args.case, args.overrides))
+    except CaseError as error:
+        return _refuse(error)
+    if args.json:
+        print(json.dumps(checked.as_dict(), indent=2))
+    else:
+        print("\n".join(_check_lines(checked)))
+    return 0
+
+
+def _check_lines(c) -> list[str]:
+    """The description of :class:`~vpcontact.check.CaseCheck` ``c`` as lines of text."""
+    elements = "triangles" if c.dim == 2 else "tetrahedra"
+    angle = f", smallest angle {c.smallest_angle_degrees:.1f}°" if c.smallest_angle_degrees is not None else ""
+    lines = [f"{c.dim}D body: {c.nodes:,} nodes, {c.elements:,} {elements}, {c.dofs:,} dofs ({c.free_dofs:,} free)",
+             f"element quality (mean ratio, 1 = equilateral): min {c.quality_min:.3f}, median {c.quality_median:.3f}"
+             f"{angle}; element size (longest edge) {c.h_min:.3g} to {c.h_max:.3g}",
+             "parts: " + ", ".join(f"{p.name} ({p.facets:,} facets, {p.nodes:,} nodes)" for p in c.parts)]
+    if c.regions:
+        lines.append("regions: " + ", ".join(f"{r.name} ({r.elements:,} {elements}: {r.material})" for r in c.regions))
+    for m in c.materials:
+        where = f"regions {', '.join(m.regions)}" if m.regions else "the whole body"
+        law = f"viscoplastic ({m.viscoplastic})" if m.viscoplastic else "elastic"
+        lines.append(f"{m.key}: E = {m.E}, nu = {m.nu}, {law}, on {where} ({m.elements:,} {elements})")
+    if c.contact_nodes:
+        lines.append(f"contact: {c.contact_nodes:,} nodes (" +
+                     ", ".join(f"{part}: {count:,}" for part, count in c.contact_nodes_by_part.items()) + ")")
+    else:
+        lines.append("contact: none")
+    lines.append(f"time: {c.steps:,} steps of k = {c.k:.6g} from t = {c.start:g} to T = {c.T:g}; fields written at "
+                 f"{c.field_steps:,} steps")
+    lines.append(f"method: {c.method} ({c.method_reason})")
+    outputs = {part: size for part, size in c.memory_bytes.items() if part != "solver"}
+    solver = c.memory_bytes["solver"]
+    lines.append(f"memory: outputs {_bytes(sum(outputs.values()))} (" +
+                 ", ".join(f"{part} {_bytes(size)}" for part, size in outputs.items()) + "), solver " +
+                 (f"{_bytes(solver)}" if solver is not None else "not estimated") +
+                 f"; {_bytes(c.memory_available_bytes)} available")
+    t = c.time_seconds
+    lines.append(f"time: about {t['total']:.2g} s (build {t['build']:.2g} s, measured; solver setup "
+                 f"{t['solver setup']:.2g} s and time loop {t['time loop']:.2g} s, estimated to a factor of 2)")
+    return lines
+
+
+def _bytes(size: int) -> str:
+    """A size in MiB below 1 GiB, else in GiB."""
+    return f"{size / 2**20:.3g} MiB" if size < 2**30 else f"{size / 2**30:.3g} GiB"
 
 
 def _describe(error: OSError) -> str:

@@ -3,8 +3,10 @@
 Node-to-rigid contact: node i of Γ3 carries a unit normal ν_i (the body's outward normal, the
 paper's u_ν, or the fixed direction of a flat foundation), a weight w_i (its share of the measure of
 Γ3, lumped boundary quadrature), an initial gap g0_i to the foundation along ν_i, and the
-penetration d_i = u(x_i)·ν_i − g0_i. The soft layer pushes back with the nodal force
+penetration d_i = u(x_i)·ν_i − g0_i. The soft layer pushes back with the nodal force::
+
     w_i ρ K(ξ_i) p(d_i),   ξ_i^n = ξ_i^{n−1} + k (d_i^n)^+   (the implicit rectangle rule for (2.15)),
+
 and the rigid base adds a multiplier λ_i ≥ 0 once d_i reaches g.
 """
 

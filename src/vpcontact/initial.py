@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import Basis
 
-from .case import Case, _brief, check_time_span
+from .case import Model, _brief, check_time_span
 from .contact import ContactLaw, ContactSurface
 from .errors import CaseError, quoted
 from .expressions import values_at
@@ -75,16 +75,16 @@ class RunState:
     time: float
 
 
-def initial_state(case: Case, mesh: Mesh, basis: Basis, surface: ContactSurface, law: ContactLaw, *,
+def initial_state(model: Model, mesh: Mesh, basis: Basis, surface: ContactSurface, law: ContactLaw, *,
                   displacement=None, stress=None, xi=None) -> InitialState:
-    """The checked initial state of ``case`` (see the module's docstring); ``displacement``, ``stress``,
+    """The checked initial state of ``model`` (see the module's docstring); ``displacement``, ``stress``,
     ``xi``: arrays of the API that replace the case's."""
     d, nodes, elements = mesh.dim, mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
-    given = case.initial
+    given = model.initial
     names = {"displacement": "initial.displacement", "stress": "initial.stress", "xi": "initial.xi"}
-    start = case.time.start
+    start = model.time.start
     if given.from_run is not None:
-        run = read_run_state(case, mesh, surface)
+        run = read_run_state(model, mesh, surface)
         label = f"initial.from_run = {quoted(given.from_run)} at step {given.step}"
         u0, sigma0 = run.displacement, np.moveaxis(run.stress, 0, -1)
         names.update(displacement=f"{label} (u)", stress=f"{label} (stress)")
@@ -121,15 +121,15 @@ def initial_state(case: Case, mesh: Mesh, basis: Basis, surface: ContactSurface,
         start = 0.0
     else:
         try:
-            check_time_span(start, case.time.T, case.time.steps, "time.start" if case.time.start is not None
+            check_time_span(start, model.time.T, model.time.steps, "time.start" if model.time.start is not None
                             else f"the time of step {given.step} of initial.from_run")
         except ValueError as error:
             raise CaseError(str(error)) from None
     state = InitialState(np.array(u0, dtype=float), np.array(sigma0, dtype=float), np.array(xi0, dtype=float),
                          float(start), names)
     _check_finite(state, mesh, surface)
-    _check_dirichlet(state, case, mesh)
-    _check_admissible(state, case, mesh, basis, surface, law)
+    _check_dirichlet(state, model, mesh)
+    _check_admissible(state, model, mesh, basis, surface, law)
     _check_history(state, surface)
     return state
 
@@ -206,12 +206,12 @@ def _check_finite(state: InitialState, mesh: Mesh, surface: ContactSurface) -> N
                             f"expected finite values")
 
 
-def _check_dirichlet(state: InitialState, case: Case, mesh: Mesh) -> None:
+def _check_dirichlet(state: InitialState, model: Model, mesh: Mesh) -> None:
     """u_0 = 0 on the Dirichlet components (u_0 ∈ V); values at rounding level are set to 0."""
     u = state.displacement
     rounding = ROUNDING * np.abs(u).max(initial=0.0)
     p = mesh.mesh.p
-    for i, item in enumerate(case.boundary.dirichlet):
+    for i, item in enumerate(model.boundary.dirichlet):
         names = item.components or coordinates(mesh.dim)
         nodes = mesh.nodes(item.part)
         columns = [component(c) for c in names]
@@ -226,7 +226,7 @@ def _check_dirichlet(state: InitialState, case: Case, mesh: Mesh) -> None:
         u[np.ix_(nodes, columns)] = 0.0
 
 
-def _check_admissible(state: InitialState, case: Case, mesh: Mesh, basis: Basis, surface: ContactSurface,
+def _check_admissible(state: InitialState, model: Model, mesh: Mesh, basis: Basis, surface: ContactSurface,
                       law: ContactLaw) -> None:
     """u_0·ν − g0 ≤ g at every contact node (to the complementarity tolerance of the solver)."""
     if surface.size == 0 or not state.moves:
@@ -234,7 +234,7 @@ def _check_admissible(state: InitialState, case: Case, mesh: Mesh, basis: Basis,
     d0 = surface.operator @ state.dofs(basis) - surface.gap0
     g = np.broadcast_to(law.g, d0.shape)
     excess = d0 - g
-    wrong = excess > case.solver.tolerance * mesh.diameter
+    wrong = excess > model.solver.tolerance * mesh.diameter
     if wrong.any():
         node = int(np.argmax(excess))
         raise CaseError(f"{state.names['displacement']} penetrates the foundation beyond the layer: u_0.nu - gap = "
@@ -260,11 +260,11 @@ _NEEDED = ("points", "steps", "times", "displacement", "stress")
 MAX_SOLUTION_BYTES = 2**36
 
 
-def read_run_state(case: Case, mesh: Mesh, surface: ContactSurface) -> RunState:
+def read_run_state(model: Model, mesh: Mesh, surface: ContactSurface) -> RunState:
     """The state of the run directory initial.from_run at its field step initial.step, checked against
     the case's mesh (same nodes, coordinates and elements) and contact nodes; CaseError otherwise."""
-    folder, step = case.from_run_path, case.initial.step
-    where = f"initial.from_run = {quoted(case.initial.from_run)}"
+    folder, step = model.from_run_path, model.initial.step
+    where = f"initial.from_run = {quoted(model.initial.from_run)}"
     if not folder.is_dir():
         raise CaseError(f"{where}: '{folder}' is not a run directory (give the --out folder of a vpcontact run)")
     path = folder / "solution.npz"
@@ -286,16 +286,16 @@ def read_run_state(case: Case, mesh: Mesh, surface: ContactSurface) -> RunState:
     written = [int(s) for s in steps]
     if step not in written:
         kept = ", ".join(map(str, written)) or "none"
-        raise CaseError(f"initial.step = {step}: the run in {quoted(case.initial.from_run)} wrote its fields at the "
+        raise CaseError(f"initial.step = {step}: the run in {quoted(model.initial.from_run)} wrote its fields at the "
                         f"steps {kept} (its output.field_steps): give one of them")
     at = written.index(step)
     xi = None
     if "xi" in arrays:
         run_nodes = arrays.get("contact_nodes", np.zeros(0, dtype=np.int64))
         if not np.array_equal(run_nodes, surface.nodes):
-            parts = "', '".join(str(layer.part) for _, layer in case.contact.layers()) if case.contact else ""
+            parts = "', '".join(str(layer.part) for _, layer in model.contact.layers()) if model.contact else ""
             ours = (f"the case's contact part '{parts}' has {surface.size} other nodes"
-                    if case.contact is not None else "the case has no [contact]")
+                    if model.contact is not None else "the case has no [contact]")
             raise CaseError(f"{where}: the run's contact part has {run_nodes.size} nodes and {ours}: a restart "
                             f"needs the same contact part")
         xi = arrays["xi"][at]

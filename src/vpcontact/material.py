@@ -1,6 +1,7 @@
-"""Isotropic linear elasticity: the tensor ℰ of the constitutive law (2.1), for d = 2 or 3.
+"""Isotropic linear elasticity: the tensor ℰ of the constitutive law (2.1), for d = 2 or 3::
 
     (ℰτ)_ij = λ τ_kk δ_ij + 2μ τ_ij,   λ = Eν/((1+ν)(1−2ν)),  μ = E/(2(1+ν)):
+
 the full isotropic tensor on S³ in 3D and, in 2D, plane strain, which is the paper's formula (4.1).
 Plane stress (2D only) replaces λ by λ* = Eν/(1−ν²) (the same μ). The plane hypotheses are the only
 place the dimension enters: in 3D there is none (``hypothesis=None``).
@@ -62,7 +63,7 @@ def _stress_3d(sigma: np.ndarray, sigma33: np.ndarray | None) -> np.ndarray:
 
 
 def von_mises(sigma: np.ndarray, sigma33: np.ndarray | None = None) -> np.ndarray:
-    """von Mises stress sqrt(3/2 |dev σ|²) of the 3D tensor (σ in 3D, σ and σ33 in 2D)."""
+    """von Mises stress sqrt(3/2 ‖dev σ‖²) of the 3D tensor (σ in 3D, σ and σ33 in 2D)."""
     dev = deviator(_stress_3d(sigma, sigma33))
     return np.sqrt(1.5 * np.einsum("ij...,ij...->...", dev, dev))
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .case import Case, MaterialSection, _material_keys
+from .case import MaterialSection, Model, _material_keys
 from .errors import CaseError, quoted
 from .expressions import values_at
 from .material import Elasticity, Perzyna, Relaxation
@@ -54,7 +54,7 @@ class AtCentroids:
 class Materials:
     """The body's materials on the elements: which entry each element has, ℰ per element and 𝒢."""
 
-    owner: np.ndarray  # the index of each element's entry in ``case.materials`` (nelements,)
+    owner: np.ndarray  # the index of each element's entry in ``model.materials`` (nelements,)
     elasticity: Elasticity  # E, ν floats for one homogeneous material, else arrays over the elements
     viscoplastic: Callable | None  # 𝒢(σ, ε) over arrays (d, d, nelements); None: 𝒢 = 0 everywhere
 
@@ -69,15 +69,15 @@ class Materials:
         return np.broadcast_to(np.asarray(self.elasticity.nu, dtype=float), self.owner.shape)
 
 
-def body_materials(case: Case, mesh: Mesh) -> Materials:
-    """The materials of ``case`` on the elements of ``mesh`` (CaseError naming the entry, region or
+def body_materials(model: Model, mesh: Mesh) -> Materials:
+    """The materials of ``model`` on the elements of ``mesh`` (CaseError naming the entry, region or
     element where they do not assign exactly one admissible material to every element)."""
-    entries = _material_keys(case)
+    entries = _material_keys(model)
     owner = _owners(entries, mesh)
     dim = mesh.dim
-    hypothesis = (case.materials[0].hypothesis or "plane_strain") if dim == 2 else None
-    if len(entries) == 1 and not any(isinstance(v, str) for v in (case.materials[0].E, case.materials[0].nu)):
-        entry = case.materials[0]
+    hypothesis = (model.materials[0].hypothesis or "plane_strain") if dim == 2 else None
+    if len(entries) == 1 and not any(isinstance(v, str) for v in (model.materials[0].E, model.materials[0].nu)):
+        entry = model.materials[0]
         elasticity = Elasticity(float(entry.E), float(entry.nu), hypothesis)  # homogeneous: the scalar form
     else:
         centroids = mesh.centroids

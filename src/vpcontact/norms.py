@@ -3,14 +3,14 @@
 A `Snapshot` is a discrete solution at one time: P1 displacement (nodal values) and P0 stress
 (one symmetric tensor per element) on a simplex mesh (triangles in 2D, tetrahedra in 3D).
 `differences` compares a solution with a reference on the reference's mesh (the paper's
-convergence study):
+convergence study)::
 
     V = ‖ε(I_ref u_h − u_ref)‖_{L²(Ω_ref)},   Q = ‖Π_ref σ_h − σ_ref‖_{L²(Ω_ref)},
     U = ‖I_ref u_h − u_ref‖_{L²(Ω_ref)},
 
 where I_ref interpolates u_h at the reference nodes and Π_ref evaluates σ_h at the reference
 element centroids (`transfer`). The norms are exact for these fields: ε(v) of a P1 field and a
-P0 stress are constant on each element, so ‖·‖² is Σ_T |T| · (the tensor's Frobenius norm)²; a
+P0 stress are constant on each element, so ‖·‖² is Σ_T :math:`|T|` · (the tensor's Frobenius norm)²; a
 P1 field's square is integrated exactly by its element mass matrix.
 
 Point location in `transfer` is vectorized: a k-d tree of the source element centroids gives
@@ -124,7 +124,7 @@ class Locator:
                        for members in (np.flatnonzero(group == g) for g in np.unique(group))]
 
     def barycentric(self, x: np.ndarray, elements: np.ndarray) -> np.ndarray:
-        """Barycentric coordinates (d + 1, *elements.shape) of points x (q, d) in elements (q,) or
+        """Barycentric coordinates ``(d + 1, *elements.shape)`` of points x (q, d) in elements (q,) or
         (q, k), in the order of the elements' vertices (rows of `elements`)."""
         d = x.shape[1]
         shape = (-1,) + (1,) * (elements.ndim - 1)
@@ -213,7 +213,7 @@ def transfer(source: Snapshot, target_points, target_elements) -> Snapshot:
 
 
 def strain_norm(points, elements, displacement) -> float:
-    """‖ε(u)‖_{L²(Ω_h)} = (Σ_T |T| ε(u)|_T : ε(u)|_T)^½ for the P1 displacement u with nodal values
+    """‖ε(u)‖_{L²(Ω_h)} = (Σ_T :math:`|T|` ε(u)|_T : ε(u)|_T)^½ for the P1 displacement u with nodal values
     `displacement` (nnodes, d) on the mesh (points (d, nnodes), elements (d + 1, nelements)); exact,
     ε(u) = sym ∇u being constant on each element."""
     (strain,), measure = _strains(points, elements, displacement)
@@ -248,7 +248,7 @@ def _squares(measure: np.ndarray, field: np.ndarray) -> float:
 
 
 def element_energies(points, elements, displacement, lame) -> np.ndarray:
-    """∫_T ℰε(u):ε(u) = |T| (λ (tr ε)² + 2μ ε:ε) on each element T (m,) for the P1 displacement with nodal
+    """∫_T ℰε(u):ε(u) = :math:`|T|` (λ (tr ε)² + 2μ ε:ε) on each element T (m,) for the P1 displacement with nodal
     values ``displacement`` (nnodes, d); ``lame`` = (λ, μ), numbers or arrays over the elements (the
     isotropic ℰ of :class:`~vpcontact.material.Elasticity`; in 2D its plane hypothesis's λ)."""
     (strain,), measure = _strains(points, elements, displacement)
@@ -268,7 +268,7 @@ def containing_elements(points, elements, x) -> np.ndarray:
 
 
 def stress_norm(points, elements, stress) -> float:
-    """‖σ‖_{L²(Ω_h)} = (Σ_T |T| σ_T : σ_T)^½ for the P0 stress `stress` (nelements, d, d) on the mesh
+    """‖σ‖_{L²(Ω_h)} = (Σ_T :math:`|T|` σ_T : σ_T)^½ for the P0 stress `stress` (nelements, d, d) on the mesh
     (points (d, nnodes), elements (d + 1, nelements)); σ : σ = σ_ij σ_ij."""
     measure = _measures(np.asarray(points, dtype=float), np.asarray(elements, dtype=np.int64))
     return float(np.sqrt(_squares(measure, np.asarray(stress, dtype=float))))

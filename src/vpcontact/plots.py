@@ -1,5 +1,7 @@
-"""Figures of a run, in 2D and 3D: the contact pressure and node states on Γ3 at a few times, the
-deformed body coloured by its von Mises stress, and history columns against t.
+"""Figures of a run, in 2D and 3D: the contact pressure and node states on Γ3 at a few times, the node
+states with the penetration at one time, the deformed body coloured by a field (the von Mises stress by
+default), and history columns against t. ``result.plot`` reaches them as methods of a run
+(:mod:`vpcontact.result_plots`).
 
 Each function takes a :class:`~vpcontact.results.Result` and returns a `matplotlib.figure.Figure`
 (no pyplot: no global state, so it renders headless, and a notebook shows it as it is). matplotlib
@@ -10,12 +12,13 @@ these figures as PNG files with ``output.figures = true`` (:func:`run_figures`, 
 
 from __future__ import annotations
 
+import difflib
 import math
 
 import numpy as np
 
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
-from .errors import CaseError
+from .errors import CaseError, shown
 from .space import coordinates
 
 STATE_COLORS = {SEPARATED: "0.6", IN_COMPLIANCE: "#0072B2", AT_LIMIT: "#D55E00"}
@@ -58,8 +61,11 @@ def default_steps(result, panels: int = PANELS) -> list[int]:
     return sorted(range(done, 0, -spacing)[:panels])
 
 
-def _step_rows(result, steps) -> dict[int, int]:
+def step_rows(result, steps) -> dict[int, int]:
     """The history row at t_n of each step n of ``steps`` (CaseError for a step not done)."""
+    wrong = [n for n in steps if isinstance(n, bool) or not isinstance(n, (int, np.integer))]
+    if wrong:
+        raise CaseError(f"step = {shown(repr(wrong[0]))}: expected a step number (an integer)")
     ends = np.flatnonzero(result.ends_step())
     row_of = dict(zip(result.series("step")[ends].astype(int).tolist(), ends.tolist()))
     missing = [n for n in steps if n not in row_of]
@@ -74,17 +80,48 @@ def contact_pressure(result, steps=None):
     """The contact pressure (compliance + rigid part) and the state of each contact node at the end of
     each of ``steps`` (step numbers; default :func:`default_steps`), one panel per time. 3D: the facets
     of Γ3 seen along the coordinate axis closest to its normal weighted by the contact force at the
-    last time shown (z for a body pressed down: the (x, y) plane, the patch seen from below), coloured by the pressure interpolated between the nodes, with one colour bar from
-    the least to the largest pressure shown, zoomed to where the pressure or the penetration is
-    positive at the last time shown. 2D: the pressure along Γ3 against the arc length s (from the end
-    of Γ3 with the least x). The node states are markers (legend)."""
+    last time shown (z for a body pressed down: the (x, y) plane, the patch seen from below), coloured
+    by the pressure interpolated between the nodes, with one colour bar from the least to the largest
+    pressure shown, zoomed to where the pressure or the penetration is positive at the last time shown.
+    2D: the pressure along Γ3 against the arc length s (from the end of Γ3 with the least x). The node
+    states are markers (legend)."""
     surface = result.problem.surface
     if surface.size == 0:
         raise CaseError("the run has no contact (no [contact] in its case): there is no contact pressure to draw")
     steps = default_steps(result) if steps is None else sorted(set(steps))
     if not steps:
         raise CaseError("the run has done no step: there is no contact pressure to draw")
-    rows = list(_step_rows(result, steps).values())
+    rows = list(step_rows(result, steps).values())
+    pressure = (result.contact_history("pressure_compliance") + result.contact_history("pressure_rigid"))[rows]
+    return _on_contact(result, rows, pressure, ("pressure", "contact pressure (compliance + rigid)"),
+                       "Contact pressure and node states on Γ3")
+
+
+def node_states(result, step=None):
+    """The state of each contact node at the end of ``step`` (default: the last step done) with its
+    penetration d = u·ν − g0, whose value sets the state: separated (d ≤ 0), in normal compliance
+    (0 < d < g), at the limit (d = g). 2D: d against the arc length along Γ3, the limit g dashed; 3D:
+    Γ3 as in :func:`contact_pressure`, coloured by d. The node states are markers (legend)."""
+    surface = result.problem.surface
+    if surface.size == 0:
+        raise CaseError("the run has no contact (no [contact] in its case): there are no node states to draw")
+    if step is None and result.completed_steps == 0:
+        raise CaseError("the run has done no step: there are no node states to draw")
+    step = result.completed_steps if step is None else step
+    rows = list(step_rows(result, [step]).values())
+    limit = result.problem.law.parameters(surface.size)["g"]
+    return _on_contact(result, rows, result.contact_history("penetration")[rows], ("penetration", "penetration d"),
+                       "Node states and penetration on Γ3", limit=limit)
+
+
+def _on_contact(result, rows, values, labels, title, limit=None):
+    """A figure of per-node ``values`` (one row per panel) at the history ``rows`` with the node states:
+    3D: Γ3 seen along the coordinate axis closest to its normal weighted by the contact force at the last
+    time shown (z for a body pressed down: the (x, y) plane, the patch seen from below), coloured by the
+    values interpolated between the nodes, zoomed to where the pressure or the penetration is positive at
+    the last time shown, with one colour bar from the least to the largest value there (``labels[1]``);
+    2D: the values against the arc length s along Γ3 (``labels[0]``), and ``limit`` per node dashed."""
+    surface = result.problem.surface
     pressure = (result.contact_history("pressure_compliance") + result.contact_history("pressure_rigid"))[rows]
     status = result.contact_history("status")[rows].astype(int)
     penetration = result.contact_history("penetration")[rows]
@@ -93,15 +130,21 @@ def contact_pressure(result, steps=None):
         load = surface.weights * pressure[-1]  # where the foundation pushes at the last time (else all of Γ3)
         along = int(np.argmax(np.abs(surface.normals @ (load if load.any() else surface.weights))))
         plane = [c for c in range(3) if c != along]
-        figure = _patch_panels(surface, plane, times, pressure, status, penetration)
+        figure = _patch_panels(surface, plane, times, values, status, pressure, penetration, labels[1])
         names = coordinates(3)
         view = f"seen along {names[along]}, on the ({names[plane[0]]}, {names[plane[1]]}) plane"
     else:
-        figure, view = _profile_panels(surface, times, pressure, status), "along Γ3"
+        figure, view = _profile_panels(surface, times, values, status, labels[0], limit), "along Γ3"
     parts = ", ".join(repr(part) for part in surface.parts)
-    figure.legend(handles=_state_handles(), loc="outside lower center", ncol=3, frameon=False, fontsize=9)
-    figure.suptitle(f"Contact pressure and node states on Γ3 (part{'s' * (len(surface.parts) > 1)} {parts}, "
-                    f"{surface.size} nodes), {view}",
+    handles = _state_handles()
+    if limit is not None and result.dim == 2:
+        from matplotlib.lines import Line2D
+
+        handles.append(Line2D([], [], color="0.25", lw=0.8, ls="--", label="limit g"))
+    narrow = result.dim == 3 and len(rows) < 3  # a legend in one row would be wider than the panels
+    figure.legend(handles=handles, loc="outside lower center", ncol=1 if narrow else len(handles), frameon=False,
+                  fontsize=9)
+    figure.suptitle(f"{title}\n(part{'s' * (len(surface.parts) > 1)} {parts}, {surface.size} nodes), {view}",
                     fontsize=10)
     return figure
 
@@ -143,8 +186,10 @@ def contact_zoom(points: np.ndarray, facets: np.ndarray, pressure: np.ndarray,
     return low - pad, high + pad
 
 
-def _patch_panels(surface, plane, times, pressure, status, penetration):
-    """3D: one panel per time, Γ3 projected on the coordinate ``plane`` (two axes)."""
+def _patch_panels(surface, plane, times, values, status, pressure, penetration, label):
+    """3D: one panel per time, Γ3 projected on the coordinate ``plane`` (two axes), zoomed by the
+    ``pressure`` and ``penetration`` at the last time, coloured by ``values`` on one scale from the least
+    to the largest value in the zoom; ``label``: the colour bar's."""
     from matplotlib.colors import Normalize
     from matplotlib.tri import Triangulation
 
@@ -154,12 +199,13 @@ def _patch_panels(surface, plane, times, pressure, status, penetration):
     shown_facets = int(np.sum(inside[surface.facets].any(axis=0)))
     size = float(np.clip(3000.0 / max(int(inside.sum()), 1), 3.0, 40.0))
     triangulation = Triangulation(*points, surface.facets.T)
-    norm = Normalize(float(pressure.min()), float(pressure.max()))
+    shown_values = values[:, inside] if inside.any() else values
+    norm = Normalize(float(shown_values.min()), float(shown_values.max()))
     width, height = high - low
     figure, axes = _grid(len(times), aspect=float(width / height))
     names = coordinates(3)
-    for ax, t, p, s in zip(axes, times, pressure, status):
-        image = ax.tripcolor(triangulation, p, shading="gouraud", cmap=PRESSURE_MAP, norm=norm, zorder=1)
+    for ax, t, value, s in zip(axes, times, values, status):
+        image = ax.tripcolor(triangulation, value, shading="gouraud", cmap=PRESSURE_MAP, norm=norm, zorder=1)
         if shown_facets <= EDGES_DRAWN_UP_TO:
             ax.triplot(triangulation, color="w", lw=0.3, alpha=0.6, zorder=2)
         _states(ax, *points, s, size)
@@ -168,20 +214,24 @@ def _patch_panels(surface, plane, times, pressure, status, penetration):
     for ax in axes[::_columns(len(times))]:
         ax.set_ylabel(names[plane[1]])
     bar = axes[_columns(len(times)) - 1].inset_axes([1.06, 0.0, 0.06, 1.0])  # beside the first row's last panel
-    figure.colorbar(image, cax=bar, label="contact pressure (compliance + rigid)")
+    figure.colorbar(image, cax=bar, label=label)
     return figure
 
 
-def _profile_panels(surface, times, pressure, status):
-    """2D: one panel per time, the pressure against the arc length along Γ3."""
+def _profile_panels(surface, times, values, status, label, limit=None):
+    """2D: one panel per time, ``values`` against the arc length along Γ3 (``label``: the y axis's), and
+    ``limit`` (per node) dashed."""
     order, s, breaks = arc_length(surface.coordinates, surface.facets)
     figure = _figure(figsize=(7.0, 1.5 * len(times) + 1.4))
     axes = figure.subplots(len(times), 1, sharex=True, sharey=True, squeeze=False)[:, 0]
     size = float(np.clip(2000.0 / surface.size, 6.0, 30.0))
-    for ax, t, p, state in zip(axes, times, pressure, status):
-        ax.plot(np.insert(s, breaks, np.nan), np.insert(p[order], breaks, np.nan), color="0.25", lw=1.0, zorder=2)
-        _states(ax, s, p[order], state[order], size)
-        ax.set_ylabel("pressure")
+    for ax, t, value, state in zip(axes, times, values, status):
+        ax.plot(np.insert(s, breaks, np.nan), np.insert(value[order], breaks, np.nan), color="0.25", lw=1.0, zorder=2)
+        if limit is not None:
+            ax.plot(np.insert(s, breaks, np.nan), np.insert(limit[order], breaks, np.nan), color="0.25", lw=0.8,
+                    ls="--", zorder=1, label="limit g")
+        _states(ax, s, value[order], state[order], size)
+        ax.set_ylabel(label)
         ax.set_title(f"t = {t:g}: {_counts(state)}", fontsize=9, loc="left")
     axes[-1].set_xlabel("arc length s along Γ3")
     return figure
@@ -228,7 +278,7 @@ def along_contact(results, quantities=ALONG_CONTACT, step=None):
         if surface.size == 0:
             raise CaseError(f"along_contact: the run {label!r} has no contact")
         n = result.completed_steps if step is None else step
-        row = _step_rows(result, [n])[n]
+        row = step_rows(result, [n])[n]
         times.add(float(result.times[row]))
         if result.dim == 2:
             order, s, breaks = arc_length(surface.coordinates, surface.facets)
@@ -256,20 +306,74 @@ def along_contact(results, quantities=ALONG_CONTACT, step=None):
 
 
 # --- deformed body -----------------------------------------------------------------------------
-def deformed_body(result, step=None, scale=None):
-    """The body deformed at the end of ``step`` (a step whose fields the run kept, see
-    ``output.field_steps``; default: the last one), its displacement magnified ``scale`` times
-    (default: see DISPLACEMENT_SHARE), coloured by the von Mises stress of each element with a colour
-    bar. 3D: the boundary facets seen obliquely; 2D: the deformed mesh, its outline, and the
-    undeformed outline dashed."""
+FIELD_LABELS = {"von_mises": "von Mises stress", "displacement": "displacement |u|"}
+"""Colour-bar labels of the body fields that are not named by their component (see :func:`body_field`)."""
+
+
+def fields_at(result, step, purpose: str):
+    """(step, Fields) of the field step ``step`` of ``result`` (None: the last one kept); CaseError when the run
+    kept no fields (the message ends with ``purpose``), or none at ``step``."""
     if not result.fields:
-        raise CaseError("the run kept no fields (output.field_steps = \"none\", or it failed before a field step): "
-                        "there is no deformed body to draw")
+        raise CaseError(f"the run kept no fields (output.field_steps = \"none\", or it failed before a field step): "
+                        f"there is {purpose}")
     step = max(result.fields) if step is None else step
     if step not in result.fields:
         raise CaseError(f"step {step!r} has no fields: the run kept them at steps {sorted(result.fields)} "
                         f"(output.field_steps)")
-    fields, mesh = result.fields[step], result.problem.mesh
+    return step, result.fields[step]
+
+
+def body_fields(fields, dim: int) -> dict[str, tuple[np.ndarray, bool]]:
+    """The scalar fields of ``fields`` (a :class:`~vpcontact.results.Fields` of a d-dimensional body) by
+    name, each with True for one value per node, False for one per element: ``von_mises``;
+    ``displacement`` (:math:`|u|`) and ``displacement_x``, …; the stress components ``sigma_xx``, ``sigma_xy``,
+    … (i ≤ j; in 2D also ``sigma_zz``, σ33 of the elastic response, when the fields have it); with a
+    viscoplastic history ``z_xx``, …; with an error estimate ``error_indicator`` (η_K)."""
+    axes = coordinates(dim)
+    pairs = [(i, j) for i in range(dim) for j in range(i, dim)]
+    named = {"von_mises": (fields.von_mises, False),
+             "displacement": (np.linalg.norm(fields.displacement, axis=1), True),
+             **{f"displacement_{c}": (fields.displacement[:, i], True) for i, c in enumerate(axes)},
+             **{f"sigma_{axes[i]}{axes[j]}": (fields.stress[:, i, j], False) for i, j in pairs}}
+    if fields.stress33 is not None:
+        named["sigma_zz"] = (fields.stress33, False)
+    if fields.z is not None:
+        named.update({f"z_{axes[i]}{axes[j]}": (fields.z[:, i, j], False) for i, j in pairs})
+    if fields.error_indicator is not None:
+        named["error_indicator"] = (fields.error_indicator, False)
+    return named
+
+
+def body_field(fields, dim: int, name: str) -> tuple[np.ndarray, bool]:
+    """The field ``name`` of :func:`body_fields` (values, per node?); CaseError naming the valid ones for
+    another name, and what computes a field the run has not (z, the error indicator)."""
+    named = body_fields(fields, dim)
+    if isinstance(name, str) and name in named:
+        return named[name]
+    valid = ", ".join(named)
+    if name == "error_indicator":
+        raise CaseError(f"field 'error_indicator': the run has no error estimate (output.error_estimate = true "
+                        f"computes it); valid fields: {valid}")
+    if isinstance(name, str) and name.startswith("z_") and fields.z is None:
+        raise CaseError(f"field {name!r}: the run has no viscoplastic history z (z = 0: no viscoplastic law and no "
+                        f"initial stress); valid fields: {valid}")
+    head, _, pair = str(name).rpartition("_")
+    transposed = f"{head}_{pair[::-1]}"  # the stored component of a symmetric tensor: sigma_xy, not sigma_yx
+    close = [transposed] if transposed in named else difflib.get_close_matches(str(name), list(named), n=1)
+    hint = f"did you mean {close[0]!r}? " if close else ""
+    raise CaseError(f"unknown field {shown(repr(name))} to colour the body by; {hint}valid fields: {valid}")
+
+
+def deformed_body(result, step=None, scale=None, field="von_mises"):
+    """The body deformed at the end of ``step`` (a step whose fields the run kept, see
+    ``output.field_steps``; default: the last one), its displacement magnified ``scale`` times
+    (default: see DISPLACEMENT_SHARE), coloured by ``field`` (a name of :func:`body_fields`; default the
+    von Mises stress) with a colour bar: an element field flat on each element, a node field
+    interpolated (2D) or averaged over each facet (3D). 3D: the boundary facets seen obliquely; 2D: the
+    deformed mesh, its outline, and the undeformed outline dashed."""
+    step, fields = fields_at(result, step, "no deformed body to draw")
+    values, at_nodes = body_field(fields, result.dim, field)
+    mesh = result.problem.mesh
     t = float(result.problem.times[step - 1])
     largest = float(np.linalg.norm(fields.displacement, axis=1).max(initial=0.0))
     scale = magnification(largest, mesh.diameter) if scale is None else float(scale)
@@ -277,11 +381,12 @@ def deformed_body(result, step=None, scale=None):
         raise CaseError(f"scale = {scale!r}: expected a positive finite magnification")
     deformed = mesh.mesh.p + scale * fields.displacement.T
     draw = _body_3d if result.dim == 3 else _body_2d
-    figure = draw(mesh.mesh, deformed, fields.von_mises)
+    label = FIELD_LABELS.get(field, field)
+    figure = draw(mesh.mesh, deformed, values, at_nodes, label)
     magnified = "at true scale" if scale == 1 else f"magnified × {scale:g}"
-    figure.suptitle(f"Deformed body at t = {t:g}, coloured by the von Mises stress\ndisplacements {magnified} "
-                    f"(the largest, {largest:.3g}, is {largest / mesh.diameter:.1%}\nof the body's size, the diagonal "
-                    f"of its bounding box)", fontsize=10)
+    figure.suptitle(f"Deformed body at t = {t:g}, coloured by {'the ' * (field in FIELD_LABELS)}{label}\ndisplacements "
+                    f"{magnified} (the largest, {largest:.3g}, is {largest / mesh.diameter:.1%}\nof the body's size, "
+                    f"the diagonal of its bounding box)", fontsize=10)
     return figure
 
 
@@ -297,7 +402,7 @@ def magnification(largest: float, size: float) -> float:
     return max(m * 10.0**exponent for m in (1, 2, 5, 10) if m * 10.0**exponent <= wanted)
 
 
-def _body_2d(mesh, deformed, von_mises):
+def _body_2d(mesh, deformed, values, at_nodes, label):
     from matplotlib.collections import LineCollection
     from matplotlib.tri import Triangulation
 
@@ -305,9 +410,14 @@ def _body_2d(mesh, deformed, von_mises):
     width, height = _size(*(both.max(axis=1) - both.min(axis=1)), BODY_HEIGHT)
     figure = _figure(figsize=(max(width + 1.9, 5.0), height + 1.8))
     ax = figure.subplots()
-    edges = "face" if mesh.t.shape[1] > EDGES_DRAWN_UP_TO else "0.3"
-    image = ax.tripcolor(Triangulation(*deformed, mesh.t.T), facecolors=von_mises, cmap=STRESS_MAP, edgecolors=edges,
-                         linewidth=0.15)
+    triangulation = Triangulation(*deformed, mesh.t.T)
+    if at_nodes:
+        image = ax.tripcolor(triangulation, values, shading="gouraud", cmap=STRESS_MAP)
+        if mesh.t.shape[1] <= EDGES_DRAWN_UP_TO:
+            ax.triplot(triangulation, color="0.3", lw=0.15)
+    else:
+        edges = "face" if mesh.t.shape[1] > EDGES_DRAWN_UP_TO else "0.3"
+        image = ax.tripcolor(triangulation, facecolors=values, cmap=STRESS_MAP, edgecolors=edges, linewidth=0.15)
     outline = mesh.facets[:, mesh.boundary_facets()]
     ax.add_collection(LineCollection(np.transpose(mesh.p[:, outline], (2, 1, 0)), colors="0.45", linewidths=0.8,
                                      linestyles="--", label="undeformed outline"))
@@ -318,11 +428,11 @@ def _body_2d(mesh, deformed, von_mises):
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     figure.legend(loc="outside lower center", ncol=2, fontsize=8, frameon=False)
-    figure.colorbar(image, cax=ax.inset_axes([1.05, 0.0, 0.05, 1.0]), label="von Mises stress")
+    figure.colorbar(image, cax=ax.inset_axes([1.05, 0.0, 0.05, 1.0]), label=label)
     return figure
 
 
-def _body_3d(mesh, deformed, von_mises):
+def _body_3d(mesh, deformed, values, at_nodes, label):
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
     from matplotlib.ticker import MaxNLocator
@@ -330,13 +440,13 @@ def _body_3d(mesh, deformed, von_mises):
 
     boundary = mesh.boundary_facets()
     triangles = np.moveaxis(deformed[:, mesh.facets[:, boundary]], 0, -1).transpose(1, 0, 2)  # (nb, 3, 3)
-    values = von_mises[mesh.f2t[0, boundary]]
-    norm = Normalize(float(von_mises.min()), float(von_mises.max()))
+    facets = values[mesh.facets[:, boundary]].mean(axis=0) if at_nodes else values[mesh.f2t[0, boundary]]
+    norm = Normalize(float(values.min()), float(values.max()))
     mappable = ScalarMappable(norm, STRESS_MAP)
     figure = _figure(figsize=(6.4, 6.0), layout="none")  # placed by hand: the layout engines cut 3D axis labels
     ax = figure.add_axes((0.0, 0.04, 0.8, 0.8), projection="3d")
     many = boundary.size > EDGES_DRAWN_UP_TO
-    colors = mappable.to_rgba(values)
+    colors = mappable.to_rgba(facets)
     ax.add_collection3d(Poly3DCollection(triangles, facecolors=colors, edgecolors=colors if many else (0, 0, 0, 0.35),
                                          linewidths=0.2))
     low, high = deformed.min(axis=1), deformed.max(axis=1)
@@ -348,7 +458,7 @@ def _body_3d(mesh, deformed, von_mises):
     ax.zaxis.set_major_locator(MaxNLocator(4))
     ax.tick_params(labelsize=8)
     ax.set_zlabel("z", labelpad=-2)
-    figure.colorbar(mappable, cax=figure.add_axes((0.82, 0.2, 0.03, 0.55)), label="von Mises stress")
+    figure.colorbar(mappable, cax=figure.add_axes((0.82, 0.2, 0.03, 0.55)), label=label)
     return figure
 
 

@@ -1,4 +1,4 @@
-"""From a case to the discrete problem: mesh, spaces, operators, loads and the contact law.
+"""From a model and a mesh to the discrete problem: spaces, operators, loads and the contact law.
 
 Everything that can fail on user input (mesh file, part names, rigid motions left free, loads that
 are not finite at a time step, outputs that would not fit in memory, Python objects of the API that
@@ -8,10 +8,12 @@ are not laws) fails here, before any computation and before anything is written.
 from __future__ import annotations
 
 import inspect
+import os
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import partial
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -21,7 +23,7 @@ from skfem import Basis
 from . import mesh as meshes
 from .assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
-from .case import Case, _brief, _material_keys
+from .case import Case, MeshSection, Model, _brief, _material_keys
 from .contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
                       PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
 from .errors import CaseError, quoted
@@ -29,7 +31,6 @@ from .expressions import parse_expression, values_at
 from .initial import InitialState, initial_state
 from .material import Elasticity
 from .materials import AtCentroids, Materials, body_materials
-from .results import check_memory
 from .rigid_modes import RigidModes
 from .space import CELLS, component, coordinates
 from .time_grid import TimeGrid
@@ -39,9 +40,12 @@ from .time_grid import TimeGrid
 
 @dataclass
 class Problem:
-    """The discrete problem of a case: Problem P_V of the paper on P1 × P0 with node-to-rigid contact."""
+    """The discrete problem of a model on a mesh: Problem P_V of the paper on P1 × P0 with node-to-rigid
+    contact. ``model`` and ``objects`` (the Python objects that replace parts of it, see
+    :func:`build_problem`) are what it was built from: :meth:`on` builds the same problem on another mesh."""
 
-    case: Case
+    model: Model
+    objects: dict  # the keyword arguments of build_problem that replace parts of the model
     mesh: meshes.Mesh
     basis: Basis
     materials: Materials  # the material of each element, ℰ per element and the case's 𝒢
@@ -56,11 +60,12 @@ class Problem:
     initial: InitialState | None = None  # u_0, σ_0, ξ_0 and t_0 (build_problem sets it)
     initial_strain: np.ndarray | None = None  # ε(u_0) per element (d, d, nelements)
     initial_history: np.ndarray | None = None  # z_0 = σ_0 − ℰε(u_0) of (2.28) per element (d, d, nelements)
+    source: str | None = None  # the resolved case (TOML) it was built from, for case.resolved.toml and checkpoints
     times: TimeGrid = field(init=False)  # t_1, …, t_steps
 
     def __post_init__(self):
         start = 0.0 if self.initial is None else self.initial.start
-        self.times = TimeGrid(self.case.time.T, self.case.time.steps, start)
+        self.times = TimeGrid(self.model.time.T, self.model.time.steps, start)
 
     @property
     def elasticity(self) -> Elasticity:
@@ -72,6 +77,26 @@ class Problem:
         """The time step (T − t_0) / steps."""
         return self.times.k
 
+    @property
+    def solver(self):
+        """The options of the step solver (:class:`~vpcontact.case.SolverSection`)."""
+        return self.model.solver
+
+    def on(self, mesh: meshes.Mesh) -> "Problem":
+        """The same problem on ``mesh`` (a refinement, with the same parts and regions): the model and the
+        Python objects again, except arrays of an initial state, which belong to the mesh they were given on."""
+        given = [name for name in INITIAL_ARRAYS if self.objects.get(name) is not None]
+        if given:
+            raise CaseError(f"{given[0]} is an array on the mesh the problem was built on: a problem with initial "
+                            f"arrays cannot be built on another mesh; give the initial state by expressions instead")
+        return build_problem(self.model, mesh=mesh, **self.objects)
+
+    def solve(self, *, output=None, progress: bool = False):
+        """The :class:`~vpcontact.results.Result` of the time loop (:func:`~vpcontact.stepping.solve_problem`)."""
+        from .stepping import solve_problem
+
+        return solve_problem(self, output=output, progress=progress)
+
     def __repr__(self) -> str:
         """One line: the sizes (not the operators)."""
         return (f"Problem(dofs={self.basis.N}, free_dofs={self.free.size}, elements={self.mesh.mesh.t.shape[1]}, "
@@ -79,14 +104,20 @@ class Problem:
                 f"k={self.k:g})")
 
 
-def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Callable | None = None,
-                  tractions: Mapping | None = None, body_force: Density | None = None,
-                  viscoplastic: Callable | None = None, initial_displacement=None, initial_stress=None,
-                  initial_xi=None, mesh: meshes.Mesh | None = None) -> Problem:
-    """Assemble the problem of ``case``; the keyword arguments replace parts of the case by Python objects:
+#: The keyword arguments of build_problem that are arrays on the mesh.
+INITIAL_ARRAYS = ("initial_displacement", "initial_stress", "initial_xi")
 
-    - ``mesh``: the mesh to solve on instead of the one ``[mesh]`` makes (a refinement of it,
-      :mod:`vpcontact.adapt`), with the same parts and regions;
+
+def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable | None = None,
+                  stiffness_law: Callable | None = None, tractions: Mapping | None = None,
+                  body_force: Density | None = None, viscoplastic: Callable | None = None, initial_displacement=None,
+                  initial_stress=None, initial_xi=None) -> Problem:
+    """Assemble the problem of ``model`` (a :class:`~vpcontact.model.Model`, or a whole
+    :class:`~vpcontact.model.Case`, whose outputs and adaptive meshes are not part of the problem) on
+    ``mesh``; the other keyword arguments replace parts of the model by Python objects:
+
+    - ``mesh``: the mesh to solve on (:mod:`vpcontact.mesh`: a built-in shape or a file); by default the
+      one the case's ``[mesh]`` makes (a Model without a mesh needs it);
 
     - ``p``, ``stiffness_law``: the laws p(r) and K(ξ) of the contact, vectorized over NumPy arrays; an
       object with a ``derivative`` method is used as it is (see :mod:`vpcontact.contact`), a plain
@@ -110,51 +141,65 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
     every step time, 𝒢 at (σ_0, ε(u_0))): one that is not callable, takes other arguments, returns the wrong
     shape or a value that is not finite is a CaseError."""
     started = time.perf_counter()
-    if case.contact is None and (p is not None or stiffness_law is not None):
+    objects = {name: value for name, value in dict(
+        p=p, stiffness_law=stiffness_law, tractions=tractions, body_force=body_force, viscoplastic=viscoplastic,
+        initial_displacement=initial_displacement, initial_stress=initial_stress, initial_xi=initial_xi).items()
+        if value is not None}
+    if not isinstance(model, Model):
+        raise CaseError(f"build_problem: {_brief(model)} is not a model: expected a vpcontact.Case "
+                        f"(vpcontact.load_case) or a vpcontact.case.Model")
+    if mesh is not None and not isinstance(mesh, meshes.Mesh):
+        raise CaseError(f"mesh = {_brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, "
+                        f"quarter_ball, rectangle, block or read_mesh)")
+    source = model.to_toml() if isinstance(model, Case) and mesh is None else None
+    if mesh is None:
+        if not isinstance(model, Case):
+            raise CaseError("a model without [mesh] needs a mesh: build_problem(model, mesh=...)")
+        mesh = make_mesh(model.mesh, model.base_dir)
+    model = model.model if isinstance(model, Case) else model
+    if model.contact is None and (p is not None or stiffness_law is not None):
         raise CaseError("p and stiffness_law are laws of the contact, and the case has no [contact]")
     p = None if p is None else _api_law(p, "p")
     stiffness_law = None if stiffness_law is None else _api_law(stiffness_law, "stiffness_law")
-    mesh = _make_mesh(case) if mesh is None else mesh
     meshed = time.perf_counter()
     dim = mesh.dim
-    _check_dimension(case, dim)
-    materials = body_materials(case, mesh)
+    _check_dimension(model, dim)
+    materials = body_materials(model, mesh)
     with np.errstate(all="ignore"):  # a stiffness that is not finite is reported below
         basis = displacement_basis(mesh)
         A = stiffness(basis, materials.elasticity)
     if not np.all(np.isfinite(A.data)):
-        moduli = ", ".join(f"{key}.E = {_brief(entry.E)}" for key, entry in _material_keys(case))
+        moduli = ", ".join(f"{key}.E = {_brief(entry.E)}" for key, entry in _material_keys(model))
         raise CaseError(f"{moduli}: the stiffness matrix is not finite in float64 (the moduli or the sizes of the "
                         f"{CELLS[dim][2]} are out of its range); state them in other units")
 
     fixed = np.zeros(basis.N, dtype=bool)
-    for item in case.boundary.dirichlet:
+    for item in model.boundary.dirichlet:
         components = [component(c) for c in (item.components or coordinates(dim))]
         fixed[basis.nodal_dofs[components][:, mesh.nodes(item.part)]] = True
     free = np.flatnonzero(~fixed)
 
     body_terms = [(f"boundary.body_force[{i}].value", _density(f.value, f"boundary.body_force[{i}].value"))
-                  for i, f in enumerate(case.boundary.body_force)]
+                  for i, f in enumerate(model.boundary.body_force)]
     if body_force is not None:
         body_terms = [("body_force", body_force)]
-    loads = LoadVector(basis, mesh, _traction_terms(case, mesh, tractions), body_terms)
+    loads = LoadVector(basis, mesh, _traction_terms(model, mesh, tractions), body_terms)
 
     surface, probe = empty_surface(basis.N, dim), None
     law = ContactLaw(PositivePart(), ConstantStiffness(0.0), np.inf)
-    if case.contact is not None:
-        c = case.contact
+    if model.contact is not None:
+        c = model.contact
         layers = c.layers()
         gaps = [parse_expression(layer.gap, coordinates(dim), where=f"{key}.gap") for key, layer in layers]
         surface = contact_surface(mesh, [layer.part for _, layer in layers], basis.nodal_dofs, gaps,
                                   None if c.normal == "body" else c.normal)
-        law = _contact_law(case, surface, p, stiffness_law)
+        law = _contact_law(model, surface, p, stiffness_law)
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
-    _check_contact_can_move(case, mesh, basis, free, surface)
+    _check_contact_can_move(model, mesh, basis, free, surface)
     _check_rigid_motions(mesh, basis, free, surface)
 
-    elements = mesh.mesh.t.shape[1]
-    initial = initial_state(case, mesh, basis, surface, law, displacement=initial_displacement, stress=initial_stress,
+    initial = initial_state(model, mesh, basis, surface, law, displacement=initial_displacement, stress=initial_stress,
                             xi=initial_xi)
     strain0 = element_strain(basis, initial.dofs(basis))
     z0 = initial.stress - materials.elasticity.stress(strain0)
@@ -163,15 +208,13 @@ def build_problem(case: Case, *, p: Callable | None = None, stiffness_law: Calla
         viscoplastic = materials.viscoplastic
     else:
         viscoplastic = _api_viscoplastic(viscoplastic, mesh)
-    check_memory(case, mesh.mesh.p.shape[1], elements, surface.size,
-                 history=viscoplastic is not None or bool(np.any(z0 != 0.0)), dim=dim)
-    grid = TimeGrid(case.time.T, case.time.steps, initial.start)
+    grid = TimeGrid(model.time.T, model.time.steps, initial.start)
     loads.check(grid)
-    _check_first_history(basis, initial, case.initial.stress, strain0, z0, viscoplastic, law_name, grid.k)
+    _check_first_history(basis, initial, model.initial.stress, strain0, z0, viscoplastic, law_name, grid.k)
     done = time.perf_counter()
     timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
-    return Problem(case, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic, timings,
-                   initial=initial, initial_strain=strain0, initial_history=z0)
+    return Problem(model, objects, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic, timings,
+                   initial=initial, initial_strain=strain0, initial_history=z0, source=source)
 
 
 def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:
@@ -189,10 +232,10 @@ def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:
     return G
 
 
-def _make_mesh(case: Case) -> meshes.Mesh:
-    m = case.mesh
+def make_mesh(m: MeshSection, base_dir: str | os.PathLike = ".") -> meshes.Mesh:
+    """The mesh of a ``[mesh]`` section: a built-in shape, or a mesh file (relative to ``base_dir``)."""
     if m.file is not None:
-        return meshes.read_mesh(case.mesh_path)
+        return meshes.read_mesh(Path(base_dir) / m.file)
     if m.shape == "half_disc":
         return meshes.half_disc(m.h, m.radius, m.coating)
     if m.shape == "quarter_ball":
@@ -202,38 +245,38 @@ def _make_mesh(case: Case) -> meshes.Mesh:
     return meshes.rectangle(m.width, m.height, m.h)
 
 
-def _check_dimension(case: Case, dim: int) -> None:
+def _check_dimension(model: Model, dim: int) -> None:
     """Refuse vectors and tensors of the case that do not have the mesh's dimension d, a plane
     hypothesis in 3D, and the coordinate z in 2D."""
     names = coordinates(dim)
     where = f"the mesh is {dim}D"
     give = f"give {dim} ({', '.join(names)})"
-    loads = [(f"boundary.traction[{i}].value", t.value) for i, t in enumerate(case.boundary.traction)]
-    loads += [(f"boundary.body_force[{i}].value", f.value) for i, f in enumerate(case.boundary.body_force)]
+    loads = [(f"boundary.traction[{i}].value", t.value) for i, t in enumerate(model.boundary.traction)]
+    loads += [(f"boundary.body_force[{i}].value", f.value) for i, f in enumerate(model.boundary.body_force)]
     vectors = list(loads)
-    if case.contact is not None:
-        vectors += [("contact.probe", case.contact.probe), ("contact.normal", case.contact.normal)]
-    vectors.append(("initial.displacement", case.initial.displacement))
+    if model.contact is not None:
+        vectors += [("contact.probe", model.contact.probe), ("contact.normal", model.contact.normal)]
+    vectors.append(("initial.displacement", model.initial.displacement))
     for key, value in vectors:
         if isinstance(value, list) and len(value) != dim:
             raise CaseError(f"{key} has {len(value)} components and {where}: {give}")
-    if case.initial.stress is not None and len(case.initial.stress) != dim:
-        raise CaseError(f"initial.stress is {len(case.initial.stress)} x {len(case.initial.stress)} and {where}: "
+    if model.initial.stress is not None and len(model.initial.stress) != dim:
+        raise CaseError(f"initial.stress is {len(model.initial.stress)} x {len(model.initial.stress)} and {where}: "
                         f"give a {dim} x {dim} table")
-    for key, entry in _material_keys(case):
+    for key, entry in _material_keys(model):
         if dim == 3 and entry.hypothesis is not None:
             raise CaseError(f"{key}.hypothesis = \"{entry.hypothesis}\" is a 2D reduction and {where} (3D uses the "
                             f"full isotropic tensor): remove {key}.hypothesis")
-    for i, item in enumerate(case.boundary.dirichlet):
+    for i, item in enumerate(model.boundary.dirichlet):
         extra = [c for c in item.components or () if c not in names]
         if extra:
             raise CaseError(f"boundary.dirichlet[{i}].components names \"{extra[0]}\" and {where}: use "
                             f"{', '.join(repr(n) for n in names)}")
     expressions = [(f"{key}[{c}]", source) for key, value in loads for c, source in enumerate(value)]
-    if case.contact is not None:
-        expressions += [(f"{key}.gap", layer.gap) for key, layer in case.contact.layers()]
-    expressions += [(f"{key}.{name}", getattr(entry, name)) for key, entry in _material_keys(case) for name in ("E", "nu")]
-    initial = case.initial
+    if model.contact is not None:
+        expressions += [(f"{key}.gap", layer.gap) for key, layer in model.contact.layers()]
+    expressions += [(f"{key}.{name}", getattr(entry, name)) for key, entry in _material_keys(model) for name in ("E", "nu")]
+    initial = model.initial
     expressions += [(f"initial.displacement[{c}]", source) for c, source in enumerate(initial.displacement or ())]
     expressions += [(f"initial.stress[{i}][{j}]", source) for i, row in enumerate(initial.stress or ())
                     for j, source in enumerate(row)]
@@ -252,10 +295,10 @@ def _density(values, where: str) -> ExpressionDensity:
     return ExpressionDensity(*(parse_expression(v, (*names, "t"), where=f"{where}[{i}]") for i, v in enumerate(values)))
 
 
-def _traction_terms(case: Case, mesh: meshes.Mesh, tractions: Mapping | None) -> list[tuple[str, object, Density]]:
+def _traction_terms(model: Model, mesh: meshes.Mesh, tractions: Mapping | None) -> list[tuple[str, object, Density]]:
     """(name, part, density) of the case's tractions, those of ``tractions`` replacing the case's on their part."""
     terms = [(f"boundary.traction[{i}].value", t.part, _density(t.value, f"boundary.traction[{i}].value"))
-             for i, t in enumerate(case.boundary.traction)]
+             for i, t in enumerate(model.boundary.traction)]
     if tractions is None:
         return terms
     if not isinstance(tractions, Mapping):
@@ -386,12 +429,12 @@ def _check_first_history(basis: Basis, initial: InitialState, written, strain0: 
         raise CaseError(f"{source}: its nodal forces are not finite in float64; state the stresses in other units")
 
 
-def _contact_law(case: Case, surface: ContactSurface, p: Callable | None, stiffness_law: Callable | None) -> ContactLaw:
+def _contact_law(model: Model, surface: ContactSurface, p: Callable | None, stiffness_law: Callable | None) -> ContactLaw:
     """The layer of each contact part at the nodes it owns (its keys' numbers, or expressions evaluated
     there), merged into one law over the contact nodes (see contact.merged_law); ``p`` and
     ``stiffness_law`` of the API, when given, replace the case's on every part."""
     ps, stiffnesses, limits = [], [], []
-    for j, (key, layer) in enumerate(case.contact.layers()):
+    for j, (key, layer) in enumerate(model.contact.layers()):
         at = partial(_layer_parameter, points=surface.coordinates[:, surface.owner == j])
         if p is None:
             ps.append(PositivePart() if layer.p == "positive_part" else
@@ -402,7 +445,7 @@ def _contact_law(case: Case, surface: ContactSurface, p: Callable | None, stiffn
     owner = surface.owner
     p, stiffness_law = (law.at(surface.coordinates) if isinstance(law, LawOfNodes) else law
                         for law in (p, stiffness_law))
-    return ContactLaw(p=merged_law(ps, owner) if p is None else p, g=per_node(limits, owner), rho=case.contact.rho,
+    return ContactLaw(p=merged_law(ps, owner) if p is None else p, g=per_node(limits, owner), rho=model.contact.rho,
                       stiffness=merged_law(stiffnesses, owner) if stiffness_law is None else stiffness_law)
 
 
@@ -438,7 +481,7 @@ def _layer_parameter(where: str, value, minimum: float | None = None, *, points:
     return values.copy()
 
 
-def _check_contact_can_move(case: Case, mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
+def _check_contact_can_move(model: Model, mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
     """Refuse a contact part on which the Dirichlet conditions leave no node free to move along its
     normal: its contact force would be 0 (or fixed) whatever the load. (A few clamped nodes, such as
     the corners the contact part shares with a clamped part, are fine.)"""
@@ -451,7 +494,7 @@ def _check_contact_can_move(case: Case, mesh: meshes.Mesh, basis: Basis, free: n
         return
     contact_dofs = basis.nodal_dofs[:, surface.nodes].ravel()
     entries = []
-    for i, item in enumerate(case.boundary.dirichlet):
+    for i, item in enumerate(model.boundary.dirichlet):
         names = item.components or coordinates(mesh.dim)
         components = [component(c) for c in names]
         if np.intersect1d(basis.nodal_dofs[components][:, mesh.nodes(item.part)], contact_dofs).size:

@@ -1,20 +1,20 @@
 """The recovery (stress-averaging) error estimator: an a posteriori estimate that reads only σ_h.
 
 The discrete stress σ_h is constant on each element. Its recovered stress σ* is the continuous P1 field
-whose value at a node is the volume-weighted mean of σ_h over the elements around the node,
+whose value at a node is the volume-weighted mean of σ_h over the elements around the node::
 
     σ*(x_i) = Σ_{K ∋ x_i} |K| σ_K / Σ_{K ∋ x_i} |K|,
 
 taken over the elements of one material at a time: σ* is continuous inside each material and may jump
 across an interface between two materials (where the tangential components of the exact stress jump
 too: averaging across it would report that jump as an error). The element indicator is the energy norm
-of the difference on K,
+of the difference on K::
 
     η_K² = ∫_K (σ* − σ_h) : ℰ_K⁻¹ (σ* − σ_h) dx,   τ : ℰ⁻¹τ = (τ : τ − λ/(dλ + 2μ) (tr τ)²) / (2μ),
 
 with the element's Lamé parameters (the in-plane λ* under plane stress) and d the dimension of the
 tensors (2 in 2D). σ* − σ_h is linear on K, so the integral is exact with the P1 mass formula
-∫_K φ ψ = |K| (Σ_i φ_i ψ_i + Σ_i φ_i Σ_i ψ_i) / ((d + 1)(d + 2)) for linear φ, ψ of vertex values φ_i,
+∫_K φ ψ = :math:`|K|` (Σ_i φ_i ψ_i + Σ_i φ_i Σ_i ψ_i) / ((d + 1)(d + 2)) for linear φ, ψ of vertex values φ_i,
 ψ_i. It is the Zienkiewicz–Zhu estimator in the energy norm; it is zero where σ_h is the same on all
 elements around each node of K and of the same order as the error ‖σ − σ_h‖ where the stress is smooth.
 """

@@ -4,7 +4,7 @@ With σ_h constant on each element (div σ_h = 0 inside it), the residual of the
 at t_n lives in the elements (f0), on the interior facets (the jump of σ_h n), on the Neumann boundary
 (σ_h n − f2) and on Γ3 (σ_h n against the discrete contact traction −P_h ν_h). Per element K, with
 h_K its longest edge, h_E the longest edge of a facet E, μ_K its shear modulus and the facets' terms
-given to the element they bound (an interior facet's half to each of its two elements):
+given to the element they bound (an interior facet's half to each of its two elements)::
 
     η_K² = 1/(2μ_K) [ h_K² ‖f0‖²_K                                         "body_force"
                     + Σ_{E ⊂ ∂K interior} ½ h_E ‖[σ_h n]‖²_E                "jump"
@@ -25,7 +25,7 @@ given to the element they bound (an interior facet's half to each of its two ele
 
 The factor 1/(2μ_K) makes every term an energy (the units of ‖u − u_h‖_E² = ∫ ℰε(e):ε(e)), the
 complementarity term is one already. Every integral is exact for these fields: σ_h n is constant on a
-facet and the contact terms are P1 on it (∫_E φ_a φ_b = |E| (1 + δ_ab) / (d(d + 1)) on a facet of d
+facet and the contact terms are P1 on it (∫_E φ_a φ_b = :math:`|E|` (1 + δ_ab) / (d(d + 1)) on a facet of d
 vertices); f0 and f2 use the degree-4 rule of the load vector.
 """
 
@@ -103,7 +103,7 @@ def _build_geometry(problem) -> _Geometry:
         else np.zeros(0, dtype=np.int64)
     neumann = np.setdiff1d(boundary, contact)
     free = np.ones((neumann.size, d), dtype=bool)
-    for item in problem.case.boundary.dirichlet:
+    for item in problem.model.boundary.dirichlet:
         rows = _rows(neumann, mesh.facets(item.part))
         for name in item.components or coordinates(d):
             free[rows, component(name)] = False

@@ -47,6 +47,8 @@ ESTIMATE_TERMS = ("body_force", "jump", "neumann", "contact_tangential", "contac
 ESTIMATE_COLUMNS = ("error_estimate", *(f"error_estimate_{term}" for term in ESTIMATE_TERMS))
 #: History columns holding integers (the others are floats).
 INTEGER_COLUMNS = ("step", "newton_iterations", "nodes_separated", "nodes_in_compliance", "nodes_at_limit", "substep")
+#: Most characters of a run's message that ``repr(result)`` shows (on its second line).
+REPR_MESSAGE = 200
 CONTACT_ARRAYS = ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid", "status")
 
 
@@ -129,14 +131,16 @@ class Result:
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
     error_estimate: bool = False  # output.error_estimate: the rows have the ESTIMATE_COLUMNS
+    output: object = None  # the OutputSection the run was made with (what the writers write)
 
     @classmethod
-    def start(cls, problem, solver) -> "Result":
-        wanted = field_step_numbers(problem.case.output.field_steps, len(problem.times))
+    def start(cls, problem, solver, output) -> "Result":
+        """The empty result of a run of ``problem`` by ``solver`` with the options ``output`` (OutputSection)."""
+        wanted = field_step_numbers(output.field_steps, len(problem.times))
         return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
                    contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
                    augmentation=solver.r, method=solver.name, method_reason=solver.reason, problem=problem,
-                   error_estimate=problem.case.output.error_estimate)
+                   output=output, error_estimate=output.error_estimate)
 
     # --- filling in ------------------------------------------------------------------------------
     def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status, substep: int = 1,
@@ -276,26 +280,58 @@ class Result:
             "history_rows": len(self.rows), "step_cuts": self.step_cuts, "resumed_at_steps": list(self.resumed_at),
         }
 
+    @property
+    def history(self):
+        """The history as a pandas DataFrame (a new one at each access): one row per converged time level,
+        the columns of history.csv (``columns``), integer columns as int64. ``result.history[result.ends_step()]``
+        keeps the rows at the step times t_n (those of ``series(..., substeps=False)``). See :mod:`vpcontact.tables`."""
+        from .tables import history_table
+
+        return history_table(self)
+
+    def contact_table(self, step: int | None = None):
+        """The contact nodes at the end of ``step`` (default: the last step done) as a pandas DataFrame, one
+        row per node: coordinates, normal, weight, arc length along Γ3 (2D), penetration, ξ, K, the two
+        pressures, σ_ν and the status (a category); see :func:`vpcontact.tables.contact_table`."""
+        from .tables import contact_table
+
+        return contact_table(self, step)
+
+    @property
+    def plot(self):
+        """The figures of this run (matplotlib Figures): ``result.plot.time_series(...)``,
+        ``.contact_pressure(step=...)``, ``.states(step=...)``, ``.deformed(field=..., scale=...)``; see
+        :class:`vpcontact.result_plots.ResultPlots`."""
+        from .result_plots import ResultPlots
+
+        return ResultPlots(self)
+
+    def to_pyvista(self, step: int | None = None):
+        """The body at a field step (default: the last one kept) as a ``pyvista.UnstructuredGrid`` with its
+        fields as point and cell data (needs pyvista); see :func:`vpcontact.pyvista_grid.body_grid`."""
+        from .pyvista_grid import body_grid
+
+        return body_grid(self, step)
+
     def write(self, out: str | os.PathLike, *, overwrite: bool = False) -> Path:
-        """Write the files of a run directory (README, "Outputs") into ``out``: created if missing; if it
-        is not empty, FileExistsError unless ``overwrite``. Returns ``out`` as a Path."""
+        """Write the files of a run directory (README, "Outputs") into ``out``, as ``vpcontact run`` does:
+        created if missing; a directory that is not empty is refused (a CaseError, and a FileExistsError)
+        unless ``overwrite``, which removes only the files a run writes there. Returns ``out`` as a Path."""
         from .writers import write_run
 
         return write_run(self, out, overwrite=overwrite)
 
     def __repr__(self) -> str:
-        """One line: status, sizes and the final values (not the arrays)."""
+        """One line: status, dimension, sizes, steps done of those planned, step method and wall time (not the
+        arrays); a second one with the message of a run that did not complete."""
         planned = len(self.problem.times) if self.problem is not None else "?"
-        text = (f"Result(status={self.status!r}, steps={self.steps}/{planned}, history_rows={len(self.rows)}, "
-                f"dofs={self.dofs}, contact_nodes={self.contact_nodes}")
-        if self.rows:
-            last = self.rows[-1]
-            text += (f", final t={last['t']:g}: K_probe={last['K_probe']:.6g}, penetration_probe="
-                     f"{last['penetration_probe']:.6g}, nodes separated/compliance/limit={last['nodes_separated']}/"
-                     f"{last['nodes_in_compliance']}/{last['nodes_at_limit']}")
-        if self.message:
-            text += f", message={shown(self.message)!r}"
-        return text + ")"
+        cuts = f", {self.step_cuts} step cut{'s' * (self.step_cuts > 1)}" if self.step_cuts else ""
+        text = (f"Result({self.status}, {self.dim}D, {self.dofs} dofs, {self.contact_nodes} contact nodes, "
+                f"{self.steps}/{planned} steps{cuts}, method {self.method or '?'}, {self.wall_time_s:.3g} s)")
+        if not self.message:
+            return text
+        message = self.message if len(self.message) <= REPR_MESSAGE else self.message[:REPR_MESSAGE] + " …"
+        return f"{text}\n  {message}"
 
 
 # --- memory ----------------------------------------------------------------------------------------
@@ -330,13 +366,14 @@ def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, conta
             "fields": (field_steps + 1) * per_field, "writing": WRITING_BYTES}
 
 
-def check_memory(case, nodes: int, elements: int, contact_nodes: int, history: bool, dim: int = 2) -> None:
-    """Refuse, before anything per step is allocated, a run whose outputs would not fit in the memory
-    available now: one line naming time.steps (and output.field_steps when the fields are the most)."""
-    steps = case.time.steps
-    field_steps = len(field_step_numbers(case.output.field_steps, steps))
+def check_memory(steps: int, output, nodes: int, elements: int, contact_nodes: int, history: bool,
+                 dim: int = 2) -> None:
+    """Refuse, before anything per step is allocated, a run of ``steps`` steps whose outputs (``output``, the
+    :class:`~vpcontact.case.OutputSection`) would not fit in the memory available now: one line naming
+    time.steps (and output.field_steps when the fields are the most)."""
+    field_steps = len(field_step_numbers(output.field_steps, steps))
     parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim,
-                          estimate=case.output.error_estimate)
+                          estimate=output.error_estimate)
     needed, available = sum(parts.values()), available_memory()
     if needed <= available:
         return
@@ -347,7 +384,7 @@ def check_memory(case, nodes: int, elements: int, contact_nodes: int, history: b
     key = f"time.steps = {steps}"
     fix = "use fewer steps"
     if parts["fields"] > parts["history rows"] + parts["contact rows"]:
-        chosen = case.output.field_steps
+        chosen = output.field_steps
         key += f" with output.field_steps = {quoted(chosen) if isinstance(chosen, str) else shown(repr(chosen))}"
         fix = "keep the fields at fewer steps (output.field_steps) or use fewer steps"
     raise CaseError(f"{key}: the run's outputs need about {needed / gib:.3g} GiB of memory ({detail}), more than "

@@ -101,11 +101,12 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
             if case.adapt is not None:
                 from .adapt import check_start  # an adaptive run only (as _adapt_locked)
 
-                check_start(problem)
+                check_start(problem, case.adapt)
                 started = True  # from here on the directory is written to: nothing above wrote to it
-                adaptation = _adapt_locked(problem, held, clear=overwrite and used, stopper=stopper, progress=progress)
+                adaptation = _adapt_locked(problem, case, held, clear=overwrite and used, stopper=stopper,
+                                           progress=progress)
                 return Outcome(adaptation.last.result, adaptation.status, adaptation.message, stopper.signal)
-            loop = TimeLoop(problem)
+            loop = TimeLoop(problem, case.output)
             resuming = resume and checkpoint.exists(out)
             if resuming:
                 checkpoint.restore(loop, out)
@@ -132,7 +133,7 @@ def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool
         remove_outputs(out)
     remove_temporaries(out)
     remove_files(out, ("summary.json",))
-    write_resolved_case(case, out)
+    write_resolved_case(case.to_toml(), out)
     cadence = _Cadence(case.output.checkpoint_every_steps, case.output.checkpoint_every_seconds, loop.state.step)
 
     def after_step(loop: TimeLoop) -> None:
@@ -153,16 +154,18 @@ def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool
     return result
 
 
-def _adapt_locked(problem: Problem, held: directory.Held, *, clear: bool, stopper, progress: bool) -> Adaptation:
-    """The adaptive cycles of ``problem.case`` in a directory this process holds (see the module docstring)."""
+def _adapt_locked(problem: Problem, case: Case, held: directory.Held, *, clear: bool, stopper,
+                  progress: bool) -> Adaptation:
+    """The adaptive cycles of ``case.adapt`` from ``problem`` (the case's) in a directory this process holds
+    (see the module docstring)."""
     from .adapt import COLUMNS, adapt
 
-    out, case = held.path, problem.case
+    out = held.path
     if clear:
         remove_outputs(out)
     remove_temporaries(out)
     remove_files(out, ("summary.json",))
-    write_resolved_case(case, out)
+    write_resolved_case(case.to_toml(), out)
     rows = []
 
     def after_cycle(cycle: Cycle) -> None:
@@ -177,7 +180,7 @@ def _adapt_locked(problem: Problem, held: directory.Held, *, clear: bool, stoppe
             writer.writeheader()
             writer.writerows({k: repr(v) if isinstance(v, float) else v for k, v in row.items()} for row in rows)
 
-    adaptation = adapt(problem, after_cycle=after_cycle, stop=stopper.reason, progress=progress,
+    adaptation = adapt(problem, case.adapt, case.output, after_cycle=after_cycle, stop=stopper.reason, progress=progress,
                        after_step=lambda loop: held.check())
     with replacing(out / "final_mesh.msh") as temporary:
         write_mesh(adaptation.mesh, temporary)

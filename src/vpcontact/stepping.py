@@ -1,11 +1,13 @@
 """The quasistatic time loop (Sect. 3 of the paper, DESIGN §2).
 
-At t_n = t_0 + n k (k = (T − t_0) / steps, t_0 = ``time.start``, default 0):
+At t_n = t_0 + n k (k = (T − t_0) / steps, t_0 = ``time.start``, default 0)::
+
     z_n   = σ_0 − ℰε(u_0) + Σ_{j=0}^{n−1} k 𝒢(σ_j, ε(u_j))   (explicit viscoplastic history, per element)
     b_n   = F(t_n) − Bᵀ z_n
     (u_n, λ_n) solves the step problem with ξ^{n−1}             (one solver call)
     ξ_n   = ξ_{n−1} + k (d_n)⁺                                  (implicit rectangle rule for (2.15))
     σ_n   = ℰε(u_n) + z_n                                       (the discrete (2.28))
+
 This is (2.28) as written, σ(t) = ℰε(u(t)) + ∫_0^t 𝒢(σ, ε(u)) ds + σ_0 − ℰε(u_0): z_0 = σ_0 − ℰε(u_0)
 and the j = 0 term is k 𝒢(σ_0, ε(u_0)), so z_1 = σ_0 − ℰε(u_0) + k 𝒢(σ_0, ε(u_0)); ξ starts from ξ_0
 (``problem.initial``: u_0 per node, σ_0 per element, ξ_0 per contact node, see :mod:`vpcontact.initial`;
@@ -36,12 +38,13 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .assembly import NonFiniteLoad, element_strain, stress_force
+from .case import OutputSection
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from .material import von_mises
 from .indicators import Level
 from .problem import Problem
 from .residual_estimate import ResidualEstimator
-from .results import Fields, Result
+from .results import Fields, Result, check_memory
 from .rigid_modes import RigidModes
 from .solvers import DofLayout, StepData, StepSolution, make_solver
 from .solvers.errors import NotConvergedError, SingularMatrixError
@@ -104,19 +107,25 @@ class _Attempt:
 
 
 class TimeLoop:
-    """The time loop of a problem: ``TimeLoop(problem).run()`` returns the :class:`Result`.
+    """The time loop of a problem: ``TimeLoop(problem, output).run()`` returns the :class:`Result`;
+    ``output`` (:class:`~vpcontact.case.OutputSection`, default: its defaults) says which steps keep their
+    fields and whether the error is estimated at every step. A run whose outputs would not fit in memory
+    is refused here, before its first step.
 
     ``run`` takes two hooks: ``after_step(loop)``, called after every completed time step (the
     checkpoints of :mod:`vpcontact.rundir`), and ``stop()``, asked before every step (a signal
     asked the run to stop: the status becomes "interrupted").
     """
 
-    def __init__(self, problem: Problem):
+    def __init__(self, problem: Problem, output: OutputSection | None = None):
         started = clock.perf_counter()
         self.problem = problem
-        case, free, surface = problem.case, problem.free, problem.surface
-        options = case.solver
+        output = OutputSection() if output is None else output
+        free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
+        history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
+        check_memory(problem.times.steps, output, mesh.p.shape[1], mesh.t.shape[1], surface.size, history,
+                     mesh.dim())
         modes = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs)
         layout = DofLayout(free, mesh.dim(), mesh.nvertices, modes.matrix[free].toarray())
         self.solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
@@ -126,8 +135,8 @@ class TimeLoop:
                                   factorization=options.factorization, layout=layout)
         self.max_cuts = options.max_step_cuts
         self._loads = problem.loads.on(free)  # F(t) at the free dofs
-        self.result = Result.start(problem, self.solver)
-        self.estimator = ResidualEstimator(problem) if case.output.error_estimate else None
+        self.result = Result.start(problem, self.solver, output)
+        self.estimator = ResidualEstimator(problem) if output.error_estimate else None
         self._created = started
         self.setup_time = clock.perf_counter() - started
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
@@ -316,9 +325,10 @@ class TimeLoop:
                 f"complementarity {s.complementarity:.3e}{counts}{advice}")
 
 
-def solve_problem(problem: Problem, *, progress: bool = False) -> Result:
-    """Run the time loop of ``problem`` and return the result (status "failed" if a step fails)."""
-    return TimeLoop(problem).run(progress=progress)
+def solve_problem(problem: Problem, *, output: OutputSection | None = None, progress: bool = False) -> Result:
+    """Run the time loop of ``problem`` and return the result (status "failed" if a step fails); ``output``:
+    the fields kept and the error estimate (:class:`~vpcontact.case.OutputSection`, default: its defaults)."""
+    return TimeLoop(problem, output).run(progress=progress)
 
 
 def viscoplastic_rate(G, sigma: np.ndarray, strain: np.ndarray) -> np.ndarray:

@@ -224,7 +224,8 @@ def execute_run(spec: RunSpec) -> dict:
     from .writers import write_run
 
     try:
-        result = solve_problem(build_problem(load_case(spec.base, spec.overrides)))
+        case = load_case(spec.base, spec.overrides)
+        result = solve_problem(build_problem(case), output=case.output)
         write_run(result, spec.out, overwrite=True)
         return result.summary()
     except Exception as error:  # a failed run is reported in study.csv, never stops the study

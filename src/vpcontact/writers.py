@@ -11,6 +11,8 @@ place: a reader never sees half a file), ``summary.json`` last: a directory whos
                         material list), E and ν (VTU files, ParaView);
 - ``fields/contact.pvd``  Γ3 with penetration, ξ, K, pressures, status, normal and contact force, and the
                         local layer parameters (``layer_columns``);
+- ``fields/body.xdmf``  with ``output.xdmf``, the same fields as an XDMF time series, the mesh stored once
+                        in ``fields/body.h5`` (and ``fields/contact.xdmf``, ``.h5``; see :mod:`vpcontact.xdmf`);
 - ``solution.npz``      the fields at the field steps as arrays, ξ too (see ``write_solution``): what a
                         restart (``initial.from_run``) starts from;
 - ``case.resolved.toml``  every value used, defaults included, with the versions as a header;
@@ -28,7 +30,9 @@ import json
 import math
 import os
 import xml.etree.ElementTree as ET
+from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 
@@ -40,7 +44,7 @@ from .errors import CaseError
 from .plots import DPI, FIGURES
 from .results import CONTACT_ARRAYS, Result
 from .space import CELLS, coordinates
-from .vtu import Grid, write_vtu
+from .vtu import Grid, in_space, tensors_in_space, write_vtu
 
 PACKAGES = ("vpcontact", "numpy", "scipy", "scikit-fem", "meshio", "pydantic")
 
@@ -69,7 +73,8 @@ def _temporary(path: Path, tag: str) -> Path:
 
 #: The files of one run, as glob patterns, summary.json first.
 RUN_OUTPUTS = ("summary.json", "history.csv", "contact.csv", "solution.npz", "fields/body.pvd", "fields/contact.pvd",
-               "fields/body_*.vtu", "fields/contact_*.vtu", *(f"figures/{stem}.png" for stem in FIGURES))
+               "fields/body_*.vtu", "fields/contact_*.vtu", "fields/body.h5", "fields/body.xdmf", "fields/contact.h5",
+               "fields/contact.xdmf", *(f"figures/{stem}.png" for stem in FIGURES))
 OUTPUTS = (*RUN_OUTPUTS, "case.resolved.toml", "checkpoint/state.npz", "checkpoint/fields_*.npz", "adapt.csv",
            "final_mesh.msh", *(f"cycles/[0-9]*/{name}" for name in RUN_OUTPUTS))
 """Every file vpcontact writes in a run directory, as glob patterns (those in checkpoint/ are the files of
@@ -151,29 +156,40 @@ def remove_temporaries(out: Path) -> None:
     remove_files(out, TEMPORARIES)
 
 
+class NotEmpty(CaseError, FileExistsError):
+    """A directory that is not empty, written to without ``overwrite``: a CaseError (one line) and a
+    FileExistsError."""
+
+
 def write_run(result: Result, out: str | os.PathLike, *, overwrite: bool = False) -> Path:
     """Write every output of ``result`` to ``out`` (created; with ``overwrite`` the outputs of an earlier
     run there are removed first, and nothing else), each file atomically and summary.json last, while
-    holding the directory (see :mod:`vpcontact.directory`)."""
+    holding the directory (see :mod:`vpcontact.directory`). Refused as ``vpcontact run`` refuses its
+    ``--out``, before anything is written: CaseError for a path that cannot be a directory or with a file
+    or folder standing where an output goes, NotEmpty for a directory that is not empty without
+    ``overwrite``."""
     out = Path(out)
     directory.usable(out, "output directory")
     check_room(out, "output directory")
     if directory.holds_files(out, "output directory") and not overwrite:
-        raise FileExistsError(f"output directory '{out}' is not empty (use --overwrite to replace it)")
+        raise NotEmpty(f"output directory '{out}' is not empty: overwrite=True replaces the outputs of a run in it "
+                       f"(and nothing else)")
     held = directory.acquire(out, "output directory")
     try:
         remove_outputs(out)
-        write_resolved_case(result.problem.case, out)
+        if result.problem.source is not None:
+            write_resolved_case(result.problem.source, out)
         write_outputs(result, out)
     finally:
         held.release()
     return out
 
 
-def write_resolved_case(case, out: Path) -> None:
-    """case.resolved.toml: every value used, defaults included, the versions in its header."""
+def write_resolved_case(resolved: str, out: Path) -> None:
+    """case.resolved.toml: ``resolved``, the case with every value used and defaults included
+    (:meth:`~vpcontact.case.Case.to_toml`), the versions in its header."""
     header = "".join(f"# {name} {version}\n" for name, version in versions().items())
-    write_text(Path(out) / "case.resolved.toml", header + case.to_toml())
+    write_text(Path(out) / "case.resolved.toml", header + resolved)
 
 
 def write_outputs(result: Result, out: Path, *, history_only: bool = False) -> None:
@@ -186,7 +202,11 @@ def write_outputs(result: Result, out: Path, *, history_only: bool = False) -> N
         return
     _write_contact(result, out / "contact.csv")
     _write_fields(result, out / "fields")
-    if result.problem.case.output.figures and result.status in ("complete", "failed"):
+    if result.output.xdmf:
+        from .xdmf import write_xdmf  # h5py: imported by the runs that write XDMF only
+
+        write_xdmf(result, out / "fields")
+    if result.output.figures and result.status in ("complete", "failed"):
         _write_figures(result, out / "figures")
     summary = {**result.summary(), "versions": versions()}
     write_text(out / "summary.json", json.dumps(json_safe(summary), indent=2) + "\n")
@@ -288,69 +308,86 @@ def _quoted(text: str) -> str:
     return buffer.getvalue()
 
 
-def _write_fields(result: Result, folder: Path) -> None:
-    if not result.fields:
-        return
-    directory.mkdir(folder)
+@dataclass(frozen=True)
+class FieldFrame:
+    """The data of the field files at one field step n (t = t_n): the body's point and cell data, and the
+    contact part's point data (None without contact); 2D vectors and tensors as the 3D ones of a file."""
+
+    step: int
+    t: float
+    body_points: dict[str, np.ndarray]
+    body_cells: dict[str, np.ndarray]
+    contact_points: dict[str, np.ndarray] | None
+
+
+def field_meshes(problem) -> tuple[tuple[np.ndarray, str, np.ndarray], tuple[np.ndarray, str, np.ndarray] | None]:
+    """(points (n, 3), cell type, cells (k, nodes per cell)) of the body and of the contact part (None
+    without contact): the meshes of the field files, 2D points with z = 0."""
+    element_cells, facet_cells, _ = CELLS[problem.mesh.dim]
+    body = (in_space(problem.mesh.mesh.p.T), element_cells, problem.mesh.mesh.t.T)
+    surface = problem.surface
+    return body, (in_space(surface.coordinates.T), facet_cells, surface.facets.T) if surface.size else None
+
+
+def field_frames(result: Result) -> Iterator[FieldFrame]:
+    """The field files' data at each field step, in step order: the body's displacement; its stress (3 × 3,
+    σ33 of the plane reduction in 2D), von Mises stress, each element's material (its index in the case's
+    material list), E and ν, the history z and the error indicator η_K when the run has them; on the contact
+    part the CONTACT_ARRAYS, the pressure (compliance + rigid), the normal, the contact force, the
+    displacement and the local layer parameters (``layer_columns``)."""
     problem = result.problem
-    element_cells, facet_cells, _ = CELLS[result.dim]
-    body_grid = Grid(_in_space(problem.mesh.mesh.p.T), element_cells, problem.mesh.mesh.t.T)
     surface = problem.surface
     if surface.size:
-        contact_grid = Grid(_in_space(surface.coordinates.T), facet_cells, surface.facets.T)
-        normal = _in_space(surface.normals.T)
+        normal = in_space(surface.normals.T)
         layer = layer_columns(problem)
-        if "part" in layer:  # VTU point data are numbers: the index in contact.parts
+        if "part" in layer:  # point data are numbers: the index in contact.parts
             layer["part"] = surface.owner
         layer = {key: np.asarray(value, dtype=float) for key, value in layer.items()}
         end_rows = _end_of_step_rows(result)
-    body, contact = [], []
     materials = {"material": problem.materials.owner.astype(np.int32), "E": np.array(problem.materials.E),
                  "nu": np.array(problem.materials.nu)}
     for step, fields in sorted(result.fields.items()):
-        t = problem.times[step - 1]
-        displacement = _in_space(fields.displacement)
-        name = f"body_{step:05d}.vtu"
-        cell_data = {"stress": _tensors_in_space(fields.stress, fields.stress33), "von_mises": fields.von_mises,
+        displacement = in_space(fields.displacement)
+        cell_data = {"stress": tensors_in_space(fields.stress, fields.stress33), "von_mises": fields.von_mises,
                      **materials}
         if fields.z is not None:
-            cell_data["z"] = _tensors_in_space(fields.z)
+            cell_data["z"] = tensors_in_space(fields.z)
         if fields.error_indicator is not None:
             cell_data["error_indicator"] = fields.error_indicator
-        with replacing(folder / name) as temporary:
-            write_vtu(temporary, body_grid, {"displacement": displacement}, cell_data)
-        body.append((t, name))
+        contact = None
         if surface.size:
-            name = f"contact_{step:05d}.vtu"
-            row = end_rows[step]
-            data = {key: np.asarray(result.contact[key][row], dtype=float) for key in CONTACT_ARRAYS}
+            data = {key: np.asarray(result.contact[key][end_rows[step]], dtype=float) for key in CONTACT_ARRAYS}
             pressure = data["pressure_compliance"] + data["pressure_rigid"]
+            contact = {**data, "pressure": pressure, "normal": normal,
+                       "contact_force": -normal * (surface.weights * pressure)[:, None],
+                       "displacement": displacement[surface.nodes], **layer}
+        yield FieldFrame(step, float(problem.times[step - 1]), {"displacement": displacement}, cell_data, contact)
+
+
+def _write_fields(result: Result, folder: Path) -> None:
+    """fields/: body_NNNNN.vtu and contact_NNNNN.vtu at each field step, their PVD collections, and
+    solution.npz beside fields/."""
+    if not result.fields:
+        return
+    directory.mkdir(folder)
+    body_mesh, contact_mesh = field_meshes(result.problem)
+    body_grid = Grid(*body_mesh)
+    contact_grid = Grid(*contact_mesh) if contact_mesh is not None else None
+    body, contact = [], []
+    for frame in field_frames(result):
+        name = f"body_{frame.step:05d}.vtu"
+        with replacing(folder / name) as temporary:
+            write_vtu(temporary, body_grid, frame.body_points, frame.body_cells)
+        body.append((frame.t, name))
+        if frame.contact_points is not None:
+            name = f"contact_{frame.step:05d}.vtu"
             with replacing(folder / name) as temporary:
-                write_vtu(temporary, contact_grid, {
-                    **data, "pressure": pressure, "normal": normal,
-                    "contact_force": -normal * (surface.weights * pressure)[:, None],
-                    "displacement": displacement[surface.nodes], **layer})
-            contact.append((t, name))
+                write_vtu(temporary, contact_grid, frame.contact_points)
+            contact.append((frame.t, name))
     _write_pvd(folder / "body.pvd", body)
     if contact:
         _write_pvd(folder / "contact.pvd", contact)
     write_solution(result, folder.parent / "solution.npz")
-
-
-def _in_space(vectors: np.ndarray) -> np.ndarray:
-    """Vectors (n, d) as the 3D vectors (n, 3) of a VTU file (z = 0 in 2D)."""
-    return np.column_stack([vectors, np.zeros((vectors.shape[0], 3 - vectors.shape[1]))])
-
-
-def _tensors_in_space(tensors: np.ndarray, t33: np.ndarray | None = None) -> np.ndarray:
-    """Tensors (n, d, d) as the 3 × 3 tensors (n, 9) of a VTU file; in 2D the out-of-plane entry is
-    ``t33`` (σ33 of the plane reduction), or 0."""
-    n, d = tensors.shape[:2]
-    full = np.zeros((n, 3, 3))
-    full[:, :d, :d] = tensors
-    if t33 is not None:
-        full[:, 2, 2] = t33
-    return full.reshape(n, 9)
 
 
 def _end_of_step_rows(result: Result) -> dict[int, int]:

@@ -45,12 +45,7 @@ def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float 
     """The step solver ``method`` for stiffness A and contact operator N (both on the free dofs);
     ``rigid``: an orthonormal basis of the rigid motions held only by contact, (free dofs, k);
     ``layout``: the dofs' nodal layout."""
-    r = default_augmentation(A, N)
-    if augmentation is not None:
-        if not 1e-12 <= augmentation / r <= 1e12:
-            raise CaseError(f"solver.augmentation = {augmentation:g} is {augmentation / r:.1e} times the normal "
-                            f"stiffness at the contact nodes ({r:.3g}): use \"auto\" or a value near it")
-        r = augmentation
+    r = augmentation_parameter(A, N, augmentation)
     method, reason = chosen_method(method, A, N, layout.dim)
     common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale, rigid)
     if method == CondensedNewton.name:
@@ -63,6 +58,18 @@ def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float 
         solver = _built(lambda: FullNewton(*common, factorization), factorization, A)
     solver.reason = reason
     return solver
+
+
+def augmentation_parameter(A, N, augmentation: float | None) -> float:
+    """The Alart–Curnier r: ``augmentation`` (solver.augmentation) or, for None, the median normal stiffness
+    at the contact nodes; CaseError for an ``augmentation`` more than 10¹² times away from that stiffness."""
+    r = default_augmentation(A, N)
+    if augmentation is None:
+        return r
+    if not 1e-12 <= augmentation / r <= 1e12:
+        raise CaseError(f"solver.augmentation = {augmentation:g} is {augmentation / r:.1e} times the normal "
+                        f"stiffness at the contact nodes ({r:.3g}): use \"auto\" or a value near it")
+    return augmentation
 
 
 def _built(make, factorization: str, A):
@@ -79,4 +86,4 @@ def _built(make, factorization: str, A):
                         f"coarser mesh{other}") from None
 
 
-__all__ = ["METHODS", "SOLVERS", "DofLayout", "StepData", "StepSolution", "make_solver"]
+__all__ = ["METHODS", "SOLVERS", "DofLayout", "StepData", "StepSolution", "augmentation_parameter", "make_solver"]

@@ -1,0 +1,171 @@
+"""A problem composed in Python (vpcontact.compose) is the problem of the same case file; the problem
+keeps its model and Python objects (Problem.on rebuilds it on a refined mesh); nothing downstream of the
+problem reads a case."""
+
+import ast
+import pathlib
+
+import numpy as np
+import pytest
+
+import vpcontact
+from vpcontact import mesh as meshes
+from vpcontact.refinement import refine
+
+from conftest import half_disc_case
+
+SOURCE = pathlib.Path(vpcontact.__file__).parent
+#: The modules after the problem in the flow case -> problem -> time loop -> result -> writers.
+DOWNSTREAM = ("stepping", "results", "writers", "checkpoint", "adapt", "indicators", "residual_estimate",
+              "recovery_estimate", "plots", "norms")
+
+
+def composed(h=0.1, **changes):
+    """The half disc of conftest.half_disc_case, composed in Python (``changes`` replace arguments)."""
+    arguments = dict(
+        material={"E": 1000.0, "nu": 0.3},
+        dirichlet={"axis": "x"},
+        traction={"top_arc": ["0", "-20.0*t"]},
+        contact={"part": "bottom_arc", "g": 0.2, "probe": [0.0, 0.0],
+                 "stiffness": {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": 1.0}},
+        time={"T": 1.1, "steps": 11},
+        solver={"tolerance": 1e-12},
+    )
+    arguments.update(changes)
+    return vpcontact.compose(meshes.half_disc(h), **arguments)
+
+
+@pytest.fixture(scope="module")
+def from_file():
+    return vpcontact.solve(vpcontact.load_case(half_disc_case()))
+
+
+def test_a_composed_problem_is_the_problem_of_the_case(from_file):
+    """The same tables through compose and through a case: the same operators and the same run, bit for bit."""
+    problem = composed()
+    case_problem = vpcontact.build_problem(vpcontact.load_case(half_disc_case()))
+    assert (problem.A != case_problem.A).nnz == 0
+    np.testing.assert_array_equal(problem.free, case_problem.free)
+    result = problem.solve()
+    assert result.status == "complete"
+    np.testing.assert_array_equal(result.final.displacement, from_file.final.displacement)
+    np.testing.assert_array_equal(result.series("K_probe"), from_file.series("K_probe"))
+    assert problem.source is None and case_problem.source is not None  # no case file: no case.resolved.toml
+
+
+def test_python_objects_replace_the_tables(from_file):
+    """A traction f(x, y, t), a stiffness law K(ξ) with its derivative and a mesh file's name give the run of
+    the tables (the load integrated by the same quadrature; the law is the power law (2.18) itself)."""
+    class Power:
+        def __call__(self, xi):
+            return 100.0 * (1.0 + 20.0 * xi)
+
+        def derivative(self, xi):
+            return np.full_like(xi, 2000.0)
+
+    contact = {"part": "bottom_arc", "g": 0.2, "probe": [0.0, 0.0], "stiffness": Power()}
+    result = composed(traction={"top_arc": lambda x, y, t: (0 * x, -20.0 * t + 0 * y)}, contact=contact).solve()
+    assert result.status == "complete"
+    scale = np.abs(from_file.final.displacement).max()
+    np.testing.assert_allclose(result.final.displacement, from_file.final.displacement, rtol=0, atol=1e-9 * scale)
+    np.testing.assert_allclose(result.series("K_probe"), from_file.series("K_probe"), rtol=1e-9)
+
+
+def test_a_3d_problem_from_a_mesh_table():
+    """The block pressed on its bottom, composed with a [mesh] table: the uniform state, in which every contact
+    node carries the applied pressure c t (K p(d) = c t, d = c t / K for K constant)."""
+    c, K, T = 50.0, 1000.0, 1.0
+    problem = vpcontact.compose(
+        {"shape": "block", "width": 1.0, "depth": 1.0, "height": 0.5, "h": 0.25},
+        material={"E": 1000.0, "nu": 0.0},
+        dirichlet={"left": "x", "right": "x", "front": "y", "back": "y"},
+        traction={"top": ["0", "0", f"-{c}*t"]},
+        contact={"part": "bottom", "g": 1.0, "stiffness": {"law": "constant", "value": K}},
+        time={"T": T, "steps": 2},
+    )
+    assert problem.mesh.dim == 3
+    result = problem.solve()
+    d = result.contact_row()["penetration"]
+    np.testing.assert_allclose(d, c * T / K, rtol=1e-8)
+
+
+def test_a_problem_is_built_again_on_a_refined_mesh():
+    """Problem.on(mesh) is the problem composed on that mesh directly, with its Python objects."""
+    law = lambda xi: 100.0 * (1.0 + 20.0 * xi)  # noqa: E731
+    contact = {"part": "bottom_arc", "g": 0.2, "probe": [0.0, 0.0], "stiffness": law}
+    coarse = composed(h=0.2, contact=contact)
+    marked = np.arange(0, coarse.mesh.mesh.t.shape[1], 3)
+    fine_mesh = refine(coarse.mesh, marked)
+    rebuilt = coarse.on(fine_mesh)
+    direct = vpcontact.compose(fine_mesh, **{name: value for name, value in dict(
+        material={"E": 1000.0, "nu": 0.3}, dirichlet={"axis": "x"}, traction={"top_arc": ["0", "-20.0*t"]},
+        contact=contact, time={"T": 1.1, "steps": 11}, solver={"tolerance": 1e-12}).items()})
+    assert rebuilt.basis.N > coarse.basis.N
+    assert (rebuilt.A != direct.A).nnz == 0
+    np.testing.assert_array_equal(rebuilt.solve().final.displacement, direct.solve().final.displacement)
+
+
+def test_initial_arrays_belong_to_their_mesh():
+    """ξ_0 given as an array of the contact nodes: used, and refused on another mesh."""
+    probe = composed(h=0.2)
+    problem = composed(h=0.2, initial={"xi": np.full(probe.surface.size, 0.01)})
+    np.testing.assert_array_equal(problem.initial.xi, 0.01)
+    with pytest.raises(vpcontact.CaseError, match="initial_xi is an array on the mesh"):
+        problem.on(refine(problem.mesh, np.arange(4)))
+
+
+@pytest.mark.parametrize("changes, words", [
+    ({"material": {"E": 1000.0}}, "material.nu"),
+    ({"material": {"E": -1.0, "nu": 0.3}}, "material.E"),
+    ({"dirichlet": {"nowhere": "x"}}, "unknown part 'nowhere'"),
+    ({"dirichlet": 3}, "dirichlet = 3"),
+    ({"traction": ["0", "-t"]}, "traction = "),
+    ({"traction": {"top_arc": ["0", "-t*"]}}, "boundary.traction[0].value[1]"),
+    ({"contact": {"part": "bottom_arc", "g": 0.2}}, "contact.stiffness"),
+    ({"contact": "bottom_arc"}, "expected a table"),
+    ({"time": {"T": 1.0}}, "time.steps"),
+    ({"solver": {"method": "magic"}}, "solver.method"),
+])
+def test_bad_arguments_are_one_line_errors_naming_them(changes, words):
+    with pytest.raises(vpcontact.CaseError) as error:
+        composed(h=0.2, **changes)
+    message = str(error.value)
+    assert words in message and "\n" not in message
+
+
+def test_a_mesh_that_is_not_a_mesh_is_refused():
+    with pytest.raises(vpcontact.CaseError, match="expected a vpcontact.mesh.Mesh"):
+        vpcontact.compose(42, material={"E": 1.0, "nu": 0.3}, time={"T": 1.0, "steps": 1})
+    with pytest.raises(vpcontact.CaseError, match="mesh.h"):
+        vpcontact.compose({"shape": "half_disc"}, material={"E": 1.0, "nu": 0.3}, time={"T": 1.0, "steps": 1})
+    model = vpcontact.load_case(half_disc_case()).model
+    with pytest.raises(vpcontact.CaseError, match="needs a mesh"):
+        vpcontact.build_problem(model)
+
+
+def test_nothing_downstream_of_the_problem_reads_a_case():
+    """DESIGN §8: the modules after the problem take what they need as arguments (outputs, adapt settings)
+    and read neither ``.case`` of an object nor the case module's Case."""
+    for name in DOWNSTREAM:
+        tree = ast.parse((SOURCE / f"{name}.py").read_text(encoding="utf-8"))
+        reads = [node.lineno for node in ast.walk(tree) if isinstance(node, ast.Attribute) and node.attr == "case"]
+        imports = [node.lineno for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
+                   and node.module == "case" and any(alias.name in ("Case", "load_case") for alias in node.names)]
+        assert not reads and not imports, (name, reads, imports)
+    assert not hasattr(composed(h=0.2), "case")
+
+
+def test_the_readme_example_balances_its_load():
+    """README's composed quarter ball runs, and the foundation's force balances the traction on the top:
+    F_z = 15 T |top| with |top| the area of the top's facets (the load is integrated exactly on them)."""
+    readme = (SOURCE.parents[1] / "README.md").read_text(encoding="utf-8")
+    block = readme.split("A problem in Python")[1].split("```python\n")[1].split("```")[0]
+    namespace = {}
+    exec(block, namespace)  # noqa: S102 -- the README's own example
+    result, problem, finer = namespace["result"], namespace["problem"], namespace["finer"]
+    assert result.status == "complete"
+    p, facets = problem.mesh.mesh.p, problem.mesh.mesh.facets[:, problem.mesh.facets("top")]
+    area = 0.5 * np.linalg.norm(np.cross(p[:, facets[1]] - p[:, facets[0]], p[:, facets[2]] - p[:, facets[0]],
+                                         axis=0), axis=0).sum()
+    assert result.series("contact_force_z")[-1] == pytest.approx(15.0 * 1.0 * area, rel=1e-8)
+    assert finer.basis.N > problem.basis.N
