@@ -34,6 +34,7 @@ EDGE = np.array([0.5, 0.0])  # the punch's edge
 
 
 def punch(h: float, cycles: int):
+    """The case of the punch on a first mesh of size h, with ``cycles`` adaptive cycles."""
     return vpcontact.load_case({
         "mesh": {"shape": "rectangle", "width": 1.0, "height": 1.0, "h": h},
         "material": {"E": 1000.0, "nu": 0.3},
@@ -47,14 +48,19 @@ def punch(h: float, cycles: int):
     })
 
 
-adaptation = adapt(vpcontact.build_problem(punch(1 / 8, cycles=8)))
+def adaptive(case):
+    """The adaptive cycles of ``case``: its problem, its [adapt] settings and its output options."""
+    return adapt(vpcontact.build_problem(case), case.adapt, case.output)
+
+
+adaptation = adaptive(punch(1 / 8, cycles=8))
 print(adaptation.message)
 for row in adaptation.rows:
     print(f"cycle {row['cycle']}: {row['dofs']:5d} dofs, estimate {row['estimate']:.4f}")
 
 # %%
 # The same estimate on uniform meshes h = 1/4 … 1/32: one cycle each.
-uniform = [adapt(vpcontact.build_problem(punch(1 / n, cycles=1))).rows[0] for n in (4, 8, 16, 32)]
+uniform = [adaptive(punch(1 / n, cycles=1)).rows[0] for n in (4, 8, 16, 32)]
 
 # %%
 # The final mesh

@@ -7,46 +7,44 @@ The paper's example in three dimensions: a quarter of a ball of radius 1,
 layer of thickness g = 0.2 that conforms to its lower half, with the history-dependent stiffness
 K(ξ) = 100 (1 + 20 ξ)^β. Rollers on the two symmetry planes x = 0 and y = 0 make it a whole ball.
 
-This is ``examples/quarter_ball.toml`` written as a Python dictionary, on a mesh coarser than the
-example's (h = 0.15 instead of 0.1: about 8,000 dofs instead of 24,000) so that the page builds in a
-few seconds.
+This is ``examples/quarter_ball.toml`` composed in Python (``vpcontact.compose``, no case file), on a
+mesh coarser than the example's (h = 0.15 instead of 0.1: about 8,000 dofs instead of 24,000) so that
+the page builds in a few seconds.
 """
 
 # %%
-# The case
-# --------
-# The load (0, 0, −c t) with c = 11.4443 is the 3D calibration of the paper's load: with β = 1 the
-# stiffness at the bottom point reaches K = 323 at t = 1.1, the value the paper reports in 2D.
+# The problem, composed in Python
+# -------------------------------
+# In the order a mechanician writes it: the mesh, the material, the supports, the load, the contact
+# law, the time grid. The load (0, 0, −c t) with c = 11.4443 is the 3D calibration of the paper's
+# load: with β = 1 the stiffness at the bottom point reaches K = 323 at t = 1.1, the value the paper
+# reports in 2D.
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
 import vpcontact
-from vpcontact import plots
+from vpcontact import mesh, plots
+from vpcontact.case import OutputSection
 
 C = 11.4443  # the traction's rate, per unit area of the upper half
 
-case = vpcontact.load_case({
-    "mesh": {"shape": "quarter_ball", "h": 0.15},
-    "material": {"E": 1000.0, "nu": 0.3},
-    "boundary": {
-        "dirichlet": [{"part": "sym_x", "components": ["x"]},   # u_x = 0 on x = 0
-                      {"part": "sym_y", "components": ["y"]}],  # u_y = 0 on y = 0
-        "traction": [{"part": "top", "value": ["0", "0", f"-{C}*t"]}],
-    },
-    "contact": {"part": "bottom", "g": 0.2, "probe": [0, 0, 0],
-                "stiffness": {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": 1.0}},
-    "time": {"T": 1.1, "steps": 11},
-    "output": {"field_steps": [2, 5, 8, 11], "progress": False},
-})
+problem = vpcontact.compose(
+    mesh.quarter_ball(h=0.15),
+    material={"E": 1000.0, "nu": 0.3},
+    dirichlet={"sym_x": "x", "sym_y": "y"},  # u_x = 0 on x = 0, u_y = 0 on y = 0
+    traction={"top": ["0", "0", f"-{C}*t"]},
+    contact={"part": "bottom", "g": 0.2, "probe": [0, 0, 0],
+             "stiffness": {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": 1.0}},
+    time={"T": 1.1, "steps": 11},
+)
+print(problem)
 
 # %%
-# Building the problem first shows its sizes before anything is solved; ``vpcontact.solve(case)`` does
-# both steps in one call.
-problem = vpcontact.build_problem(case)
-print(problem)
-result = vpcontact.solve_problem(problem)
+# The problem knows its sizes before anything is solved. The time loop keeps the fields (displacement,
+# stress) at the steps asked for:
+result = problem.solve(output=OutputSection(field_steps=[2, 5, 8, 11]))
 print(result)
 
 # %%
@@ -64,13 +62,21 @@ body = plots.deformed_body(result, step=11)
 # %%
 # The history
 # -----------
-# One row per time step: the stiffness and the penetration at the probe (the bottom point), the node
-# counts, and the vertical resultant of the contact pressure.
-columns = ("t", "K_probe", "penetration_probe", "nodes_in_compliance", "nodes_at_limit", "contact_force_z")
-table = np.column_stack([result.series(column) for column in columns])
-print("".join(f"{column:>20}" for column in columns))
-print("\n".join("".join(f"{value:20.6g}" for value in row) for row in table))
-history = plots.time_series(result, ["K_probe", "penetration_probe", "contact_force_z"])
+# One row per time step (a pandas DataFrame, the table of ``history.csv``): the stiffness and the
+# penetration at the probe (the bottom point), the node counts, and the vertical resultant of the
+# contact pressure.
+history = result.history
+history[["t", "K_probe", "penetration_probe", "nodes_in_compliance", "nodes_at_limit", "contact_force_z"]]
+
+# %%
+# The same columns against t:
+series = plots.time_series(result, ["K_probe", "penetration_probe", "contact_force_z"])
+
+# %%
+# And the contact nodes at the last step, one row each (``result.contact_table()``), here the five
+# lowest: the pressure is largest at the bottom point and falls towards the equator.
+nodes = result.contact_table()
+nodes.sort_values("z")[["x", "y", "z", "penetration", "xi", "K", "pressure_compliance"]].head()
 
 # %%
 # The standard outputs of a run directory (ParaView series, CSV tables, ``summary.json``) are one call
@@ -86,8 +92,8 @@ with tempfile.TemporaryDirectory() as folder:
 # vertical contact force must balance the applied load, c t times the area of the upper half as the
 # mesh represents it (its flat triangles: about π/2, the area of a quarter of a unit hemisphere,
 # short by the facets' sag, O(h²)).
-mesh = problem.mesh
-corners = mesh.mesh.p[:, mesh.mesh.facets[:, mesh.facets("top")]]  # (3 coordinates, 3 corners, facets)
+ball = problem.mesh
+corners = ball.mesh.p[:, ball.mesh.facets[:, ball.facets("top")]]  # (3 coordinates, 3 corners, facets)
 area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0], axis=0),
                             axis=0).sum()
 print(f"area of the upper half: {area:.6f} (π/2 = {np.pi / 2:.6f})")
