@@ -30,9 +30,8 @@ API = {"Case": "case", "load_case": "case", "CaseError": "errors", "Problem": "p
        "Result": "results", "solve_problem": "stepping"}
 
 #: The modules of the package a user may reach as ``vpcontact.<name>`` after ``import vpcontact``.
-SUBMODULES = ("assembly", "case", "checkpoint", "contact", "errors", "expressions", "figures", "material", "mesh",
-              "norms", "plots", "problem", "report", "reproduce", "results", "rundir", "solvers", "stepping", "studies",
-              "writers")
+SUBMODULES = ("assembly", "case", "checkpoint", "contact", "errors", "expressions", "material", "mesh", "norms", "plots",
+              "problem", "reproduction", "results", "rundir", "solvers", "stepping", "studies", "writers")
 
 
 def __getattr__(name: str):

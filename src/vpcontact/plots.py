@@ -191,7 +191,7 @@ def arc_length(coordinates: np.ndarray, segments: np.ndarray) -> tuple[np.ndarra
     """The contact nodes in their order along a curve made of ``segments`` (2, s) (a curve of one open
     piece runs from its end of least x, then least y), the arc length at each (going on from one piece
     to the next), and the positions in that order where a new piece starts."""
-    from .figures import along_curve
+    from .reproduction.figures import along_curve
 
     m = coordinates.shape[1]
     order = along_curve(segments, m)

@@ -16,8 +16,8 @@ The runs are a plain list, in the order of the paper:
 
 Each run writes the standard outputs under DIR/cases/ or DIR/studies/ (a study can be rerun with
 ``vpcontact study DIR/studies/NAME.toml --out DIR/studies/NAME``). `run` measures what the paper
-states (`assess`), draws the figures (:mod:`vpcontact.figures`) and writes DIR/reproduce.json and the
-report (:mod:`vpcontact.report`).
+states (`assess`), draws the figures (:mod:`.figures`) and writes DIR/reproduce.json and the
+report (:mod:`.report`).
 """
 
 from __future__ import annotations
@@ -38,10 +38,10 @@ from typing import Callable
 import numpy as np
 import tomli_w
 
-from . import __version__, directory, writers
-from .case import load_case
-from .norms import differences
-from .writers import json_safe
+from .. import __version__, directory, writers
+from ..case import load_case
+from ..norms import differences
+from ..writers import json_safe
 
 #: The paper's example with the calibrated load: the content of examples/paper_ball.toml (a test
 #: checks that the two resolve to the same case), carried by the package so that `reproduce` does not
@@ -471,8 +471,8 @@ def recorded_case(base: Path, spec: CaseSpec, out: Path) -> dict:
 
 def solve_case(base: Path, spec: CaseSpec, out: Path):
     """Solve one case and write its standard outputs; raises ReproduceError if a step fails."""
-    from . import solve
-    from .writers import write_run
+    from .. import solve
+    from ..writers import write_run
 
     result = solve(load_case(base, spec.overrides))
     write_run(result, out, overwrite=True)
@@ -545,7 +545,7 @@ def calibrate(base: Path, plan: Plan) -> dict:
     and what β = −1 gives at that c (the README's calibration, repeated with the fine time step)."""
     from scipy.optimize import brentq
 
-    from . import solve
+    from .. import solve
 
     evaluations = []
 
@@ -583,7 +583,7 @@ def calibrate(base: Path, plan: Plan) -> dict:
 
 def run_named_study(out: Path, name: str, text: str, executor) -> list[dict]:
     """Write DIR/studies/NAME.toml, run it into DIR/studies/NAME with ``executor``, return study.csv's rows."""
-    from .studies import load_study, run_study
+    from ..studies import load_study, run_study
 
     folder = out / "studies"
     folder.mkdir(exist_ok=True)
@@ -708,8 +708,8 @@ def adaptive_record(base: Path, plan: Plan, out: Path, uniform: dict) -> dict:
     that study's reference; and the DOFs the cycles need to reach the error of its finest uniform mesh
     (``uniform``: the rate in h's record; log–log interpolation between the two cycles around it; NaN if
     no cycle reaches it)."""
-    from .rundir import run as run_directory
-    from .studies import snapshots_at
+    from ..rundir import run as run_directory
+    from ..studies import snapshots_at
 
     case = load_case(base, {"mesh.h": level_overrides(plan.adapt_level)["mesh.h"], "time.steps": plan.h_steps,
                             "output.field_steps": "final", "adapt.cycles": plan.adapt_cycles,
@@ -1032,7 +1032,7 @@ def assess(data: dict) -> list[dict]:
 # --- the machine -------------------------------------------------------------------------------------
 def machine() -> dict:
     """Platform, processor, cores, memory and the versions that matter."""
-    from .writers import versions
+    from ..writers import versions
 
     memory = None
     try:
@@ -1048,7 +1048,7 @@ def machine() -> dict:
     except OSError:
         pass
     try:
-        from .solvers.factorization import installed_backends
+        from ..solvers.factorization import installed_backends
 
         backend = installed_backends()[0]
     except Exception:  # noqa: BLE001 - informational only

@@ -28,9 +28,9 @@ from matplotlib.patches import Patch
 from matplotlib.tri import Triangulation
 from scipy.sparse.csgraph import connected_components, depth_first_order
 
-from .contact import AT_LIMIT, STATUS_NAMES
-from .errors import CaseError
-from .plots import STATE_COLORS, STATE_LABELS  # Γ3 coloured by the state of its nodes, as in a run's figures
+from ..contact import AT_LIMIT, STATUS_NAMES
+from ..errors import CaseError
+from ..plots import STATE_COLORS, STATE_LABELS  # Γ3 coloured by the state of its nodes, as in a run's figures
 
 MAGNIFICATION = 1.0
 """Displacements are drawn at true scale."""
