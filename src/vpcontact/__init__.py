@@ -31,7 +31,7 @@ API = {"Case": "case", "load_case": "case", "CaseError": "errors", "Problem": "p
 
 #: The modules of the package a user may reach as ``vpcontact.<name>`` after ``import vpcontact``.
 SUBMODULES = ("assembly", "case", "checkpoint", "contact", "errors", "expressions", "material", "mesh", "norms", "plots",
-              "problem", "reproduction", "results", "rundir", "solvers", "stepping", "studies", "writers")
+              "problem", "reproduction", "results", "run_reader", "rundir", "solvers", "stepping", "studies", "writers")
 
 
 def __getattr__(name: str):

@@ -303,7 +303,7 @@ def _write_fields(result: Result, folder: Path) -> None:
         if "part" in layer:  # VTU point data are numbers: the index in contact.parts
             layer["part"] = surface.owner
         layer = {key: np.asarray(value, dtype=float) for key, value in layer.items()}
-        end_rows = _end_of_step_rows(result)
+        end_rows = result.end_of_step_rows()
     body, contact = [], []
     materials = {"material": problem.materials.owner.astype(np.int32), "E": np.array(problem.materials.E),
                  "nu": np.array(problem.materials.nu)}
@@ -353,12 +353,6 @@ def _tensors_in_space(tensors: np.ndarray, t33: np.ndarray | None = None) -> np.
     return full.reshape(n, 9)
 
 
-def _end_of_step_rows(result: Result) -> dict[int, int]:
-    """Step n -> the history row at t_n."""
-    ends = np.flatnonzero(result.ends_step())
-    return dict(zip(result.series("step")[ends].astype(int).tolist(), ends.tolist()))
-
-
 def write_solution(result: Result, path: Path) -> None:
     """solution.npz: ``points`` (d, nnodes), the elements by their type, ``triangles`` (3, nelements) in
     2D or ``tetrahedra`` (4, nelements) in 3D, ``steps`` (s,), ``times`` (s,), ``displacement``
@@ -379,7 +373,7 @@ def write_solution(result: Result, path: Path) -> None:
         arrays["z"] = np.array([result.fields[s].z for s in steps])
     surface = result.problem.surface
     if surface.size:
-        end_rows = _end_of_step_rows(result)
+        end_rows = result.end_of_step_rows()
         arrays["contact_nodes"] = surface.nodes
         arrays["xi"] = np.array([result.contact["xi"][end_rows[s]] for s in steps]).reshape(len(steps), surface.size)
     with replacing(path) as temporary:
