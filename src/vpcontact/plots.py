@@ -204,7 +204,6 @@ def along_curve(segments: np.ndarray, count: int) -> np.ndarray:
     return np.concatenate(order)
 
 
-
 def arc_length(coordinates: np.ndarray, segments: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The contact nodes in their order along a curve made of ``segments`` (2, s) (a curve of one open
     piece runs from its end of least x, then least y), the arc length at each (going on from one piece

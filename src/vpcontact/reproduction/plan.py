@@ -9,6 +9,13 @@ from dataclasses import dataclass
 from .paper import CALIBRATED_LOAD, CONTACT_CONDITIONS, FIGURE_TIMES, PRINTED_LOAD, T, load_overrides
 
 
+def level_overrides(level: int) -> dict:
+    """The level rule: h = 1/level, element edge √2·h (the paper's sizes), steps = round(T/h), k = T/steps
+    (h = k = 1/level up to that rounding)."""
+    h = 1.0 / level
+    return {"mesh.h": math.sqrt(2.0) * h, "time.steps": round(T / h)}
+
+
 @dataclass(frozen=True)
 class Plan:
     """The sizes of a reproduction: the full one, or the coarse `--quick` one."""
@@ -18,8 +25,8 @@ class Plan:
     """Element size of the mesh of Figs. 2–9 (the example's 0.0125; quick: 0.05)."""
     steps_coarse: int = 11
     """k = 0.1: the paper's data (N = 11)."""
-    steps_fine: int = 141
-    """k = 1.1/141 ≈ 1/128 (1.1·128 = 140.8 is not an integer; the h–k study rounds the same way)."""
+    steps_fine: int = level_overrides(128)["time.steps"]
+    """k ≈ 1/128: the level rule's 141 steps of level 128 (1.1·128 = 140.8 is not an integer)."""
     rho: tuple = (1.0, 1e-1, 1e-2, 1e-3, 1e-4, 1e-5, 1e-6)
     fig9_rho: tuple = (1.0, 1e-1, 1e-2, 1e-3)
     levels: tuple = (4, 8, 16, 32, 64, 128, 256)
@@ -49,13 +56,6 @@ def make_plan(quick: bool) -> Plan:
                     h_levels=(4, 8, 16), h_reference_level=64, h_steps=9, k_steps=(4, 9, 18, 35),
                     k_reference_steps=141, k_level=16, adapt_level=4, adapt_cycles=6, adapt_max_dofs=1_500)
     return Plan(False, figure_h=0.0125)
-
-
-def level_overrides(level: int) -> dict:
-    """The level rule: h = 1/level, element edge √2·h (the paper's sizes), steps = round(T/h), k = T/steps
-    (h = k = 1/level up to that rounding)."""
-    h = 1.0 / level
-    return {"mesh.h": math.sqrt(2.0) * h, "time.steps": round(T / h)}
 
 
 def level_step(level: int) -> float:
