@@ -27,7 +27,7 @@ from .space import CELLS, coordinates
 if TYPE_CHECKING:
     from .norms import Snapshot
 
-SOLUTION_ARRAYS = ("times", "points", "displacement", "stress")
+SOLUTION_ARRAYS = ("steps", "times", "points", "displacement", "stress")
 """The arrays of solution.npz a comparison reads (besides the elements, and the Lamé parameters when
 the run wrote them): see :func:`vpcontact.writers.write_solution`."""
 
