@@ -4,7 +4,7 @@ the paper's example").
 For each β, examples/paper_ball.toml is solved on a uniform reference mesh (h = 1/512: 477,194 dofs), on the
 uniform meshes h = 1/8 … 1/256 and in the adaptive cycles of [adapt] from h = 1/8, all on the example's own
 time grid (k = 0.1, 11 steps): the same time steps everywhere, so the errors compared are spatial. A mesh
-"h = 1/n" has the element edge √2/n, the paper's sizes (`vpcontact.reproduce.level_overrides`: its 1/512
+"h = 1/n" has the element edge √2/n, the paper's sizes (`vpcontact.reproduction.plan.level_overrides`: its 1/512
 is the paper's 472k-dof reference). For every uniform level and adaptive cycle it reports the dofs, the
 estimate of the chosen estimator ((Σ_K F_K)^½ with the time functional of [adapt]) and the errors against
 the reference at t = 0.5 and 1.1, on the reference mesh (the solution interpolated at its nodes):
@@ -42,7 +42,8 @@ from vpcontact.adapt import adapt, solve_and_estimate
 from vpcontact.norms import differences, element_energies, transfer
 from vpcontact.problem import build_problem
 from vpcontact.refinement import signed_measures
-from vpcontact.reproduce import dofs_reaching, level_overrides
+from vpcontact.reproduction.plan import level_overrides
+from vpcontact.reproduction.records import dofs_reaching
 
 CASE = Path(__file__).resolve().parent.parent / "examples" / "paper_ball.toml"
 TIMES = {5: 0.5, 11: 1.1}  # step → t on the example's grid
@@ -88,7 +89,7 @@ class Reference:
 
 def reach(uniform: dict, cycles: list[dict]) -> dict:
     """For each error: the uniform mesh's, the dofs the adaptive cycles need to reach it
-    (`vpcontact.reproduce.dofs_reaching`; None if no cycle does) and their ratio to the uniform mesh's dofs."""
+    (`vpcontact.reproduction.records.dofs_reaching`; None if no cycle does) and their ratio to the uniform mesh's dofs."""
     found = {"uniform_level": uniform["level"], "uniform_dofs": uniform["dofs"], "errors": {}}
     for name in ERRORS:
         target = uniform["errors"][name]
@@ -222,7 +223,7 @@ def main() -> None:
     studies = [study(beta, args) for beta in args.beta]
     report = {"case": "examples/paper_ball.toml", "time_steps": 11, "times": list(TIMES.values()),
               "estimator": args.estimator, "functional": args.functional, "theta": args.theta,
-              "mesh_convention": "h = 1/n: element edge √2/n (vpcontact.reproduce.level_overrides)",
+              "mesh_convention": "h = 1/n: element edge √2/n (vpcontact.reproduction.plan.level_overrides)",
               "studies": studies, "wall_time_s": time.perf_counter() - started}
     text = json.dumps(report, indent=1)
     print(text)

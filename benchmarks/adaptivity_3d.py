@@ -39,7 +39,7 @@ from vpcontact.adapt import adapt
 from vpcontact.indicators import Level
 from vpcontact.norms import differences
 from vpcontact.problem import build_problem
-from vpcontact.reproduce import dofs_reaching
+from vpcontact.reproduction.records import dofs_reaching
 from vpcontact.residual_estimate import ResidualEstimator
 
 CASE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
@@ -108,7 +108,7 @@ def sizes(mesh) -> dict:
 
 
 def crossing(cycles: list[dict], target: float, t: str) -> float | None:
-    """The dofs at which the cycles' error at ``t`` falls to ``target`` (`vpcontact.reproduce.dofs_reaching`:
+    """The dofs at which the cycles' error at ``t`` falls to ``target`` (`vpcontact.reproduction.records.dofs_reaching`:
     log–log interpolation between the last cycle above it and the first at or below it); None when no
     cycle reaches it."""
     found = dofs_reaching([c["dofs"] for c in cycles], [c[t]["error"] for c in cycles], target)

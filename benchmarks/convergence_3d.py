@@ -20,7 +20,6 @@ v(h) = v* + C h^p.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import math
 import sys
@@ -33,7 +32,8 @@ import tomli_w
 from scipy.optimize import curve_fit
 
 from vpcontact.ball import CELLS_PER_RADIUS
-from vpcontact.studies import load_study, run_study
+from vpcontact.run_reader import read_table
+from vpcontact.studies import load_study, norm_column, run_study
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
 SETTINGS = {
@@ -41,8 +41,8 @@ SETTINGS = {
     "quick": {"levels": (0.5, 0.35), "reference": 0.25, "steps": 3},
 }
 T = 1.1
-#: The errors reported, by the study.csv column they come from.
-ERRORS = {"error_strain": "norm_V", "error_L2": "norm_U", "error_stress": "norm_Q"}
+#: The errors reported, by the difference norm of study.csv they come from (`vpcontact.studies.norm_column`).
+ERRORS = {"error_strain": "V", "error_L2": "U", "error_stress": "Q"}
 PROBE = ("K_probe", "penetration_probe", "normal_stress_probe")
 
 
@@ -111,8 +111,7 @@ def measure(out: Path, setting: dict, workers: int | None) -> dict:
     started = time.perf_counter()
     report = run_study(load_study(path, out / "study"), out / "study", workers=workers)
     wall = time.perf_counter() - started
-    with open(out / "study" / "study.csv") as handle:
-        rows = {row["id"]: row for row in csv.DictReader(handle)}
+    rows = {row["id"]: row for row in read_table(out / "study" / "study.csv")}
     if report["failed"] or report["interrupted"] or any(row["status"] != "complete" for row in rows.values()):
         raise SystemExit(f"convergence_3d: runs did not complete: {json.dumps(report)}")
     reference = rows.pop("reference")
@@ -127,7 +126,7 @@ def measure(out: Path, setting: dict, workers: int | None) -> dict:
     levels = []
     for row in ordered:
         level = record(row)
-        level.update({name: float(row[f"{column}_t{T:g}"]) for name, column in ERRORS.items()})
+        level.update({name: float(row[norm_column(norm, T)]) for name, norm in ERRORS.items()})
         level.update({f"{key}_difference": level[key] - float(reference[key]) for key in PROBE})
         levels.append(level)
     h = [level["h"] for level in levels]

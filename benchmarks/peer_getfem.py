@@ -25,7 +25,6 @@ vpcontact alone is timed and "getfem" is null.
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import os
 import shutil
@@ -38,6 +37,8 @@ import tomllib
 from pathlib import Path
 
 import numpy as np
+
+from vpcontact.run_reader import read_contact, read_solution, read_summary
 
 HERE = Path(__file__).resolve().parent
 EXAMPLE = HERE.parent / "examples" / "paper_ball.toml"
@@ -174,23 +175,19 @@ def _match(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def agreement(run: Path, peer: Path) -> list[dict]:
     """vpcontact's run directory against GetFEM's .npz at the steps GetFEM recorded: at the probe and at a
     few nodes the two values, and the largest differences over the contact nodes and over every node."""
-    solution, other = np.load(run / "solution.npz"), np.load(peer)
+    solution, other = read_solution(run), np.load(peer)
     ia, ib = _match(solution["points"], other["nodes"])
     points = solution["points"][:, ia]
     nearest = [int(np.argmin(np.hypot(points[0] - x, points[1] - y))) for x, y in REPORTED_POINTS]
-    with open(run / "contact.csv", newline="") as file:
-        rows = list(csv.DictReader(file))
-    table = {column: np.array([float(row[column]) for row in rows])
-             for column in ("step", "x", "y", "penetration", "pressure_compliance", "pressure_rigid")}
     records = []
     for k, step in enumerate(other["steps"]):
-        here = table["step"] == step
-        xy = np.vstack((table["x"][here], table["y"][here]))
+        contact = read_contact(run, int(step))  # the rows at t_n (a step cut into sub-steps has more)
+        xy = contact["coordinates"]
         ca, cb = _match(xy, other["nodes"][:, other["contact_nodes"]])
         probe = int(np.argmin(np.hypot(*(xy[:, ca] - np.reshape(PROBE, (2, 1))))))
-        d = table["penetration"][here][ca], other["penetration"][k][cb]
-        rigid = table["pressure_rigid"][here][ca], other["pressure_rigid"][k][cb]
-        pressure = table["pressure_compliance"][here][ca] + rigid[0], other["pressure_compliance"][k][cb] + rigid[1]
+        d = contact["penetration"][ca], other["penetration"][k][cb]
+        rigid = contact["pressure_rigid"][ca], other["pressure_rigid"][k][cb]
+        pressure = contact["pressure_compliance"][ca] + rigid[0], other["pressure_compliance"][k][cb] + rigid[1]
         u = solution["displacement"][list(solution["steps"]).index(step)][ia], other["displacement"][k][ib]
         records.append({
             "step": int(step), "t": float(other["times"][k]),
@@ -232,7 +229,7 @@ def main() -> None:
             if getfem:
                 theirs.append(timed([*peer_command, "--out", str(folder / f"peer{run}.npz")], env=_plain_env()))
         last = folder / f"run{args.runs - 1}"
-        summary = json.loads((last / "summary.json").read_text())
+        summary = read_summary(last)
         record = {
             "level": f"1/{args.level}", "h": H_TIMES_LEVEL / args.level, "mesher": mesher,
             "dofs": summary["dofs"], "elements": summary["elements"], "contact_nodes": summary["contact_nodes"],

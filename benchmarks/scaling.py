@@ -1,13 +1,14 @@
 """The paper's convergence sequence h = k = 1/4, …, 1/512 (its Fig. 10), timed: prints JSON.
 
 Each level runs examples/paper_ball.toml in a fresh process (so its peak memory is its own) with
-time.steps = round(1.1 / k) and the half disc meshed with element edge √2·h, which gives the
-paper's sizes (about 472,000 DOFs and 470,000 triangles at h = 1/512; an edge of h itself would
-give twice as many). One record per level and method: DOFs, contact nodes, steps, the setup stages
-(mesh, assembly, factorization, condensation), the time loop, the total, Newton iterations, the
-peak RSS, and the full/condensed time ratio where both ran. ``--viscoplastic``: the same runs with
-the Perzyna law of examples/viscoplastic_ball.toml (η = 0.5, yield stress 3), so that u is computed at
-every step (σ_n feeds z_{n+1}).
+the level rule of `vpcontact.reproduction.plan.level_overrides` (time.steps = round(1.1 / h), the
+half disc meshed with element edge √2·h), which gives the paper's sizes (about 472,000 DOFs and
+470,000 triangles at h = 1/512; an edge of h itself would give twice as many). One record per level
+and method: DOFs, contact nodes, steps, the setup stages (mesh, assembly, factorization,
+condensation), the time loop, the total, Newton iterations, the peak RSS, and the full/condensed time
+ratio where both ran. ``--viscoplastic``: the same runs with the Perzyna law of
+examples/viscoplastic_ball.toml (η = 0.5, yield stress 3), so that u is computed at every step (σ_n
+feeds z_{n+1}).
 
     python benchmarks/scaling.py                      # every level, condensed; full up to 1/128
     python benchmarks/scaling.py --level 512 --beta -1 --method condensed
@@ -19,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import resource
 import subprocess
 import sys
@@ -38,10 +38,11 @@ PERZYNA = {"material.viscoplastic": {"law": "perzyna", "eta": 0.5, "yield_stress
 def run_level(level: int, method: str, beta: float, viscoplastic: bool = False) -> dict:
     """Solve one level in this process and return its record."""
     import vpcontact
+    from vpcontact.reproduction.plan import level_overrides
 
     h = 1.0 / level
     case = vpcontact.load_case(EXAMPLE, {
-        "mesh.h": math.sqrt(2.0) * h, "time.steps": round(1.1 / h), "solver.method": method,
+        **level_overrides(level), "solver.method": method,
         "contact.stiffness.beta": beta, "output.field_steps": "none", **(PERZYNA if viscoplastic else {})})
     result = vpcontact.solve(case)
     timings = result.timings

@@ -13,7 +13,7 @@ import vpcontact
 from vpcontact.adapt import adapt
 from vpcontact.norms import element_energies, transfer
 from vpcontact.problem import build_problem
-from vpcontact.reproduce import level_overrides
+from vpcontact.reproduction.plan import level_overrides
 
 ROOT = Path(__file__).resolve().parents[1]
 

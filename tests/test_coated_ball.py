@@ -84,7 +84,7 @@ def test_the_paper_figures_refuse_a_thickness_that_varies():
     import pytest
 
     from vpcontact.errors import CaseError
-    from vpcontact.figures import Frame
+    from vpcontact.reproduction.frames import Frame
 
     case = vpcontact.load_case(EXAMPLES / "coated_ball.toml", [*COARSE, 'contact.g="0.2 - 0.1*x"', "time.steps=1",
                                                                 'output.field_steps="final"',

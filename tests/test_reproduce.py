@@ -13,8 +13,11 @@ from matplotlib.quiver import Quiver
 from vpcontact import build_problem, load_case
 from vpcontact.cli import main
 from vpcontact.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
-from vpcontact.figures import ARROWS, MESH_DRAWN_UP_TO, STATE_COLORS, Frame, along_curve, deformed_panels
-from vpcontact.reproduce import PAPER_CASE, make_plan
+from vpcontact.plots import STATE_COLORS, along_curve
+from vpcontact.reproduction.figures import MESH_DRAWN_UP_TO, deformed_panels
+from vpcontact.reproduction.frames import ARROWS, Frame
+from vpcontact.reproduction.paper import PAPER_CASE
+from vpcontact.reproduction.plan import make_plan
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 FIGURES = [f"fig{n:02d}" for n in range(2, 12)]
@@ -231,7 +234,7 @@ def test_overwrite_removes_the_reproduction_and_nothing_else(quick, tmp_path):
     the reproduction's folders (cases/, studies/, a run directory, figures/)."""
     import shutil
 
-    from vpcontact.reproduce import prepare
+    from vpcontact.reproduction.reproduce import prepare
 
     source, _ = quick
     out = tmp_path / "paper"
@@ -252,7 +255,7 @@ def test_overwrite_removes_the_reproduction_and_nothing_else(quick, tmp_path):
 def test_dofs_reaching_interpolates_log_log_between_the_meshes_around_the_target():
     """On errors that fall as a power of the DOFs the interpolation is exact; a first mesh already below
     the target gives its own DOFs; no mesh reaching it, NaN."""
-    from vpcontact.reproduce import dofs_reaching
+    from vpcontact.reproduction.records import dofs_reaching
 
     dofs = [100, 400, 1600, 6400]
     errors = [3.0 * n**-0.6 for n in dofs]

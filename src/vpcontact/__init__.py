@@ -31,7 +31,7 @@ API = {"Case": "case", "Model": "case", "load_case": "case", "CaseError": "error
 
 #: The modules of the package a user may reach as ``vpcontact.<name>`` after ``import vpcontact``.
 SUBMODULES = ("adapt", "assembly", "case", "check", "checkpoint", "compose", "contact", "errors", "expressions",
-              "figures", "material", "mesh", "norms", "plots", "problem", "refinement", "report", "reproduce", "results",
+              "material", "mesh", "norms", "plots", "problem", "refinement", "reproduction", "results", "run_reader",
               "rundir", "solvers", "stepping", "studies", "writers")
 
 

@@ -237,7 +237,7 @@ def _connect(address: str):
 
 
 def _reproduce(args) -> int:
-    from .reproduce import OutputError, ReproduceError, run
+    from .reproduction.reproduce import OutputError, ReproduceError, run
 
     if args.workers is not None and args.workers < 1:
         return _refuse(f"--workers {args.workers}: must be at least 1")

@@ -42,10 +42,9 @@ class Level:
             kept = ", ".join(map(str, sorted(result.fields))) or "none"
             raise CaseError(f"no fields kept at step {step} (steps kept: {kept}): an error estimate needs the fields "
                             f"of its steps; set output.field_steps to include them")
-        ends = np.flatnonzero((result.series("step") == step) & result.ends_step())
-        if ends.size == 0:
+        row = result.end_of_step_rows().get(step)
+        if row is None:
             raise CaseError(f"step {step} was not reached (the run reached step {result.steps})")
-        row = int(ends[-1])
         contact = {name: np.asarray(result.contact[name][row]) for name in CONTACT_ARRAYS}
         return cls(result.problem, step, float(result.times[row]), float(result.rows[row]["k"]), fields, contact)
 

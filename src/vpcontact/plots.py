@@ -66,8 +66,7 @@ def step_rows(result, steps) -> dict[int, int]:
     wrong = [n for n in steps if isinstance(n, bool) or not isinstance(n, (int, np.integer))]
     if wrong:
         raise CaseError(f"step = {shown(repr(wrong[0]))}: expected a step number (an integer)")
-    ends = np.flatnonzero(result.ends_step())
-    row_of = dict(zip(result.series("step")[ends].astype(int).tolist(), ends.tolist()))
+    row_of = result.end_of_step_rows()
     missing = [n for n in steps if n not in row_of]
     if missing:
         done = f"steps 1 to {result.completed_steps}" if result.completed_steps else "no step"
@@ -237,12 +236,28 @@ def _profile_panels(surface, times, values, status, label, limit=None):
     return figure
 
 
+def along_curve(segments: np.ndarray, count: int) -> np.ndarray:
+    """The nodes 0, …, count − 1 of a curve made of ``segments`` (2, s), in their order along it:
+    each connected piece from one of its ends (any node of a closed piece), piece after piece."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components, depth_first_order
+
+    graph = sp.coo_matrix((np.ones(segments.shape[1]), (segments[0], segments[1])), shape=(count, count)).tocsr()
+    pieces, label = connected_components(graph, directed=False)
+    degree = np.bincount(segments.ravel(), minlength=count)
+    order = []
+    for piece in range(pieces):
+        members = np.flatnonzero(label == piece)
+        ends = members[degree[members] == 1]
+        start = ends[0] if ends.size else members[0]
+        order.append(depth_first_order(graph, start, directed=False, return_predecessors=False))
+    return np.concatenate(order)
+
+
 def arc_length(coordinates: np.ndarray, segments: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The contact nodes in their order along a curve made of ``segments`` (2, s) (a curve of one open
     piece runs from its end of least x, then least y), the arc length at each (going on from one piece
     to the next), and the positions in that order where a new piece starts."""
-    from .figures import along_curve
-
     m = coordinates.shape[1]
     order = along_curve(segments, m)
     if tuple(coordinates[:, order[-1]]) < tuple(coordinates[:, order[0]]):

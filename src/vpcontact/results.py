@@ -9,8 +9,9 @@ Sub-steps: a step whose Newton iteration fails is cut in halves (``stepping``). 
 time level is a row of the history and of the per-node arrays, in time order: a step done whole is
 one row (``substep`` 1, ``k`` the case's step), a step cut into s sub-steps is s rows with the same
 ``step`` n, ``substep`` 1, …, s, their own ``t`` and ``k``, the last one at t_n. Fields are kept per
-step n, at t_n. ``series(..., substeps=False)`` and ``contact_history(..., substeps=False)`` keep
-only the rows at the step times t_n.
+step n, at t_n. Which rows are the steps t_n is decided in one place, :func:`step_ends` (for a run in
+memory and for a run directory's tables alike); ``series(..., substeps=False)`` and
+``contact_history(..., substeps=False)`` keep only those rows.
 
 Memory: the rows and the fields at the field steps are kept until the run is written; a case whose
 outputs would not fit in the memory available is refused before its first step (:func:`check_memory`).
@@ -18,6 +19,7 @@ outputs would not fit in the memory available is refused before its first step (
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import os
 from collections.abc import Collection
@@ -68,6 +70,22 @@ def _unknown(kind: str, name, valid: Collection[str], elsewhere: tuple[Collectio
     return UnknownName(f"unknown {kind} {shown(repr(name))}; {hint}valid names: {', '.join(valid)}")
 
 
+def step_ends(steps, completed: int) -> np.ndarray:
+    """Per history row, given the step number n of each row (in time order): is it the row at t_n? It is
+    the last row of its step, for the steps n ≤ ``completed`` (the steps reached): a step cut into
+    sub-steps has several rows, its last one at t_n; the rows of a step not reached (a step that failed
+    even after its cuts) are none."""
+    steps = np.asarray(steps)
+    last = np.append(steps[1:] != steps[:-1], True) if steps.size else np.zeros(0, dtype=bool)
+    return last & (steps <= completed)
+
+
+def end_of_step_rows(steps, completed: int) -> dict[int, int]:
+    """Step n -> the index of its row at t_n (:func:`step_ends`), for the steps reached."""
+    ends = np.flatnonzero(step_ends(steps, completed))
+    return dict(zip(np.asarray(steps)[ends].astype(int).tolist(), ends.tolist()))
+
+
 def field_step_numbers(field_steps, steps: int) -> Collection[int]:
     """The steps whose fields are kept, for ``output.field_steps`` ("all", "final", "none" or a list) in a
     run of ``steps`` steps (a range for "all": no set of every step is built)."""
@@ -93,10 +111,13 @@ class Fields:
 
     def __repr__(self) -> str:
         """The shapes, not the values."""
-        shapes = ", ".join(f"{name}{getattr(self, name).shape}" for name in
-                           ("displacement", "stress", "stress33", "von_mises", "z", "error_indicator")
+        shapes = ", ".join(f"{name}{getattr(self, name).shape}" for name in FIELD_NAMES
                            if getattr(self, name) is not None)
         return f"Fields({shapes})"
+
+
+#: The fields of a time level (:class:`Fields`), in their order: what a checkpoint keeps of a field step.
+FIELD_NAMES = tuple(item.name for item in dataclasses.fields(Fields))
 
 
 @dataclass(repr=False)
@@ -223,10 +244,13 @@ class Result:
         self._times = [np.float64(t) for t in values]
 
     def ends_step(self) -> np.ndarray:
-        """Per history row: does it end a time step (t = t_n), rather than being an earlier sub-step?"""
-        if not self.rows:
-            return np.zeros(0, dtype=bool)
-        return self.times == self.problem.times.at(self.series("step"))
+        """Per history row: does it end a time step (t = t_n), rather than being an earlier sub-step
+        (:func:`step_ends`)?"""
+        return step_ends(self.series("step"), self.completed_steps)
+
+    def end_of_step_rows(self) -> dict[int, int]:
+        """Step n -> the history row at t_n, for the steps reached (:func:`end_of_step_rows`)."""
+        return end_of_step_rows(self.series("step"), self.completed_steps)
 
     def series(self, column: str, *, substeps: bool = True) -> np.ndarray:
         """One column of the history (see ``columns``) over the rows done; ``substeps=False``: only the

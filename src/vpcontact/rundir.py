@@ -41,11 +41,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from . import checkpoint, directory
-from .case import Case, load_case
+from .case import Case
 from .errors import CaseError
 from .mesh_file import write_mesh
 from .problem import Problem, build_problem
 from .results import Result
+from .run_reader import read_case, read_summary
 from .stepping import TimeLoop
 from .writers import (check_room, json_safe, remove_files, remove_outputs, remove_temporaries, replacing, versions,
                       write_outputs, write_resolved_case, write_text)
@@ -192,14 +193,8 @@ def _adapt_locked(problem: Problem, case: Case, held: directory.Held, *, clear: 
 
 def _finished(case: Case, out: Path) -> Outcome | None:
     """A run directory that holds a finished run of this case and no checkpoint: nothing to resume."""
-    summary_path = out / "summary.json"
-    if checkpoint.exists(out) or not summary_path.is_file():
-        return None
-    try:
-        summary = json.loads(summary_path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    if summary.get("status") not in ("complete", "failed"):
+    summary = None if checkpoint.exists(out) else read_summary(out)
+    if summary is None or summary.get("status") not in ("complete", "failed"):
         return None
     _check_same_case(case, out)
     message = summary.get("message", "") or f"the run in '{out}' is already complete; nothing to resume"
@@ -208,9 +203,8 @@ def _finished(case: Case, out: Path) -> Outcome | None:
 
 def _check_same_case(case: Case, out: Path) -> None:
     """--resume in a directory without a checkpoint: it must hold a run of this same case."""
-    path = out / "case.resolved.toml"
     try:
-        before = load_case(path)
+        before = read_case(out)
     except CaseError:
         raise CaseError(f"cannot resume: '{out}' holds no run of vpcontact (no readable case.resolved.toml)") from None
     if checkpoint.comparable(before.resolved()) != checkpoint.comparable(case.resolved()):

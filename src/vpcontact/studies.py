@@ -38,14 +38,12 @@ import re
 import signal
 import tomllib
 import unicodedata
-import zipfile
 from collections.abc import Callable, Collection
 from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 from tqdm.auto import tqdm
 
 from . import directory
@@ -53,10 +51,15 @@ from .case import _brief, load_case
 from .errors import CaseError
 from .inputs import MAX_TOML_BYTES, check_regular_file
 from .norms import Snapshot, differences
-from .space import CELLS, COORDINATES
+from .run_reader import read_case, read_summary, snapshots_at
+from .space import COORDINATES
 from .writers import check_room, replacing
 
 STUDY_KEYS = {"base", "set", "vary", "runs", "compare"}
+COMPARED = ("V", "Q", "U", "energy")
+"""The difference norms (:func:`vpcontact.norms.differences`) study.csv has at each compared time t, in
+the columns ``norm_column(norm, t)`` (NaN where a run has no fields at t; "energy" needs the
+reference's Lamé parameters)."""
 MAX_ID = 100
 """The longest run id (characters): an id names a directory, DIR/runs/<id>."""
 
@@ -234,12 +237,14 @@ def execute_run(spec: RunSpec) -> dict:
 
 def is_complete(spec: RunSpec) -> bool:
     """Does spec.out hold a complete result of exactly this run's resolved case?"""
-    try:
-        summary = json.loads((spec.out / "summary.json").read_text())
-        done = load_case(spec.out / "case.resolved.toml").resolved()
-    except (OSError, ValueError, CaseError):
+    summary = read_summary(spec.out)
+    if summary is None or summary.get("status") != "complete":
         return False
-    return summary.get("status") == "complete" and done == load_case(spec.base, spec.overrides).resolved()
+    try:
+        done = read_case(spec.out).resolved()
+    except CaseError:
+        return False
+    return done == load_case(spec.base, spec.overrides).resolved()
 
 
 def run_study(study: Study, out: str | os.PathLike, *, executor: Executor | None = None, workers: int | None = None,
@@ -400,10 +405,7 @@ def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = N
             mine = _snapshots(study, spec.id) if summary.get("status") == "complete" else {}
             for t in study.times:
                 norms = differences(mine[t], reference[t]) if t in mine and t in reference else {}
-                row[f"norm_V_t{t:g}"] = norms.get("V", math.nan)
-                row[f"norm_Q_t{t:g}"] = norms.get("Q", math.nan)
-                row[f"norm_U_t{t:g}"] = norms.get("U", math.nan)
-                row[f"norm_energy_t{t:g}"] = norms.get("energy", math.nan)
+                row.update({norm_column(norm, t): norms.get(norm, math.nan) for norm in COMPARED})
         rows.append(row)
     columns = list(dict.fromkeys(key for row in rows for key in row))
     with replacing(out / "study.csv") as temporary, temporary.open("w", newline="") as handle:
@@ -411,6 +413,11 @@ def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = N
         writer.writeheader()
         writer.writerows(rows)
     return rows
+
+
+def norm_column(norm: str, t: float) -> str:
+    """The column of study.csv with the difference norm ``norm`` (one of COMPARED) at time t."""
+    return f"norm_{norm}_t{t:g}"
 
 
 def _summary(spec: RunSpec, error: str | None, interrupted: bool) -> dict:
@@ -421,10 +428,7 @@ def _summary(spec: RunSpec, error: str | None, interrupted: bool) -> dict:
     if interrupted:
         return {"status": "interrupted", "message": "the study was stopped before this run finished; rerun the "
                                                     "study to do it"}
-    try:
-        return json.loads((spec.out / "summary.json").read_text())
-    except (OSError, ValueError):
-        return {"status": "missing", "message": ""}
+    return read_summary(spec.out) or {"status": "missing", "message": ""}
 
 
 def _cell(value):
@@ -434,23 +438,4 @@ def _cell(value):
 def _snapshots(study: Study, run_id: str) -> dict[float, Snapshot]:
     """The run's fields at the compared times, from its solution.npz."""
     spec = next(s for s in study.runs if s.id == run_id)
-    return snapshots_at(spec.out / "solution.npz", study.times)
-
-
-def snapshots_at(path: Path, times: Collection[float]) -> dict[float, Snapshot]:
-    """The fields of a run's solution.npz at those of ``times`` it holds (none if it is missing or damaged)."""
-    try:
-        with np.load(path) as solution:
-            data = {key: solution[key] for key in ("times", "points", "displacement", "stress")}
-            data["elements"] = solution[CELLS[data["points"].shape[0]][2]]
-            data["lame"] = solution["lame"] if "lame" in solution else None  # runs of earlier versions lack it
-    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):  # missing or damaged: no norms
-        return {}
-    found = {}
-    for t in times:
-        index = np.flatnonzero(np.isclose(data["times"], t, rtol=1e-9, atol=1e-12))
-        if index.size:
-            i = index[0]
-            found[t] = Snapshot(data["points"], data["elements"], data["displacement"][i], data["stress"][i],
-                                data["lame"])
-    return found
+    return snapshots_at(spec.out, study.times)

@@ -343,7 +343,7 @@ def field_frames(result: Result) -> Iterator[FieldFrame]:
         if "part" in layer:  # point data are numbers: the index in contact.parts
             layer["part"] = surface.owner
         layer = {key: np.asarray(value, dtype=float) for key, value in layer.items()}
-        end_rows = _end_of_step_rows(result)
+        end_rows = result.end_of_step_rows()
     materials = {"material": problem.materials.owner.astype(np.int32), "E": np.array(problem.materials.E),
                  "nu": np.array(problem.materials.nu)}
     for step, fields in sorted(result.fields.items()):
@@ -390,10 +390,6 @@ def _write_fields(result: Result, folder: Path) -> None:
     write_solution(result, folder.parent / "solution.npz")
 
 
-def _end_of_step_rows(result: Result) -> dict[int, int]:
-    """Step n -> the history row at t_n."""
-    ends = np.flatnonzero(result.ends_step())
-    return dict(zip(result.series("step")[ends].astype(int).tolist(), ends.tolist()))
 
 
 def write_solution(result: Result, path: Path) -> None:
@@ -416,7 +412,7 @@ def write_solution(result: Result, path: Path) -> None:
         arrays["z"] = np.array([result.fields[s].z for s in steps])
     surface = result.problem.surface
     if surface.size:
-        end_rows = _end_of_step_rows(result)
+        end_rows = result.end_of_step_rows()
         arrays["contact_nodes"] = surface.nodes
         arrays["xi"] = np.array([result.contact["xi"][end_rows[s]] for s in steps]).reshape(len(steps), surface.size)
     with replacing(path) as temporary:

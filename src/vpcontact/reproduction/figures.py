@@ -1,179 +1,42 @@
-"""The figures of Sect. 4 of the paper (Figs. 2–10), drawn with matplotlib, PNG and PDF.
+"""The figures of Sect. 4 of the paper (Figs. 2–10, and Fig. 11 beyond it), drawn with matplotlib, PNG and PDF.
 
 No pyplot: every figure is a `matplotlib.figure.Figure` rendered by the Agg canvas, so importing this
-module changes no global matplotlib state. A deformed-configuration panel (`Frame`) shows the
+module changes no global matplotlib state. A deformed-configuration panel (a :class:`~.frames.Frame`) shows the
 deformed body (filled, with its outline; its mesh too when it has at most `MESH_DRAWN_UP_TO`
 triangles, finer meshes would be a grey block), the undeformed outline, the soft layer of
 thickness g and the rigid base under it (the foundation conforms to Γ3: the layer lies between the
 circle of radius 1 and that of radius 1 + g about (0, 1)), Γ3 coloured by the state of its nodes
 (separated, in normal compliance, at the limit g), and the contact forces as arrows pointing at the
-body (the force per unit length the foundation exerts, −(ρK p + λ/w) ν) at no more than `ARROWS`
+body (the force per unit length the foundation exerts, −(ρK p + λ/w) ν) at no more than `frames.ARROWS`
 nodes evenly spaced along Γ3.
 """
 
 from __future__ import annotations
 
-import csv
 import math
-import tomllib
-from dataclasses import dataclass
-from functools import cached_property
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.tri import Triangulation
-from scipy.sparse.csgraph import connected_components, depth_first_order
 
-from .contact import AT_LIMIT, STATUS_NAMES
-from .errors import CaseError
-from .plots import STATE_COLORS, STATE_LABELS  # Γ3 coloured by the state of its nodes, as in a run's figures
+from ..contact import AT_LIMIT
+from ..plots import STATE_COLORS, STATE_LABELS  # Γ3 coloured by the state of its nodes, as in a run's figures
+from .frames import MAGNIFICATION, Frame
+from .paper import CONTACT_CONDITIONS, FIGURE_TIMES
 
-MAGNIFICATION = 1.0
-"""Displacements are drawn at true scale."""
 DPI = 150
 COLORS = {"beta+1": "C0", "beta-1": "C3", "alpha0_g0.2": "C2", "alpha0_g2000": "C1"}
 ARROW = 0.3
 """Length (m) of the longest contact-force arrow of a figure."""
-ARROWS = 40
-"""At most this many contact-force arrows per panel, at nodes evenly spaced along Γ3 (the figure
-mesh has 127 contact nodes: an arrow at each would merge into a band)."""
 MESH_DRAWN_UP_TO = 2000
 """The mesh is drawn when it has at most this many triangles; a finer one (the figure mesh has
 23,204) would be a grey block, so only the body's outline is drawn."""
 BODY = "0.86"
 """Fill colour of the deformed body."""
 ARROW_COLOR = "0.15"
-
-
-@dataclass
-class Frame:
-    """A deformed configuration with its contact forces, at one time."""
-
-    title: str
-    points: np.ndarray
-    """Node coordinates (2, n)."""
-    triangles: np.ndarray
-    """(3, elements)."""
-    displacement: np.ndarray
-    """(n, 2)."""
-    nodes: np.ndarray
-    """Mesh indices of the contact nodes (m,)."""
-    normals: np.ndarray
-    """Outward unit normals ν_i (2, m)."""
-    pressure: np.ndarray
-    """Contact pressure (compliance + rigid part), N/m (m,)."""
-    status: np.ndarray
-    """Node states (m,): 0 separated, 1 in compliance, 2 at the limit."""
-    g: float
-    t: float
-
-    @classmethod
-    def from_result(cls, result, step: int, title: str) -> "Frame":
-        """Step ``step`` (1-based; a field step or the last) of a :class:`~vpcontact.results.Result`."""
-        from .reproduce import step_rows
-
-        last = len(result.problem.times)
-        fields = result.fields.get(step) or (result.final if step == last else None)
-        if fields is None:
-            raise KeyError(f"step {step} has no fields (field steps: {sorted(result.fields)})")
-        problem = result.problem
-        if np.ndim(problem.law.g):
-            raise CaseError("the paper's figures draw its foundation, a layer of one thickness g; this run's g varies "
-                            "along Γ3 (contact.g an expression or contact.parts): draw it with vpcontact.plots")
-        i = step_rows(result)[step - 1]
-        pressure = result.contact_history("pressure_compliance")[i] + result.contact_history("pressure_rigid")[i]
-        return cls(
-            title,
-            problem.mesh.mesh.p,
-            problem.mesh.mesh.t,
-            fields.displacement,
-            problem.surface.nodes,
-            problem.surface.normals,
-            pressure,
-            result.contact_history("status")[i],
-            float(problem.law.g),
-            float(problem.times[step - 1]),
-        )
-
-    @classmethod
-    def from_run(cls, folder: Path, title: str) -> "Frame":
-        """The last step of a run directory (solution.npz, contact.csv, case.resolved.toml)."""
-        folder = Path(folder)
-        with np.load(folder / "solution.npz") as data:
-            points, triangles = data["points"], data["triangles"]
-            displacement, t = data["displacement"][-1], float(data["times"][-1])
-        with open(folder / "contact.csv", newline="") as handle:
-            rows = list(csv.DictReader(handle))
-        last = max(float(row["t"]) for row in rows)  # the final time (sub-steps have earlier times)
-        rows = [row for row in rows if float(row["t"]) == last]
-        column = lambda name: np.array([float(row[name]) for row in rows])  # noqa: E731
-        status = np.array([STATUS_NAMES.index(row["status"]) for row in rows])
-        case = tomllib.loads((folder / "case.resolved.toml").read_text(encoding="utf-8"))
-        g = case["contact"]["g"]
-        return cls(
-            title,
-            points,
-            triangles,
-            displacement,
-            np.array([int(row["node"]) for row in rows]),
-            np.vstack([column("normal_x"), column("normal_y")]),
-            column("pressure_compliance") + column("pressure_rigid"),
-            status,
-            math.inf if isinstance(g, str) else float(g),
-            t,
-        )
-
-    def deformed(self) -> np.ndarray:
-        return self.points + MAGNIFICATION * self.displacement.T
-
-    @cached_property
-    def edges(self) -> tuple[np.ndarray, np.ndarray]:
-        """The edges (2, e) of the mesh, each once, and the number of triangles of each (1: on the boundary)."""
-        t = self.triangles
-        ends = np.sort(np.hstack([t[[0, 1]], t[[1, 2]], t[[2, 0]]]), axis=0).astype(np.int64)
-        n = self.points.shape[1]
-        keys, count = np.unique(ends[0] * n + ends[1], return_counts=True)
-        return np.vstack([keys // n, keys % n]), count
-
-    def contact_segments(self) -> np.ndarray:
-        """The edges of Γ3 (2, s) as indices into ``nodes``: boundary edges between two contact nodes."""
-        edges, count = self.edges
-        local = np.full(self.points.shape[1], -1)
-        local[self.nodes] = np.arange(self.nodes.size)
-        ends = local[edges[:, count == 1]]
-        return ends[:, (ends >= 0).all(axis=0)]
-
-    def arrow_nodes(self, count: int = ARROWS) -> np.ndarray:
-        """Indices into ``nodes`` of the nodes drawn with an arrow: all when there are at most
-        ``count``; else as many as every k-th node would give, for the smallest k that gives at
-        most ``count``, at the nodes nearest to evenly spaced points of Γ3 (undeformed arc length)."""
-        m = self.nodes.size
-        if m <= count:
-            return np.arange(m)
-        order = along_curve(self.contact_segments(), m)
-        xy = self.points[:, self.nodes[order]]
-        s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=1), axis=0))])
-        targets = np.linspace(0.0, s[-1], math.ceil(m / math.ceil(m / count)))
-        return np.unique(order[np.abs(s[None, :] - targets[:, None]).argmin(axis=1)])
-
-
-def along_curve(segments: np.ndarray, count: int) -> np.ndarray:
-    """The nodes 0, …, count − 1 of a curve made of ``segments`` (2, s), in their order along it:
-    each connected piece from one of its ends (any node of a closed piece), piece after piece."""
-    graph = sp.coo_matrix((np.ones(segments.shape[1]), (segments[0], segments[1])), shape=(count, count)).tocsr()
-    pieces, label = connected_components(graph, directed=False)
-    degree = np.bincount(segments.ravel(), minlength=count)
-    order = []
-    for piece in range(pieces):
-        members = np.flatnonzero(label == piece)
-        ends = members[degree[members] == 1]
-        start = ends[0] if ends.size else members[0]
-        order.append(depth_first_order(graph, start, directed=False, return_predecessors=False))
-    return np.concatenate(order)
 
 
 def _save(figure: Figure, folder: Path, stem: str) -> dict:
@@ -350,8 +213,6 @@ def stiffness_figure(data: dict, folder: Path) -> dict:
 
 def probe_figure(data: dict, folder: Path, column: str, stem: str, title: str, ylabel: str, sign: float = 1.0) -> dict:
     """Figs. 6, 7: a bottom-point quantity against time for the four contact conditions (k = 0.1)."""
-    from .reproduce import CONTACT_CONDITIONS
-
     figure, ax = _line_figure(title, "t (s)", ylabel)
     for name, (label, _) in CONTACT_CONDITIONS.items():
         record = data["cases"][f"{name}_k0.1"]
@@ -437,8 +298,6 @@ TITLES = {
 
 def draw_all(data: dict, frames: dict, folder: Path) -> dict:
     """Every figure into ``folder``; returns {id: {"title", "png", "pdf"}} (paths relative to its parent)."""
-    from .reproduce import CONTACT_CONDITIONS, FIGURE_TIMES
-
     folder = Path(folder)
     contact = [frames[f"beta{s}_t{t:g}"] for s in ("+1", "-1") for t in FIGURE_TIMES]
     contact += [frames[f"final_{name}"] for name in CONTACT_CONDITIONS]
@@ -463,3 +322,4 @@ def draw_all(data: dict, frames: dict, folder: Path) -> dict:
         "fig11": adaptive_figure(data, folder),
     }
     return {key: {"title": TITLES[key], **paths} for key, paths in drawn.items()}
+

@@ -14,7 +14,9 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .figures import ARROWS, MESH_DRAWN_UP_TO
+from .figures import MESH_DRAWN_UP_TO
+from .frames import ARROWS
+from .paper import CONTACT_CONDITIONS, T
 
 
 @dataclass
@@ -257,8 +259,6 @@ def _load(data):
 
 def _time_step(data):
     s, cases = data["settings"], data["cases"]
-    from .reproduce import CONTACT_CONDITIONS
-
     rows = []
     for sign, label in (("+1", "β = 1"), ("-1", "β = −1")):
         a, b = cases[f"beta{sign}_k0.1"]["K_probe"][-1], cases[f"beta{sign}_k1_128"]["K_probe"][-1]
@@ -423,7 +423,7 @@ def _figures(data):
         [
             f"1/{ref['level']} (reference)",
             f"{1 / ref['level']:.5f}",
-            f"{1.1 / ref['steps']:.5f}",
+            f"{T / ref['steps']:.5f}",
             f"{ref['dofs']:,}",
             ref["steps"],
             "0",
