@@ -277,25 +277,25 @@ class TimeLoop:
         compliance, _ = law.pressure(d, state.xi, h)
         xi = state.xi + h * np.maximum(d, 0.0)
         K = law.K(xi)
-        fields, rate, level = None, None, None
+        fields, rate, computed = None, None, None
         G = problem.viscoplastic
-        wanted = self.estimator is not None or ends_step and (n in result.field_steps or n == len(problem.times))
+        wanted = self.estimator is not None or (ends_step and (n in result.field_steps or n == len(problem.times)))
         if G is not None or wanted:
             u = self._u
             u_free = u[problem.free] = self.solver.displacement(attempt.step, solution)
             strain = element_strain(problem.basis, u)
             z = attempt.z
             sigma = problem.elasticity.stress(strain) + (0.0 if z is None else z)  # σ = ℰε(u) + z
-            level = (u_free, strain, sigma, z)
+            computed = (u_free, strain, sigma, z)
             if wanted:
-                fields = self._fields(*level)
+                fields = self._fields(*computed)
             if G is not None:
                 rate = viscoplastic_rate(G, sigma, strain)
         values = {"ξ": xi, "K": K, "the compliance pressure": compliance}
         if fields is not None:
             values.update({"the displacement": fields.displacement, "the stress": fields.von_mises})
-        elif level is not None:
-            values.update({"the displacement": level[0], "the stress": level[2]})
+        elif computed is not None:
+            values.update({"the displacement": u_free, "the stress": sigma})
         wrong = [name for name, value in values.items() if not np.all(np.isfinite(value))]
         if wrong:
             cause = (f"the viscoplastic history blows up: is the explicit step k = {problem.k:g} small against the "
@@ -306,7 +306,7 @@ class TimeLoop:
         self._substep += 1
         result.record(n, attempt.t, solution, fields, xi=xi, K=K, compliance=compliance,
                       status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step)
-        self._level_without_fields = level if fields is None else None
+        self._level_without_fields = computed if fields is None else None
         if self.estimator is not None:
             level = Level(problem, n, attempt.t, h, fields, result.contact_row())
             result.record_estimate(self.estimator(level), fields)

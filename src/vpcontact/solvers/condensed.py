@@ -50,10 +50,11 @@ from .newton import ROUNDOFF, STAGNATION, Evaluation, SemismoothNewton
 class SolvedSpan:
     """N A0⁻¹ b, reusing the solutions of earlier right-hand sides when b lies in their span.
 
-    ``solve`` is b ↦ A0⁻¹ b (or what stands for it) and ``observe`` gives N A0⁻¹ b from it; the span keeps an orthonormal basis Q of the
-    right-hand sides solved (rows, at most ``capacity``) and N A0⁻¹ of each, so a right-hand side in
-    their span (loads proportional to t, for instance) costs two products with Q and no solve: about
-    five passes over n entries instead of a solve with the factor.
+    ``solve`` is b ↦ A0⁻¹ b (or what stands for it: the condensed method's split solve) and ``observe``
+    gives N A0⁻¹ b from what it returns; the span keeps an orthonormal basis Q of the right-hand sides
+    solved (rows, at most ``capacity``) and N A0⁻¹ of each, so a right-hand side in their span (loads
+    proportional to t, for instance) costs two products with Q and no solve: about five passes over n
+    entries instead of a solve with the factor.
     """
 
     def __init__(self, solve, observe, shape: tuple[int, int], capacity: int = 4, tolerance: float = 1e-13):
