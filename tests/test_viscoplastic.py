@@ -276,6 +276,27 @@ def test_both_step_solvers_give_the_same_viscoplastic_solution():
     np.testing.assert_allclose(full.contact_history("K"), condensed.contact_history("K"), rtol=1e-9)
 
 
+@pytest.mark.parametrize("field_steps", ["none", [2]])
+def test_the_fields_kept_are_those_of_every_step(field_steps):
+    """The loop computes σ at every level but builds the fields at the field steps only: those kept, and
+    the last level's of a run interrupted after step 4 (``result.final``), are the ones a run keeping every
+    step's has there."""
+    from vpcontact.stepping import TimeLoop
+
+    case = ball(h=0.2, viscoplastic={"law": "perzyna", "eta": 0.5, "yield_stress": 1.0})
+    case["output"]["field_steps"] = "all"
+    every = vpcontact.solve(case)
+    case["output"]["field_steps"] = field_steps
+    loop = TimeLoop(vpcontact.build_problem(vpcontact.load_case(case)))
+    stopped = loop.run(stop=lambda: "stopped" if loop.state.step == 4 else None)
+    kept = [] if field_steps == "none" else field_steps
+    assert stopped.status == "interrupted" and stopped.steps == 4 and sorted(stopped.fields) == kept
+    for fields, expected in [(stopped.final, every.fields[4])] + [(stopped.fields[n], every.fields[n]) for n in kept]:
+        for name in ("displacement", "stress", "stress33", "von_mises", "z"):
+            np.testing.assert_array_equal(getattr(fields, name), getattr(expected, name))
+    assert np.abs(every.fields[4].z).max() > 0.1
+
+
 def _with_method(case, method):
     case["solver"]["method"] = method
     return vpcontact.solve(case)

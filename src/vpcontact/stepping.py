@@ -31,7 +31,7 @@ With ``output.error_estimate`` the fields are computed at every level and the re
 from __future__ import annotations
 
 import time as clock
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -64,10 +64,16 @@ class LoopState:
     rate: np.ndarray | None  # 𝒢(σ, ε) at the last level; None: 𝒢 = 0
     previous: StepSolution | None  # the last level's solution
     trend: Trend | None = None  # how it changed since the level before (None: no level before)
+    _z_after: tuple = field(default=(None, None), init=False, repr=False, compare=False)  # (h, z_after(h))
 
     def z_after(self, h: float) -> np.ndarray | None:
-        """z at the level h after the last one (explicit: z + h 𝒢)."""
-        return self.z if self.rate is None else self.z + h * self.rate
+        """z at the level h after the last one (explicit: z + h 𝒢), computed once per h (the loop checks it
+        is finite after a step, the next step uses it)."""
+        if self.rate is None:
+            return self.z
+        if self._z_after[0] != h:
+            self._z_after = (h, self.z + h * self.rate)
+        return self._z_after[1]
 
     def start(self, h: float) -> StepSolution | None:
         """The first Newton iterate of the level h after the last one: the last level's solution
@@ -116,6 +122,10 @@ class TimeLoop:
     checkpoints of :mod:`vpcontact.rundir`), and ``stop()``, asked before every step (a signal
     asked the run to stop: the status becomes "interrupted").
     """
+
+    #: (u at the free dofs, ε, σ, z) of the last level when its Fields were not built (a viscoplastic body
+    #: computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
+    _level_without_fields: tuple | None = None
 
     def __init__(self, problem: Problem, output: OutputSection | None = None):
         started = clock.perf_counter()
@@ -196,6 +206,8 @@ class TimeLoop:
                     break
                 if after_step is not None:
                     after_step(self)
+        if self._level_without_fields is not None:  # the last level's fields, not kept at its step
+            result.final, self._level_without_fields = self._fields(*self._level_without_fields), None
         now = clock.perf_counter()
         for name, count in self.counts().items():
             setattr(result, name, count)
@@ -274,24 +286,25 @@ class TimeLoop:
         compliance, _ = law.pressure(d, state.xi, h)
         xi = state.xi + h * np.maximum(d, 0.0)
         K = law.K(xi)
-        fields, rate = None, None
+        fields, rate, computed = None, None, None
         G = problem.viscoplastic
-        wanted = ends_step and (n in result.field_steps or n == len(problem.times))
-        if G is not None or self.estimator is not None or wanted:
+        wanted = self.estimator is not None or (ends_step and (n in result.field_steps or n == len(problem.times)))
+        if G is not None or wanted:
             u = self._u
-            u[problem.free] = self.solver.displacement(attempt.step, solution)
+            u_free = u[problem.free] = self.solver.displacement(attempt.step, solution)
             strain = element_strain(problem.basis, u)
             z = attempt.z
             sigma = problem.elasticity.stress(strain) + (0.0 if z is None else z)  # σ = ℰε(u) + z
-            sigma33 = problem.elasticity.out_of_plane_stress(strain)
-            fields = Fields(displacement=u[problem.basis.nodal_dofs].T.copy(), stress=np.moveaxis(sigma, -1, 0),
-                            stress33=sigma33, von_mises=von_mises(sigma, sigma33),
-                            z=None if z is None else np.moveaxis(z, -1, 0).copy())
+            computed = (u_free, strain, sigma, z)
+            if wanted:
+                fields = self._fields(*computed)
             if G is not None:
                 rate = viscoplastic_rate(G, sigma, strain)
         values = {"ξ": xi, "K": K, "the compliance pressure": compliance}
         if fields is not None:
             values.update({"the displacement": fields.displacement, "the stress": fields.von_mises})
+        elif computed is not None:
+            values.update({"the displacement": u_free, "the stress": sigma})
         wrong = [name for name, value in values.items() if not np.all(np.isfinite(value))]
         if wrong:
             cause = (f"the viscoplastic history blows up: is the explicit step k = {problem.k:g} small against the "
@@ -302,12 +315,23 @@ class TimeLoop:
         self._substep += 1
         result.record(n, attempt.t, solution, fields, xi=xi, K=K, compliance=compliance,
                       status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step)
+        self._level_without_fields = computed if fields is None else None
         if self.estimator is not None:
             level = Level(problem, n, attempt.t, h, fields, result.contact_row())
             result.record_estimate(self.estimator(level), fields)
         trend = None if state.previous is None else Trend.between(state.previous, solution, h)
         self.state = LoopState(state.step, xi, attempt.z, rate, solution, trend)
         return None
+
+    def _fields(self, u_free: np.ndarray, strain: np.ndarray, sigma: np.ndarray, z: np.ndarray | None) -> Fields:
+        """The Fields of a level from its displacement at the free dofs, ε, σ and z (elements last)."""
+        problem = self.problem
+        u = np.zeros(problem.basis.N)
+        u[problem.free] = u_free
+        sigma33 = problem.elasticity.out_of_plane_stress(strain)
+        return Fields(displacement=u[problem.basis.nodal_dofs].T.copy(), stress=np.moveaxis(sigma, -1, 0),
+                      stress33=sigma33, von_mises=von_mises(sigma, sigma33),
+                      z=None if z is None else np.moveaxis(z, -1, 0).copy())
 
     def _failure_message(self, n: int, attempt: _Attempt, cuts: int) -> str:
         """One line: the step, its time, where the cuts ended, the residuals, the contact counts and what to try."""

@@ -12,7 +12,11 @@ solved by the same semi-smooth Newton iteration as the full system, now with a d
 (:class:`NewtonSystems`: a dense LU per iteration for small m, GMRES preconditioned by the inverse of
 an earlier iteration's matrix from KRYLOV_FROM contact nodes on); u = A0⁻¹ (b − Nᵀ q) is recovered by
 one solve, only when it is asked for. Right-hand sides that are combinations of ones already solved
-(loads proportional to t, for instance) cost no solve at all.
+(loads proportional to t, for instance) cost no solve at all. A new right-hand side (a viscoplastic
+body's b_n = F(t_n) − Bᵀz_n changes everywhere at every step) is solved in two halves around the
+contact problem (``factorization.split``): with PARDISO's Schur-mode factor, the forward substitution
+gives N A0⁻¹ b, and the recovery of u is the rest of the same solve, so a step that needs u costs one
+solve instead of two.
 
 A stiff body held only by a soft layer (E / K ≳ 1e6) is the one case where that is not enough: A
 annihilates the body's rigid motions only to rounding, and A0's factor carries that rounding into
@@ -46,10 +50,11 @@ from .newton import ROUNDOFF, STAGNATION, Evaluation, SemismoothNewton
 class SolvedSpan:
     """N A0⁻¹ b, reusing the solutions of earlier right-hand sides when b lies in their span.
 
-    ``solve`` is b ↦ A0⁻¹ b and ``observe`` x ↦ N x; the span keeps an orthonormal basis Q of the
-    right-hand sides solved (rows, at most ``capacity``) and N A0⁻¹ of each, so a right-hand side in
-    their span (loads proportional to t, for instance) costs two products with Q and no solve: about
-    five passes over n entries instead of a solve with the factor.
+    ``solve`` is b ↦ A0⁻¹ b (or what stands for it: the condensed method's split solve) and ``observe``
+    gives N A0⁻¹ b from what it returns; the span keeps an orthonormal basis Q of the right-hand sides
+    solved (rows, at most ``capacity``) and N A0⁻¹ of each, so a right-hand side in their span (loads
+    proportional to t, for instance) costs two products with Q and no solve: about five passes over n
+    entries instead of a solve with the factor.
     """
 
     def __init__(self, solve, observe, shape: tuple[int, int], capacity: int = 4, tolerance: float = 1e-13):
@@ -234,9 +239,10 @@ class CondensedNewton(SemismoothNewton):
         self._S_row_sums = np.abs(self.S).sum(axis=1)  # bounds |S| |q| by its rows' sums times max |q|
         self.timings = {"factorization": factored - started, "condensation": time.perf_counter() - factored}
         self.systems, self.krylov_from = NewtonSystems(self.S, self._S_row_sums), krylov_from
-        self.span = SolvedSpan(self.factorization.solve, self.N.__matmul__, self.N.shape)
+        self.span = SolvedSpan(self._split, lambda split: split.observed, self.N.shape)
         self.recoveries = self.refinements = 0
         self._step, self._load_vector, self._d_free, self._b_norm = None, None, None, 0.0
+        self._pending = None  # the split solve of this step's load, when N A0⁻¹ b came from one
 
     def solve(self, step: StepData, previous: StepSolution | None) -> StepSolution:
         solution = super().solve(step, previous)
@@ -259,7 +265,7 @@ class CondensedNewton(SemismoothNewton):
                 break
             last = balance
             self.refinements += 1
-            self._load_vector = self._load_vector - R
+            self._load_vector, self._pending = self._load_vector - R, None
             self._d_free = self._d_free - self.N @ self.factorization.solve(R)
             refined = super().solve(step, solution)
             solution = replace(refined, iterations=solution.iterations + refined.iterations)
@@ -272,16 +278,26 @@ class CondensedNewton(SemismoothNewton):
     def _free_penetration(self, step: StepData) -> np.ndarray:
         """d_free = N A0⁻¹ b − g0 of this step (computed once per step; b corrected by refinements)."""
         if self._step is not step:
-            self._step, self._load_vector = step, step.b
+            self._step, self._load_vector, self._pending = step, step.b, None
             self._d_free = self.span(step.b, step.support) - self.gap0
             self._b_norm = step.b_norm
         return self._d_free
 
+    def _split(self, b: np.ndarray):
+        """Start the solve of this step's load b, kept for the recovery of u (the span's solve)."""
+        self._pending = self.factorization.split(b)
+        return self._pending
+
     def _recover(self, solution: StepSolution) -> np.ndarray:
-        """u = A0⁻¹ (b − Nᵀ q) at the free dofs for this step's (corrected) load b: one solve."""
-        self.recoveries += 1
+        """u = A0⁻¹ (b − Nᵀ q) at the free dofs for this step's (corrected) load b: the second half of its
+        split solve when N A0⁻¹ b came from one (no further solve with PARDISO), else one solve."""
         state = ContactState.evaluate(self._step, self.weights, solution.d, solution.lam, self.r)
-        return self.factorization.solve(self._load_vector - self.N.T @ self._load(state, solution.d, solution.lam))
+        q = self._load(state, solution.d, solution.lam)
+        if self._pending is not None:
+            self.recoveries += self._pending.finish_solves
+            return self._pending.finish(q)
+        self.recoveries += 1
+        return self.factorization.solve(self._load_vector - self.N.T @ q)
 
     @property
     def krylov_iterations(self) -> int:
@@ -293,8 +309,8 @@ class CondensedNewton(SemismoothNewton):
 
     @property
     def solves(self) -> int:
-        """Solves with the factored A0 in the time loop: new right-hand sides, recoveries of u and the
-        corrections of refinements."""
+        """Solves with the factored A0 in the time loop: new right-hand sides (a split solve counts once
+        with PARDISO), recoveries of u and the corrections of refinements."""
         return self.span.solves + self.recoveries + self.refinements
 
     def _load(self, state: ContactState, d, lam) -> np.ndarray:
@@ -346,7 +362,7 @@ class CondensedNewton(SemismoothNewton):
                             ev.complementarity, converged, message, advice)
 
     def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
-        """u at the free dofs: the refined one, or u = A0⁻¹ (b − Nᵀ q) (one solve)."""
+        """u at the free dofs: the refined one, or u = A0⁻¹ (b − Nᵀ q) (at most one solve)."""
         if solution.u is not None:
             return solution.u
         self._free_penetration(step)

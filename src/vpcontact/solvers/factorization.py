@@ -3,6 +3,8 @@
     factorization = factorize(A0, N, backend)       # factors A0, ready to condense onto N's rows
     x = factorization.solve(b)                      # b: (n,) or (n, k)
     S = factorization.condensed_operator()          # the dense m × m matrix N A0⁻¹ Nᵀ
+    split = factorization.split(b)                  # N A0⁻¹ b now (split.observed), then
+    x = split.finish(q)                             # A0⁻¹ (b − Nᵀ q) for a q found from it
 
 Backends, fastest first (measurements in docs/factorizations.md): "pardiso" (MKL PARDISO, SPD
 Cholesky with METIS; S from its Schur complement on the contact dofs; needs the ``mkl`` wheel) and
@@ -10,6 +12,9 @@ Cholesky with METIS; S from its Schur complement on the contact dofs; needs the 
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 import scipy.linalg as sla
@@ -22,6 +27,23 @@ from .errors import SingularMatrixError, SolverMemoryError
 BLOCK = 64
 
 
+@dataclass(frozen=True)
+class SplitSolve:
+    """A0⁻¹ (b − Nᵀ q) for a q that is known only once N A0⁻¹ b is (a step of the condensed method: its
+    contact problem needs N A0⁻¹ b, its displacement A0⁻¹ (b − Nᵀ q)): ``observed`` = N A0⁻¹ b,
+    ``finish(q)`` the solution, ``finish_solves`` the solves with the factor that finishing costs (0 when
+    the first half kept what the second needs: one solve's work in all)."""
+
+    observed: np.ndarray
+    finish: Callable[[np.ndarray], np.ndarray]
+    finish_solves: int
+
+
+def split_by_two_solves(solve, N: sp.csr_matrix, b: np.ndarray) -> SplitSolve:
+    """A SplitSolve made of two solves: x = A0⁻¹ b for N x, then A0⁻¹ (b − Nᵀ q)."""
+    return SplitSolve(N @ solve(b), lambda q: solve(b - N.T @ q), 1)
+
+
 class PardisoFactorization:
     """MKL PARDISO; the Schur complement S_C of A0 on the contact dofs C comes with the factor, and
     S = N_C S_C⁻¹ N_Cᵀ (the C block of A0⁻¹ is S_C⁻¹).
@@ -29,7 +51,10 @@ class PardisoFactorization:
     The factor computed in Schur mode also solves, but about 1.7 times slower than a plain one
     (0.15 s against 0.09 s at 470k DOFs, docs/factorizations.md). A run that needs few solves (an
     elastic body: one per new load and one per written step) keeps it; once ``PLAIN_AFTER`` solves
-    have been done, a plain factorization (3–4 s at 470k DOFs) replaces it for the rest of the run.
+    have been done, and more of them than split solves, a plain factorization (3–4 s at 470k DOFs)
+    replaces it for the rest of the run. A run that splits its solves (a viscoplastic body: the load
+    changes everywhere at every step, and u is needed at every step) keeps it: its split solves are one
+    solve's work in Schur mode (``split``), two solves with a plain factor.
     """
 
     name = "pardiso"
@@ -48,22 +73,41 @@ class PardisoFactorization:
     def __init__(self, A: sp.spmatrix, N: sp.csr_matrix):
         from .pardiso import Pardiso
 
-        self._A = A
+        self._A, self._N = A, N
         self._dofs = np.unique(N.indices)
         self._N_contact = N[:, self._dofs].toarray()
         self._pardiso = Pardiso(A, self._dofs)
         self.factor_nonzeros = self._pardiso.factor_nonzeros  # of the factor made here, in Schur mode
         self._schur_mode = self._dofs.size > 0
-        self.solves = 0
+        self.solves = self.splits = 0
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        if self._schur_mode and self.solves == self.PLAIN_AFTER:
+        if self._schur_mode and self.solves >= self.PLAIN_AFTER and self.solves > self.splits:
             from .pardiso import Pardiso
 
             self._pardiso = None  # release the Schur-mode factor before the plain one is made
             self._pardiso, self._schur_mode = Pardiso(self._A), False
         self.solves += 1
         return self._pardiso.solve(b)
+
+    def split(self, b: np.ndarray) -> SplitSolve:
+        """In Schur mode, one solve's work (pardiso.py's docstring has the factorization): the forward
+        substitution y of b leaves b reduced to the contact dofs C on them, the diagonal substitution of y
+        gives x_C = (A0⁻¹ b)_C there, so N A0⁻¹ b = N_C x_C. Nᵀq lives on C, where L is the identity: the
+        forward substitution of b − Nᵀ q is y with y_C − N_Cᵀ q on C, and its diagonal and backward
+        substitutions give A0⁻¹ (b − Nᵀ q). With the plain factor: two solves."""
+        self.splits += 1
+        if not self._schur_mode:
+            return split_by_two_solves(self.solve, self._N, b)
+        pardiso, dofs, N_contact = self._pardiso, self._dofs, self._N_contact
+        forward = pardiso.forward(b)
+
+        def finish(q: np.ndarray) -> np.ndarray:
+            reduced = forward.copy()
+            reduced[dofs] -= N_contact.T @ q
+            return pardiso.backward(pardiso.diagonal(reduced))
+
+        return SplitSolve(N_contact @ pardiso.diagonal(forward)[dofs], finish, 0)
 
     def condensed_operator(self) -> np.ndarray:
         if self._dofs.size == 0:
@@ -96,6 +140,10 @@ class SuperLUFactorization:
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self._lu.solve(b)
+
+    def split(self, b: np.ndarray) -> SplitSolve:
+        """Two solves (SuperLU has no partial substitutions)."""
+        return split_by_two_solves(self.solve, self._N, b)
 
     def condensed_operator(self) -> np.ndarray:
         """S = N A0⁻¹ Nᵀ by block solves with BLOCK columns of Nᵀ at a time, symmetrized."""

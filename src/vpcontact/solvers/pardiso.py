@@ -4,7 +4,13 @@ The ``mkl`` wheel ships libmkl_rt; pypardiso's own interface uses the unsymmetri
 re-checks the matrix at every solve, about 10 times slower per solve (docs/factorizations.md), and
 has no Schur complement. This binding passes the upper triangle in zero-based CSR (iparm[34] = 1),
 orders with METIS (iparm[1] = 2) and can return the dense Schur complement of chosen dofs while it
-factors (iparm[35] = 2); the factor stays usable for ordinary solves.
+factors (iparm[35] = 2); the factor stays usable for ordinary solves, and its solve can be run in its
+three parts (phases 331, 332, 333: ``forward``, ``diagonal``, ``backward``). With the Schur complement
+the factorization is A = L D Lᵀ with the Schur dofs C ordered last, L's block on C the identity and D's
+block on C the Schur complement S_C (factored by PARDISO): the forward substitution leaves
+y_C = b_C − A_CI A_II⁻¹ b_I on C (b reduced to C), the diagonal one x_C = S_C⁻¹ y_C there (A⁻¹ b on C),
+the backward one the rest of A⁻¹ b (the MKL reference: "for iparm[35] > 0, phases 331, 332 and 333
+perform a different decomposition").
 
 Reproducibility: the factorization is bitwise reproducible with several threads, the solve phase is
 not (measured with MKL 2026.2 on two threads: the same factor and right-hand side gave results that
@@ -37,6 +43,8 @@ _ERRORS = {
     -9: (SolverMemoryError, "not enough memory for the out-of-core factorization"),
 }
 _LIBRARY = None
+#: The solve (33) and its forward, diagonal and backward parts.
+SOLVE_PHASES = (33, 331, 332, 333)
 
 
 def library() -> ctypes.CDLL:
@@ -122,7 +130,7 @@ class Pardiso:
     def _call(self, phase: int, b: np.ndarray | None = None, x: np.ndarray | None = None, nrhs: int = 1) -> None:
         """One PARDISO phase; solves (reproducible: see the module's docstring) and every phase of a
         refactorable handle on one MKL thread."""
-        one_thread = phase == 33 or self._refactorable
+        one_thread = phase in SOLVE_PHASES or self._refactorable
         previous = library().MKL_Set_Num_Threads_Local(1) if one_thread else None
         try:
             self._pardiso(phase, b, x, nrhs)
@@ -144,10 +152,28 @@ class Pardiso:
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """A⁻¹ b for b of shape (n,) or (n, k)."""
+        return self._solve(33, b)
+
+    def forward(self, b: np.ndarray) -> np.ndarray:
+        """The forward substitution of b (phase 331); with a Schur complement, b reduced to the Schur dofs
+        there (see the module's docstring)."""
+        return self._solve(331, b)
+
+    def diagonal(self, y: np.ndarray) -> np.ndarray:
+        """The diagonal substitution of a forward-substituted y (phase 332); with a Schur complement, the
+        solve with it on the Schur dofs."""
+        return self._solve(332, y)
+
+    def backward(self, y: np.ndarray) -> np.ndarray:
+        """The backward substitution of a diagonally substituted y (phase 333): A⁻¹ b for the y of b."""
+        return self._solve(333, y)
+
+    def _solve(self, phase: int, b: np.ndarray) -> np.ndarray:
+        """One solve phase on b of shape (n,) or (n, k)."""
         b = np.asarray(b, dtype=np.float64)
         B = np.asfortranarray(b.reshape(self.n, -1))
         X = np.zeros_like(B, order="F")
-        self._call(33, B, X, nrhs=B.shape[1])
+        self._call(phase, B, X, nrhs=B.shape[1])
         return X[:, 0] if b.ndim == 1 else X
 
     def __del__(self):
