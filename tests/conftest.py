@@ -41,6 +41,21 @@ def half_disc_case(h=0.1, **contact) -> dict:
     }
 
 
+def block_3d_case():
+    """A block on rollers at x = 0 and y = 0 on a flat foundation with a curved gap x² + y²: a contact
+    patch around the corner (0, 0) with nodes in all three states at the end."""
+    return {
+        "mesh": {"shape": "block", "h": 0.2, "width": 1.0, "depth": 1.0, "height": 0.5},
+        "material": {"E": 1000.0, "nu": 0.3},
+        "boundary": {"dirichlet": [{"part": "left", "components": ["x"]}, {"part": "front", "components": ["y"]}],
+                     "traction": [{"part": "top", "value": ["0", "0", "-30*t"]}]},
+        "contact": {"part": "bottom", "g": 0.05, "normal": [0, 0, -1], "gap": "x*x + y*y", "probe": [0, 0, 0],
+                    "stiffness": {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0}},
+        "time": {"T": 1.1, "steps": 11},
+        "output": {"field_steps": [5, 11]},
+    }
+
+
 @pytest.fixture
 def deep_copy():
     return copy.deepcopy

@@ -19,7 +19,7 @@ from vpcontact.cli import main
 from vpcontact.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from vpcontact.errors import CaseError
 from vpcontact.writers import write_outputs
-from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree
+from conftest import assert_refused, block_3d_case, half_disc_case, run_cli, snapshot_tree
 
 PNG = b"\x89PNG\r\n\x1a\n"
 FIGURE_FILES = ["contact_pressure.png", "deformed.png", "time_series.png"]
@@ -32,20 +32,6 @@ def flat_2d_case():
     case["output"]["field_steps"] = [5, 11]
     return case
 
-
-def block_3d_case():
-    """A block on rollers at x = 0 and y = 0 on a flat foundation with a curved gap x² + y²: a contact
-    patch around the corner (0, 0) with nodes in all three states at the end."""
-    return {
-        "mesh": {"shape": "block", "h": 0.2, "width": 1.0, "depth": 1.0, "height": 0.5},
-        "material": {"E": 1000.0, "nu": 0.3},
-        "boundary": {"dirichlet": [{"part": "left", "components": ["x"]}, {"part": "front", "components": ["y"]}],
-                     "traction": [{"part": "top", "value": ["0", "0", "-30*t"]}]},
-        "contact": {"part": "bottom", "g": 0.05, "normal": [0, 0, -1], "gap": "x*x + y*y", "probe": [0, 0, 0],
-                    "stiffness": {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0}},
-        "time": {"T": 1.1, "steps": 11},
-        "output": {"field_steps": [5, 11]},
-    }
 
 
 @pytest.fixture(scope="module")

@@ -287,7 +287,8 @@ def test_the_fields_kept_are_those_of_every_step(field_steps):
     case["output"]["field_steps"] = "all"
     every = vpcontact.solve(case)
     case["output"]["field_steps"] = field_steps
-    loop = TimeLoop(vpcontact.build_problem(vpcontact.load_case(case)))
+    loaded = vpcontact.load_case(case)
+    loop = TimeLoop(vpcontact.build_problem(loaded), loaded.output)
     stopped = loop.run(stop=lambda: "stopped" if loop.state.step == 4 else None)
     kept = [] if field_steps == "none" else field_steps
     assert stopped.status == "interrupted" and stopped.steps == 4 and sorted(stopped.fields) == kept
