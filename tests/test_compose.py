@@ -14,7 +14,8 @@ from vpcontact.refinement import refine
 
 from conftest import half_disc_case
 
-SOURCE = pathlib.Path(vpcontact.__file__).parent
+REPO = pathlib.Path(__file__).resolve().parents[1]
+SOURCE = REPO / "src" / "vpcontact"
 #: The modules after the problem in the flow case -> problem -> time loop -> result -> writers.
 DOWNSTREAM = ("stepping", "results", "writers", "checkpoint", "adapt", "indicators", "residual_estimate",
               "recovery_estimate", "plots", "norms")
@@ -158,7 +159,7 @@ def test_nothing_downstream_of_the_problem_reads_a_case():
 def test_the_readme_example_balances_its_load():
     """README's composed quarter ball runs, and the foundation's force balances the traction on the top:
     F_z = 15 T |top| with |top| the area of the top's facets (the load is integrated exactly on them)."""
-    readme = (SOURCE.parents[1] / "README.md").read_text(encoding="utf-8")
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
     block = readme.split("A problem in Python")[1].split("```python\n")[1].split("```")[0]
     namespace = {}
     exec(block, namespace)  # noqa: S102 -- the README's own example

@@ -40,15 +40,19 @@ def build_html(source: Path, out: Path) -> subprocess.CompletedProcess:
     temporary = out / "tmp"
     temporary.mkdir(parents=True)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO / "src"), os.environ.get("PYTHONPATH")])),
-           "TMPDIR": str(temporary), "MPLBACKEND": "Agg"}
+           "TMPDIR": str(temporary), "MPLBACKEND": "Agg", "NO_COLOR": "1"}
     return subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-b", "html", "-d",
                            str(out / "doctrees"), str(source), str(out / "html")],
                           env=env, capture_output=True, text=True, timeout=900, stdin=subprocess.DEVNULL)
 
 
 def failing_examples(output: str) -> list[str]:
-    """The gallery examples sphinx-gallery reports as failed (their file names), from the build's output."""
-    return sorted(set(re.findall(r"([\w.-]+\.py) unexpectedly failed to execute correctly", output)))
+    """The gallery examples sphinx-gallery reports as failed (their file names), from the build's output: as it
+    runs them ("... unexpectedly failed to execute correctly") or in its closing summary ("... failed leaving
+    traceback"), colours removed (a terminal, or CI=true, gets them)."""
+    plain = re.sub(r"\x1b\[[0-9;]*m", "", output)
+    return sorted(set(re.findall(r"([\w.-]+\.py) (?:unexpectedly failed to execute correctly|failed leaving traceback)",
+                                 plain)))
 
 
 def check_built(build: subprocess.CompletedProcess) -> None:
@@ -56,7 +60,8 @@ def check_built(build: subprocess.CompletedProcess) -> None:
     output = build.stdout + build.stderr
     failed = failing_examples(output)
     if failed:
-        errors = re.findall(r"^\s*(\w+(?:Error|Exception)\b.*)$", output, flags=re.MULTILINE)
+        errors = re.findall(r"^\s*(\w+(?:Error|Exception)\b.*)$", re.sub(r"\x1b\[[0-9;]*m", "", output),
+                            flags=re.MULTILINE)
         raise AssertionError(f"gallery examples failed: {', '.join(failed)}\n" + "\n".join(dict.fromkeys(errors)))
     warnings = [line for line in output.splitlines() if "WARNING" in line or "ERROR" in line]
     shown = "\n".join(warnings or [output[-3000:]])

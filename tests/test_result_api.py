@@ -381,3 +381,20 @@ def test_the_modules_of_the_tables_figures_and_grids_load_pandas_matplotlib_pyvi
     process = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert process.returncode == 0, process.stderr
     assert process.stdout.splitlines()[-1] == "[]"
+
+
+def test_a_complete_run_that_kept_no_fields_draws_its_last_step():
+    """With output.field_steps = "none" a complete run still has its last step's fields (result.final): the
+    deformed body and the pyvista grid use them; a run stopped early, without them, is refused in one line."""
+    case = half_disc_case(h=0.25)
+    result = vpcontact.solve(case)
+    assert result.status == "complete" and not result.fields
+    figure = result.plot.deformed(field="sigma_xy")
+    (cells,) = [c for c in figure.axes[0].collections if isinstance(c, PolyCollection)]
+    np.testing.assert_array_equal(cells.get_array(), result.final.stress[:, 0, 1])
+    assert "t = 1.1" in figure.get_suptitle()
+    loaded = vpcontact.load_case(case)
+    loop = vpcontact.stepping.TimeLoop(vpcontact.build_problem(loaded), loaded.output)
+    stopped = loop.run(stop=lambda: "stopped" if loop.state.step == 3 else None)
+    with pytest.raises(vpcontact.CaseError, match="the run kept no fields"):
+        stopped.plot.deformed()

@@ -38,7 +38,7 @@ import numpy as np
 from . import directory
 from .case import _brief
 from .errors import CaseError
-from .results import CONTACT_ARRAYS, INTEGER_COLUMNS, Fields
+from .results import CONTACT_ARRAYS, FIELD_NAMES, INTEGER_COLUMNS, Fields
 from .solvers import StepSolution
 from .stepping import COUNTERS, LoopState, TimeLoop, Trend
 from .writers import OUTPUTS, remove_files, replacing, versions
@@ -94,8 +94,7 @@ def save(loop: TimeLoop, out: Path) -> None:
         path = target / f"fields_{n:05d}.npz"
         if not path.exists():
             fields = result.fields[n]
-            arrays = {name: getattr(fields, name) for name in ("displacement", "stress", "stress33", "von_mises", "z",
-                                                           "error_indicator") if getattr(fields, name) is not None}
+            arrays = {name: getattr(fields, name) for name in FIELD_NAMES if getattr(fields, name) is not None}
             with replacing(path) as temporary:
                 np.savez(temporary, **arrays)
     rows = len(result.rows)
@@ -182,8 +181,7 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
     result.resumed_at = [*meta["resumed_at"], step]
     for n in meta["field_steps"]:
         data = _read(folder(out) / f"fields_{n:05d}.npz")
-        result.fields[n] = Fields(data["displacement"], data["stress"], data.get("stress33"), data["von_mises"],
-                                  data.get("z"), data.get("error_indicator"))
+        result.fields[n] = Fields(**{name: data[name] for name in FIELD_NAMES if name in data})
     if result.fields:
         result.final = result.fields[max(result.fields)]
     loop.earlier_time = float(meta["elapsed_s"])

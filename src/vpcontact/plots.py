@@ -326,16 +326,20 @@ FIELD_LABELS = {"von_mises": "von Mises stress", "displacement": "displacement |
 
 
 def fields_at(result, step, purpose: str):
-    """(step, Fields) of the field step ``step`` of ``result`` (None: the last one kept); CaseError when the run
-    kept no fields (the message ends with ``purpose``), or none at ``step``."""
-    if not result.fields:
+    """(step, Fields) of the field step ``step`` of ``result`` (None: the last one kept); the fields of the
+    last step of a complete run are there whatever ``output.field_steps`` kept (``result.final``). CaseError
+    when the run has no fields (the message ends with ``purpose``), or none at ``step``."""
+    kept = dict(result.fields)
+    if result.status == "complete" and result.final is not None:
+        kept.setdefault(result.completed_steps, result.final)
+    if not kept:
         raise CaseError(f"the run kept no fields (output.field_steps = \"none\", or it failed before a field step): "
                         f"there is {purpose}")
-    step = max(result.fields) if step is None else step
-    if step not in result.fields:
-        raise CaseError(f"step {step!r} has no fields: the run kept them at steps {sorted(result.fields)} "
+    step = max(kept) if step is None else step
+    if step not in kept:
+        raise CaseError(f"step {step!r} has no fields: the run kept them at steps {sorted(kept)} "
                         f"(output.field_steps)")
-    return step, result.fields[step]
+    return step, kept[step]
 
 
 def body_fields(fields, dim: int) -> dict[str, tuple[np.ndarray, bool]]:
