@@ -123,10 +123,6 @@ class TimeLoop:
     asked the run to stop: the status becomes "interrupted").
     """
 
-    #: (u at the free dofs, ε, σ, z) of the last level when its Fields were not built (a viscoplastic body
-    #: computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
-    _level_without_fields: tuple | None = None
-
     def __init__(self, problem: Problem, output: OutputSection | None = None):
         started = clock.perf_counter()
         self.problem = problem
@@ -152,6 +148,9 @@ class TimeLoop:
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
         self.earlier_counts = dict.fromkeys(COUNTERS, 0)  # the counters of earlier sessions (resumed)
         self.state = self._initial_state()
+        # (u at the free dofs, ε, σ, z) of the last level when its Fields were not built (a viscoplastic body
+        # computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
+        self._level_without_fields: tuple | None = None
         self._u = np.zeros(problem.basis.N)
 
     def _initial_state(self) -> LoopState:
