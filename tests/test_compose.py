@@ -10,6 +10,7 @@ import pytest
 
 import vpcontact
 from vpcontact import mesh as meshes
+from vpcontact.indicators import Level
 from vpcontact.refinement import refine
 
 from conftest import half_disc_case
@@ -173,14 +174,23 @@ def test_the_readme_example_balances_its_load():
 
 
 def test_a_result_is_sent_between_processes(from_file, tmp_path):
-    """A result pickles (its mesh's exact normals and projections are objects, not closures) and the copy
-    writes the same history: what a process pool or Dask needs to send it back."""
+    """A result pickles without its problem (the operators, loads and laws stay in the process that solved it):
+    the copy is a fraction of the problem's size, holds the discretization's exact normals (objects, not
+    closures), and writes the same run directory."""
     import pickle
 
-    copy = pickle.loads(pickle.dumps(from_file))
+    sent = pickle.dumps(from_file)
+    copy = pickle.loads(sent)
+    assert copy.problem is None and from_file.problem is not None
+    assert len(sent) < 0.5 * len(pickle.dumps(from_file.problem))
     np.testing.assert_array_equal(copy.final.displacement, from_file.final.displacement)
-    np.testing.assert_array_equal(copy.problem.mesh.exact_normals["bottom_arc"](copy.problem.surface.coordinates),
-                                  from_file.problem.surface.normals)
-    from_file.write(tmp_path / "sent")
+    view = copy.discretization
+    np.testing.assert_array_equal(view.mesh.exact_normals["bottom_arc"](view.surface.coordinates),
+                                  from_file.discretization.surface.normals)
+    from_file.write(tmp_path / "solved")
     copy.write(tmp_path / "copy")
-    assert (tmp_path / "copy" / "history.csv").read_bytes() == (tmp_path / "sent" / "history.csv").read_bytes()
+    for name in ("history.csv", "contact.csv", "case.resolved.toml"):
+        assert (tmp_path / "copy" / name).read_bytes() == (tmp_path / "solved" / name).read_bytes(), name
+    np.testing.assert_array_equal(copy.contact_table()["K"], from_file.contact_table()["K"])
+    with pytest.raises(vpcontact.CaseError, match="holds no problem"):
+        Level.of(copy, 11)

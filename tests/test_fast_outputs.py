@@ -16,7 +16,7 @@ from test_contact_parts import LAYERS, split_case, two_parts_form
 from vpcontact.contact import STATUS_NAMES
 from vpcontact.results import CONTACT_ARRAYS
 from vpcontact.vtu import Grid, write_vtu
-from vpcontact.writers import layer_columns, write_run
+from vpcontact.writers import write_run
 
 
 def test_a_vtu_file_reads_back_as_the_arrays_written(tmp_path):
@@ -59,7 +59,9 @@ def two_part_result(tmp_path, dim):
 def contact_csv_row_by_row(result) -> bytes:
     """contact.csv as csv.writer writes the rows one at a time (the writer before it was vectorized)."""
     surface, problem = result.problem.surface, result.problem
-    layer = layer_columns(problem)
+    layer = problem.law.parameters(surface.size)  # from the problem's law, not from the result's view of it
+    if len(surface.parts) > 1:
+        layer["part"] = np.asarray(surface.parts)[surface.owner]
     axes = "xyz"[:result.dim]
     buffer = io.StringIO(newline="")
     writer = csv.writer(buffer)

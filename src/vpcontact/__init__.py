@@ -30,9 +30,9 @@ API = {"Case": "case", "Model": "case", "load_case": "case", "CaseError": "error
        "Problem": "problem", "build_problem": "problem", "Result": "results", "solve_problem": "stepping"}
 
 #: The modules of the package a user may reach as ``vpcontact.<name>`` after ``import vpcontact``.
-SUBMODULES = ("adapt", "assembly", "case", "check", "checkpoint", "compose", "contact", "errors", "expressions",
-              "material", "mesh", "norms", "plots", "problem", "refinement", "reproduction", "results", "run_reader",
-              "rundir", "solvers", "stepping", "studies", "writers")
+SUBMODULES = ("adapt", "assembly", "case", "check", "checkpoint", "compose", "contact", "discretization", "errors",
+              "expressions", "indicators", "material", "mesh", "norms", "plots", "problem", "refinement",
+              "reproduction", "results", "run_reader", "rundir", "solvers", "stepping", "studies", "writers")
 
 
 def __getattr__(name: str):

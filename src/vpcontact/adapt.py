@@ -81,7 +81,7 @@ class Adaptation:
     @property
     def mesh(self) -> Mesh:
         """The mesh of the last cycle."""
-        return self.last.result.problem.mesh
+        return self.last.result.discretization.mesh
 
 
 def dorfler(values: np.ndarray, theta: float) -> np.ndarray:

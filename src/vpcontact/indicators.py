@@ -34,7 +34,11 @@ class Level:
     @classmethod
     def of(cls, result: Result, step: int) -> "Level":
         """The level at the end of time step ``step`` of ``result``; its fields must have been kept
-        (``output.field_steps``; the last step's are always kept)."""
+        (``output.field_steps``; the last step's are always kept), and it must hold its problem (a result
+        sent from another process does not: estimate there, or build the problem again)."""
+        if result.problem is None:
+            raise CaseError("this result holds no problem (it was sent from the process that solved it): estimate "
+                            "the error where it was solved, or solve it again here")
         fields = result.fields.get(step)
         if fields is None and step == result.steps and result.final is not None:
             fields = result.final

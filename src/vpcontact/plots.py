@@ -84,7 +84,7 @@ def contact_pressure(result, steps=None):
     pressure shown, zoomed to where the pressure or the penetration is positive at the last time shown.
     2D: the pressure along Γ3 against the arc length s (from the end of Γ3 with the least x). The node
     states are markers (legend)."""
-    surface = result.problem.surface
+    surface = result.discretization.surface
     if surface.size == 0:
         raise CaseError("the run has no contact (no [contact] in its case): there is no contact pressure to draw")
     steps = default_steps(result) if steps is None else sorted(set(steps))
@@ -101,14 +101,14 @@ def node_states(result, step=None):
     penetration d = u·ν − g0, whose value sets the state: separated (d ≤ 0), in normal compliance
     (0 < d < g), at the limit (d = g). 2D: d against the arc length along Γ3, the limit g dashed; 3D:
     Γ3 as in :func:`contact_pressure`, coloured by d. The node states are markers (legend)."""
-    surface = result.problem.surface
+    surface = result.discretization.surface
     if surface.size == 0:
         raise CaseError("the run has no contact (no [contact] in its case): there are no node states to draw")
     if step is None and result.completed_steps == 0:
         raise CaseError("the run has done no step: there are no node states to draw")
     step = result.completed_steps if step is None else step
     rows = list(step_rows(result, [step]).values())
-    limit = result.problem.law.parameters(surface.size)["g"]
+    limit = result.discretization.layer["g"]
     return _on_contact(result, rows, result.contact_history("penetration")[rows], ("penetration", "penetration d"),
                        "Node states and penetration on Γ3", limit=limit)
 
@@ -120,7 +120,7 @@ def _on_contact(result, rows, values, labels, title, limit=None):
     values interpolated between the nodes, zoomed to where the pressure or the penetration is positive at
     the last time shown, with one colour bar from the least to the largest value there (``labels[1]``);
     2D: the values against the arc length s along Γ3 (``labels[0]``), and ``limit`` per node dashed."""
-    surface = result.problem.surface
+    surface = result.discretization.surface
     pressure = (result.contact_history("pressure_compliance") + result.contact_history("pressure_rigid"))[rows]
     status = result.contact_history("status")[rows].astype(int)
     penetration = result.contact_history("penetration")[rows]
@@ -289,7 +289,7 @@ def along_contact(results, quantities=ALONG_CONTACT, step=None):
     axes = figure.subplots(len(quantities), 1, sharex=True, squeeze=False)[:, 0]
     times = set()
     for color, (label, result) in enumerate(results.items()):
-        surface = result.problem.surface
+        surface = result.discretization.surface
         if surface.size == 0:
             raise CaseError(f"along_contact: the run {label!r} has no contact")
         n = result.completed_steps if step is None else step
@@ -298,7 +298,7 @@ def along_contact(results, quantities=ALONG_CONTACT, step=None):
         if result.dim == 2:
             order, s, breaks = arc_length(surface.coordinates, surface.facets)
         else:
-            s = np.linalg.norm(surface.coordinates - surface.coordinates[:, [result.problem.probe]], axis=0)
+            s = np.linalg.norm(surface.coordinates - surface.coordinates[:, [result.discretization.probe]], axis=0)
             order, breaks = np.argsort(s), np.zeros(0, dtype=int)
             s = s[order]
         for ax, quantity in zip(axes, quantities):
@@ -392,8 +392,8 @@ def deformed_body(result, step=None, scale=None, field="von_mises"):
     deformed mesh, its outline, and the undeformed outline dashed."""
     step, fields = fields_at(result, step, "no deformed body to draw")
     values, at_nodes = body_field(fields, result.dim, field)
-    mesh = result.problem.mesh
-    t = float(result.problem.times[step - 1])
+    mesh = result.discretization.mesh
+    t = float(result.discretization.times[step - 1])
     largest = float(np.linalg.norm(fields.displacement, axis=1).max(initial=0.0))
     scale = magnification(largest, mesh.diameter) if scale is None else float(scale)
     if not (math.isfinite(scale) and scale > 0):
@@ -504,9 +504,9 @@ def time_series(result, columns=TIME_SERIES):
         ax.set_ylabel(column)
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("t")
-    start, end = result.problem.times.start, float(result.problem.times[-1])
+    start, end = result.discretization.times.start, float(result.discretization.times[-1])
     axes[0].set_xlim(start, end + 0.02 * (end - start))  # room for the last marker
-    figure.suptitle(f"History of the run ({result.status}, {result.completed_steps} of {len(result.problem.times)} "
+    figure.suptitle(f"History of the run ({result.status}, {result.completed_steps} of {len(result.discretization.times)} "
                     f"steps)", fontsize=10)
     return figure
 
@@ -517,7 +517,7 @@ def run_figures(result) -> dict:
     (TIME_SERIES) when the run has contact and has done a step (without contact its history holds only
     the solver's counts), ``deformed`` at the last step whose fields it kept, if any."""
     figures = {}
-    contact = result.completed_steps > 0 and result.problem.surface.size > 0
+    contact = result.completed_steps > 0 and result.discretization.surface.size > 0
     if contact:
         figures["contact_pressure"] = contact_pressure(result)
     if result.fields:

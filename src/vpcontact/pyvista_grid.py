@@ -25,7 +25,7 @@ def body_grid(result, step=None):
     except ImportError:
         raise CaseError("to_pyvista needs pyvista, which is not installed: pip install pyvista") from None
     step, fields = fields_at(result, step, "no body to convert to pyvista")
-    mesh = result.problem.mesh.mesh
+    mesh = result.discretization.mesh.mesh
     grid = pyvista.UnstructuredGrid({CELL_TYPES[CELLS[result.dim][0]]: mesh.t.T}, in_space(mesh.p.T))
     grid.point_data["displacement"] = in_space(fields.displacement)
     grid.cell_data["stress"] = tensors_in_space(fields.stress, fields.stress33)
@@ -35,5 +35,5 @@ def body_grid(result, step=None):
     if fields.error_indicator is not None:
         grid.cell_data["error_indicator"] = fields.error_indicator
     grid.field_data["step"] = [step]
-    grid.field_data["t"] = [float(result.problem.times[step - 1])]
+    grid.field_data["t"] = [float(result.discretization.times[step - 1])]
     return grid

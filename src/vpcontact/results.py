@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
+from .discretization import Discretization
 from .errors import CaseError, quoted, shown
 from .memory import available_memory
 from .space import coordinates
@@ -147,7 +148,8 @@ class Result:
     linear_solves: int = 0  # solves with a factored matrix in the time loop
     krylov_iterations: int = 0  # GMRES iterations on Newton systems in the time loop
     newton_factorizations: int = 0  # LU factorizations of condensed Newton matrices in the time loop
-    problem: object = None  # the Problem solved: mesh, contact surface, operators
+    problem: object = None  # the Problem solved, in the process that solved it (None in a copy sent elsewhere)
+    discretization: object = None  # what the result needs of the problem (vpcontact.discretization), always there
     completed_steps: int = 0  # time steps t_n reached
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
@@ -161,6 +163,7 @@ class Result:
         return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
                    contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
                    augmentation=solver.r, method=solver.name, method_reason=solver.reason, problem=problem,
+                   discretization=Discretization.of(problem),
                    output=output, error_estimate=output.error_estimate)
 
     # --- filling in ------------------------------------------------------------------------------
@@ -168,7 +171,8 @@ class Result:
                k: float = float("nan"), ends_step: bool = True):
         """Store a converged time level of step n (the step itself, or its sub-step ``substep`` of
         length k; ``ends_step``: t = t_n): the solver report, the contact state, the fields if computed."""
-        w, normals = self.problem.surface.weights, self.problem.surface.normals
+        surface = self.discretization.surface
+        w, normals = surface.weights, surface.normals
         rigid = np.divide(solution.lam, w, out=np.zeros_like(w), where=w > 0)
         d = solution.d
         for name, value in zip(CONTACT_ARRAYS, (d, xi, K, compliance, rigid, status)):
@@ -279,7 +283,7 @@ class Result:
         if self.final is None:
             raise CaseError("no fields computed: the run did not complete a step")
         fields = self.final if step is None else self.fields[step]
-        mesh = self.problem.mesh.mesh
+        mesh = self.discretization.mesh.mesh
         return Snapshot(mesh.p, mesh.t, fields.displacement, fields.stress)
 
     def summary(self) -> dict:
@@ -345,10 +349,15 @@ class Result:
 
         return write_run(self, out, overwrite=overwrite)
 
+    def __getstate__(self) -> dict:
+        """A copy sent to another process (pickled) leaves the Problem behind (its operators, loads and the
+        Python objects it may hold); ``discretization`` has all the writers, tables, plots and norms read."""
+        return {**self.__dict__, "problem": None}
+
     def __repr__(self) -> str:
         """One line: status, dimension, sizes, steps done of those planned, step method and wall time (not the
         arrays); a second one with the message of a run that did not complete."""
-        planned = len(self.problem.times) if self.problem is not None else "?"
+        planned = len(self.discretization.times) if self.discretization is not None else "?"
         cuts = f", {self.step_cuts} step cut{'s' * (self.step_cuts > 1)}" if self.step_cuts else ""
         text = (f"Result({self.status}, {self.dim}D, {self.dofs} dofs, {self.contact_nodes} contact nodes, "
                 f"{self.steps}/{planned} steps{cuts}, method {self.method or '?'}, {self.wall_time_s:.3g} s)")

@@ -41,7 +41,7 @@ def contact_table(result, step: int | None = None):
     import pandas as pd
 
     row = step_row(result, step)
-    surface = result.problem.surface
+    surface = result.discretization.surface
     axes = coordinates(result.dim)
     values = {name: np.asarray(result.contact[name][row]) for name in CONTACT_ARRAYS}
     columns = {"node": surface.nodes.astype(np.int64),

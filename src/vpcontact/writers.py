@@ -177,8 +177,8 @@ def write_run(result: Result, out: str | os.PathLike, *, overwrite: bool = False
     held = directory.acquire(out, "output directory")
     try:
         remove_outputs(out)
-        if result.problem.source is not None:
-            write_resolved_case(result.problem.source, out)
+        if result.discretization.source is not None:
+            write_resolved_case(result.discretization.source, out)
         write_outputs(result, out)
     finally:
         held.release()
@@ -240,28 +240,24 @@ def _write_history(result: Result, path: Path) -> None:
 CONTACT_BLOCK = 2**14
 
 
-def layer_columns(problem) -> dict[str, np.ndarray]:
+def layer_columns(discretization) -> dict[str, np.ndarray]:
     """The local layer parameters per contact node, as the last columns of contact.csv and point data of
     the contact VTU: g, those of K (c_v, alpha, beta or value) and the exponent of p = power where the
     laws have them (empty, or NaN in a VTU, at the nodes of a part whose law has not that parameter), and
     with several contact parts each node's part (its name in contact.csv, its index in contact.parts in
-    a VTU: ``part`` there)."""
-    surface = problem.surface
-    columns = problem.law.parameters(surface.size)
-    if len(surface.parts) > 1:
-        columns["part"] = np.asarray(surface.parts)[surface.owner]
-    return columns
+    a VTU: ``part`` there): ``discretization.layer`` (:class:`~vpcontact.discretization.Discretization`)."""
+    return dict(discretization.layer)
 
 
 def _write_contact(result: Result, path: Path) -> None:
     """contact.csv, in blocks of rows: each number turned into text once (the columns of a node, such as its
     coordinates, once for all the steps; those of a row, such as t, once for all its nodes), as csv.writer
     writes it (floats as repr, an empty cell for None or a NaN layer parameter, text quoted if need be)."""
-    surface = result.problem.surface
+    surface = result.discretization.surface
     rows, m = len(result.rows), surface.size
     steps, substeps, times = result.series("step").astype(int), result.series("substep").astype(int), result.times
     axes = coordinates(result.dim)
-    layer = layer_columns(result.problem)
+    layer = layer_columns(result.discretization)
     names = ["step", "t", "node", *axes, *(f"normal_{c}" for c in axes), "weight", *CONTACT_ARRAYS, "substep",
              *layer]
     node_cells = _joined(surface.nodes, *surface.coordinates, *surface.normals, surface.weights)
@@ -320,12 +316,13 @@ class FieldFrame:
     contact_points: dict[str, np.ndarray] | None
 
 
-def field_meshes(problem) -> tuple[tuple[np.ndarray, str, np.ndarray], tuple[np.ndarray, str, np.ndarray] | None]:
+def field_meshes(discretization) -> tuple[tuple[np.ndarray, str, np.ndarray],
+                                          tuple[np.ndarray, str, np.ndarray] | None]:
     """(points (n, 3), cell type, cells (k, nodes per cell)) of the body and of the contact part (None
     without contact): the meshes of the field files, 2D points with z = 0."""
-    element_cells, facet_cells, _ = CELLS[problem.mesh.dim]
-    body = (in_space(problem.mesh.mesh.p.T), element_cells, problem.mesh.mesh.t.T)
-    surface = problem.surface
+    element_cells, facet_cells, _ = CELLS[discretization.mesh.dim]
+    body = (in_space(discretization.mesh.mesh.p.T), element_cells, discretization.mesh.mesh.t.T)
+    surface = discretization.surface
     return body, (in_space(surface.coordinates.T), facet_cells, surface.facets.T) if surface.size else None
 
 
@@ -335,17 +332,16 @@ def field_frames(result: Result) -> Iterator[FieldFrame]:
     material list), E and ν, the history z and the error indicator η_K when the run has them; on the contact
     part the CONTACT_ARRAYS, the pressure (compliance + rigid), the normal, the contact force, the
     displacement and the local layer parameters (``layer_columns``)."""
-    problem = result.problem
-    surface = problem.surface
+    view = result.discretization
+    surface = view.surface
     if surface.size:
         normal = in_space(surface.normals.T)
-        layer = layer_columns(problem)
+        layer = layer_columns(view)
         if "part" in layer:  # point data are numbers: the index in contact.parts
             layer["part"] = surface.owner
         layer = {key: np.asarray(value, dtype=float) for key, value in layer.items()}
         end_rows = result.end_of_step_rows()
-    materials = {"material": problem.materials.owner.astype(np.int32), "E": np.array(problem.materials.E),
-                 "nu": np.array(problem.materials.nu)}
+    materials = {"material": view.material.astype(np.int32), "E": np.array(view.E), "nu": np.array(view.nu)}
     for step, fields in sorted(result.fields.items()):
         displacement = in_space(fields.displacement)
         cell_data = {"stress": tensors_in_space(fields.stress, fields.stress33), "von_mises": fields.von_mises,
@@ -361,7 +357,7 @@ def field_frames(result: Result) -> Iterator[FieldFrame]:
             contact = {**data, "pressure": pressure, "normal": normal,
                        "contact_force": -normal * (surface.weights * pressure)[:, None],
                        "displacement": displacement[surface.nodes], **layer}
-        yield FieldFrame(step, float(problem.times[step - 1]), {"displacement": displacement}, cell_data, contact)
+        yield FieldFrame(step, float(view.times[step - 1]), {"displacement": displacement}, cell_data, contact)
 
 
 def _write_fields(result: Result, folder: Path) -> None:
@@ -370,7 +366,7 @@ def _write_fields(result: Result, folder: Path) -> None:
     if not result.fields:
         return
     directory.mkdir(folder)
-    body_mesh, contact_mesh = field_meshes(result.problem)
+    body_mesh, contact_mesh = field_meshes(result.discretization)
     body_grid = Grid(*body_mesh)
     contact_grid = Grid(*contact_mesh) if contact_mesh is not None else None
     body, contact = [], []
@@ -401,16 +397,16 @@ def write_solution(result: Result, path: Path) -> None:
     contact part also ``contact_nodes`` (m,), the node indices of Γ3, and ``xi`` (s, m), the layer's
     history ξ there. A run restarts from one of these steps with ``initial.from_run``."""
     steps = sorted(result.fields)
-    mesh = result.problem.mesh.mesh
+    mesh = result.discretization.mesh.mesh
     arrays = dict(points=mesh.p, steps=np.array(steps), **{CELLS[result.dim][2]: mesh.t},
-                  times=np.array([result.problem.times[s - 1] for s in steps]),
+                  times=np.array([result.discretization.times[s - 1] for s in steps]),
                   displacement=np.array([result.fields[s].displacement for s in steps]),
                   stress=np.array([result.fields[s].stress for s in steps]),
                   lame=np.array([np.broadcast_to(np.asarray(value, dtype=float), mesh.t.shape[1:])
-                                 for value in result.problem.elasticity.lame]))
+                                 for value in result.discretization.elasticity.lame]))
     if steps and result.fields[steps[0]].z is not None:
         arrays["z"] = np.array([result.fields[s].z for s in steps])
-    surface = result.problem.surface
+    surface = result.discretization.surface
     if surface.size:
         end_rows = result.end_of_step_rows()
         arrays["contact_nodes"] = surface.nodes

@@ -41,7 +41,7 @@ def write_xdmf(result: Result, folder: Path) -> None:
 
     if not result.fields:
         return
-    body_mesh, contact_mesh = field_meshes(result.problem)
+    body_mesh, contact_mesh = field_meshes(result.discretization)
     meshes = {"body": body_mesh, **({"contact": contact_mesh} if contact_mesh is not None else {})}
     steps = {name: [] for name in meshes}  # (step, t, {center: {array: (shape, dtype)}}) of each series
     with ExitStack() as stack:

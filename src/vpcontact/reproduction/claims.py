@@ -58,8 +58,8 @@ def node_states(cases: dict, results: dict, plan: Plan) -> dict:
     d2 = soft.contact_history("penetration", substeps=False)
     touching = (d1 > 0.0) | (d2 > 0.0)
     violations = touching & ~(d1 < d2)
-    xy = results["beta+1_k0.1"].problem.surface.coordinates
-    t = hard.problem.times
+    xy = results["beta+1_k0.1"].discretization.surface.coordinates
+    t = hard.discretization.times
     where = [
         {
             "t": float(t[i]),

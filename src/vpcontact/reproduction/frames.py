@@ -51,27 +51,28 @@ class Frame:
     @classmethod
     def from_result(cls, result, step: int, title: str) -> "Frame":
         """Step ``step`` (1-based; a field step or the last) of a :class:`~vpcontact.results.Result`."""
-        last = len(result.problem.times)
+        last = len(result.discretization.times)
         fields = result.fields.get(step) or (result.final if step == last else None)
         if fields is None:
             raise KeyError(f"step {step} has no fields (field steps: {sorted(result.fields)})")
-        problem = result.problem
-        if np.ndim(problem.law.g):
+        view = result.discretization
+        g = view.layer["g"]
+        if g.size and np.any(g != g[0]):
             raise CaseError("the paper's figures draw its foundation, a layer of one thickness g; this run's g varies "
                             "along Γ3 (contact.g an expression or contact.parts): draw it with vpcontact.plots")
         i = result.end_of_step_rows()[step]
         pressure = result.contact_history("pressure_compliance")[i] + result.contact_history("pressure_rigid")[i]
         return cls(
             title,
-            problem.mesh.mesh.p,
-            problem.mesh.mesh.t,
+            view.mesh.mesh.p,
+            view.mesh.mesh.t,
             fields.displacement,
-            problem.surface.nodes,
-            problem.surface.normals,
+            view.surface.nodes,
+            view.surface.normals,
             pressure,
             result.contact_history("status")[i],
-            float(problem.law.g),
-            float(problem.times[step - 1]),
+            float(g[0]),
+            float(view.times[step - 1]),
         )
 
     @classmethod
@@ -132,7 +133,7 @@ def figure_frames(results: dict, plan: Plan) -> dict:
             frames[f"beta{sign}_t{t:g}"] = Frame.from_result(result, step, f"t = {t:g} s")
     for name in CONTACT_CONDITIONS:
         result = results[f"{name}_k0.1"]
-        frames[f"final_{name}"] = Frame.from_result(result, len(result.problem.times), SHORT_LABELS[name])
+        frames[f"final_{name}"] = Frame.from_result(result, len(result.discretization.times), SHORT_LABELS[name])
     return frames
 
 

@@ -49,7 +49,7 @@ SERIES = (  # the history columns reproduce.json keeps of a case, at the step ti
 
 def case_record(spec: CaseSpec, result) -> dict:
     """What reproduce.json keeps of a run: its overrides, sizes, time and its series at the step times t_n."""
-    steps = len(result.problem.times)
+    steps = len(result.discretization.times)
     record = {
         "label": spec.label,
         "group": spec.group,
@@ -70,7 +70,7 @@ def case_record(spec: CaseSpec, result) -> dict:
 
 def mesh_record(result) -> dict:
     """The figure mesh: elements, DOFs, contact nodes and edges on Γ3."""
-    surface = result.problem.surface
+    surface = result.discretization.surface
     return {
         "elements": int(result.elements),
         "dofs": int(result.dofs),
