@@ -16,6 +16,7 @@ import numpy as np
 
 from .contact import ContactSurface
 from .material import Elasticity
+from .materials import Materials
 from .mesh import Mesh
 from .time_grid import TimeGrid
 
@@ -48,11 +49,7 @@ class Discretization:
                    problem.probe, problem.source)
 
     @property
-    def E(self) -> np.ndarray:
-        """Young's modulus of each element."""
-        return np.broadcast_to(np.asarray(self.elasticity.E, dtype=float), self.material.shape)
-
-    @property
-    def nu(self) -> np.ndarray:
-        """Poisson's ratio of each element."""
-        return np.broadcast_to(np.asarray(self.elasticity.nu, dtype=float), self.material.shape)
+    def materials(self) -> Materials:
+        """ℰ and the material entry of each element (E and ν per element: ``materials.E``, ``materials.nu``),
+        without the viscoplastic law (a function of the problem, left behind with it)."""
+        return Materials(self.material, self.elasticity, None)

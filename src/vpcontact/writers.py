@@ -341,7 +341,8 @@ def field_frames(result: Result) -> Iterator[FieldFrame]:
             layer["part"] = surface.owner
         layer = {key: np.asarray(value, dtype=float) for key, value in layer.items()}
         end_rows = result.end_of_step_rows()
-    materials = {"material": view.material.astype(np.int32), "E": np.array(view.E), "nu": np.array(view.nu)}
+    materials = {"material": view.material.astype(np.int32), "E": np.array(view.materials.E),
+                 "nu": np.array(view.materials.nu)}
     for step, fields in sorted(result.fields.items()):
         displacement = in_space(fields.displacement)
         cell_data = {"stress": tensors_in_space(fields.stress, fields.stress33), "von_mises": fields.von_mises,
