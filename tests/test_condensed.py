@@ -48,6 +48,32 @@ def test_solved_span_on_a_support_projects_there_only_and_falls_back_off_it():
     assert span.solves == 3
 
 
+@pytest.mark.parametrize("size", [1e-200, 1e200, 1e300])
+def test_solved_span_of_right_hand_sides_whose_squares_overflow_or_underflow(size):
+    """Entries beyond 1e154 overflow the sum of squares of a norm, entries below 1e-154 underflow it: b is
+    still solved (once), not taken as lying in the empty span (inf ≤ inf, or a norm of 0), and its
+    multiples reuse it."""
+    rng = np.random.default_rng(2)
+    A = sp.random(30, 30, density=0.2, random_state=5) + 30 * sp.eye(30)
+    lu = sp.linalg.splu(A.tocsc())
+    N = sp.random(4, 30, density=0.3, random_state=6).tocsr()
+    span = SolvedSpan(lu.solve, N.__matmul__, N.shape)
+    b = size * rng.standard_normal(30)
+    for t in (1.0, 0.5, 0.25):
+        expected = N @ lu.solve(t * b)
+        np.testing.assert_allclose(span(t * b), expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+    assert span.solves == 1
+
+
+def test_the_norm_of_the_solvers_does_not_overflow():
+    from vpcontact.solvers.base import norm
+
+    assert norm(np.array([3e200, -4e200])) == pytest.approx(5e200, rel=1e-15)
+    assert norm(np.array([3e-200, 4e-200])) == pytest.approx(5e-200, rel=1e-15)
+    assert norm(np.array([3.0, 4.0])) == 5.0 and norm(np.zeros(3)) == 0.0
+    assert norm(np.array([np.inf, 1.0])) == np.inf and np.isnan(norm(np.array([np.nan, 1e200])))
+
+
 def test_loads_linear_in_time_cost_one_solve_plus_the_recovered_steps():
     case = half_disc_case(h=0.1, load=20.0)
     case["output"]["field_steps"] = [4, 11]

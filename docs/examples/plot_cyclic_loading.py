@@ -22,7 +22,7 @@ h = 0.05).
 # --------------------------
 # The small constant part of the load (0.02, 1 % of the peak) keeps the ball resting on the layer
 # between the pulses: a body that left the foundation entirely would have nothing to fix its vertical
-# position. The probe is the contact node nearest to (0.2, 0), off the bottom point, in contact only
+# position, and the run would stop there (exit 3, "no contact node carries a force"). The probe is the contact node nearest to (0.2, 0), off the bottom point, in contact only
 # around the peaks.
 import numpy as np
 from matplotlib.figure import Figure

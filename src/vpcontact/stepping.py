@@ -134,8 +134,12 @@ class TimeLoop:
                      mesh.dim())
         modes = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs)
         layout = DofLayout(free, mesh.dim(), mesh.nvertices, modes.matrix[free].toarray())
+        rigid = modes.free_basis(free)
+        self._held_by_contact_only = rigid.shape[1] > 0 and surface.size > 0  # see _floating
+        self._largest_pressure = 0.0  # the largest contact pressure of the levels so far (see _floating)
+        self._tolerance = options.tolerance
         self.solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
-                                  surface.weights, surface.gap0, rigid=modes.free_basis(free),
+                                  surface.weights, surface.gap0, rigid=rigid,
                                   augmentation=options.augmentation, tolerance=options.tolerance,
                                   max_iterations=options.max_iterations, length_scale=problem.mesh.diameter,
                                   factorization=options.factorization, layout=layout)
@@ -188,7 +192,7 @@ class TimeLoop:
                                       f"of {len(times)}")
                     break
                 self._substep = 0
-                failure = self._advance(n, times[n - 1], problem.k, 0)
+                failure = self._history_failure(n) or self._advance(n, times[n - 1], problem.k, 0)
                 if failure is not None:
                     result.fail(failure)
                     break
@@ -197,12 +201,6 @@ class TimeLoop:
                 bar.set_postfix(newton=row["newton_iterations"], residual=f"{row['residual']:.1e}",
                                 at_limit=row["nodes_at_limit"], cuts=result.step_cuts, refresh=False)
                 bar.update()
-                with np.errstate(all="ignore"):  # a history that is not finite is reported
-                    finite = self.state.rate is None or np.all(np.isfinite(self.state.z_after(problem.k)))
-                if not finite:
-                    result.fail(f"after step {n} (t = {times[n - 1]:g}): the viscoplastic history is not finite (is "
-                                f"the explicit step k = {problem.k:g} small against the law's relaxation time?)")
-                    break
                 if after_step is not None:
                     after_step(self)
         if self._level_without_fields is not None:  # the last level's fields, not kept at its step
@@ -226,6 +224,16 @@ class TimeLoop:
     def elapsed(self) -> float:
         """Wall time of the run so far, earlier sessions included (seconds)."""
         return self.earlier_time + self.problem.timings["build"] + clock.perf_counter() - self._created
+
+    def _history_failure(self, n: int) -> str | None:
+        """The failure of step n when the history it starts from, z_n = z_{n−1} + k 𝒢 (explicit), is not
+        finite (no step cut can help: the sub-steps' z lie between z_{n−1} and z_n); None when it is."""
+        with np.errstate(all="ignore"):  # a history that is not finite is reported
+            finite = self.state.rate is None or np.all(np.isfinite(self.state.z_after(self.problem.k)))
+        if finite:
+            return None
+        return (f"step {n} (t = {self.problem.times[n - 1]:g}) failed: the viscoplastic history is not finite at its "
+                f"start (is the explicit step k = {self.problem.k:g} small against the law's relaxation time?)")
 
     def _advance(self, n: int, t: float, h: float, cuts: int) -> str | None:
         """Reach time t of step n from the current level by one step of length h, or by two halves if
@@ -311,6 +319,9 @@ class TimeLoop:
                      "float64 overflow: state the loads, moduli and laws in units that keep them far from 1e308")
             return (f"step {n} (t = {problem.times[n - 1]:g}) failed: {wrong[0]} is not finite at t = "
                     f"{attempt.t:.10g} ({cause})")
+        floating = self._floating(n, attempt, compliance)
+        if floating is not None:
+            return floating
         self._substep += 1
         result.record(n, attempt.t, solution, fields, xi=xi, K=K, compliance=compliance,
                       status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step)
@@ -321,6 +332,26 @@ class TimeLoop:
         trend = None if state.previous is None else Trend.between(state.previous, solution, h)
         self.state = LoopState(state.step, xi, attempt.z, rate, solution, trend)
         return None
+
+    def _floating(self, n: int, attempt: _Attempt, compliance: np.ndarray) -> str | None:
+        """The failure of a level at which no contact node carries a force while the Dirichlet conditions leave
+        a rigid motion free: nothing holds the body there, so the step problem does not determine its position
+        (any rigid motion that keeps the nodes separated solves it, and a Newton iteration would return the one
+        its start holds: the last levels' motion extrapolated). A node carries a force when its pressure is
+        above ``solver.tolerance`` times the largest pressure of the run so far (below is the rounding of a
+        zero force). None when the level is determined."""
+        if not self._held_by_contact_only:
+            return None
+        w = self.problem.surface.weights
+        rigid = np.divide(attempt.solution.lam, w, out=np.zeros_like(w), where=w > 0)
+        largest = float(np.max(compliance + rigid, initial=0.0))
+        if largest > self._tolerance * self._largest_pressure:
+            self._largest_pressure = max(self._largest_pressure, largest)
+            return None
+        return (f"step {n} (t = {self.problem.times[n - 1]:g}) failed: at t = {attempt.t:.10g} no contact node carries "
+                f"a force and the Dirichlet conditions leave a rigid motion of the body free, so nothing holds the body "
+                f"and its position is not determined; keep a load pressing it on the foundation, or hold that motion "
+                f"with boundary.dirichlet entries")
 
     def _fields(self, u_free: np.ndarray, strain: np.ndarray, sigma: np.ndarray, z: np.ndarray | None) -> Fields:
         """The Fields of a level from its displacement at the free dofs, ε, σ and z (elements last)."""
@@ -344,6 +375,9 @@ class TimeLoop:
             counts = (f"; contact nodes separated/in compliance/at limit = {int(np.sum(status == SEPARATED))}/"
                       f"{int(np.sum(status == IN_COMPLIANCE))}/{int(np.sum(status == AT_LIMIT))}")
         advice = f"; {s.advice}" if s.advice else ""
+        if attempt.z is not None and not np.isfinite(s.residual) and self.state.rate is not None:
+            advice = (f"; the viscoplastic history reaches |z| = {np.abs(attempt.z).max():.3g}: is the explicit step "
+                      f"k = {self.problem.k:g} small against the law's relaxation time?")
         return (f"step {n} (t = {t_n:g}) failed{where}: {s.message}; residual {s.residual:.3e}, "
                 f"complementarity {s.complementarity:.3e}{counts}{advice}")
 

@@ -16,6 +16,25 @@ import numpy as np
 from ..contact import ContactLaw
 
 
+#: The norms whose sums of squares lose no digit to overflow or to subnormal numbers.
+SQUARES_SAFE = (1e-140, 1e140)
+
+
+def norm(x: np.ndarray) -> float:
+    """‖x‖₂, accurate for every finite x: the sum of squares overflows from entries of about 1e154 on and
+    underflows below 1e-154, and a norm of inf or 0 would make residuals relative to it 0 or a nonzero
+    vector look null (false convergences), so the norm is then taken of x over its largest entry. inf or
+    NaN only for an x that is not finite."""
+    with np.errstate(over="ignore", under="ignore"):
+        value = float(np.linalg.norm(x))
+    if SQUARES_SAFE[0] < value < SQUARES_SAFE[1]:
+        return value
+    largest = float(np.max(np.abs(x), initial=0.0))
+    if largest == 0.0 or not np.isfinite(largest):
+        return largest
+    return largest * float(np.linalg.norm(x / largest))
+
+
 @dataclass(frozen=True)
 class StepData:
     """The data of one step problem: right-hand side b_n = F(t_n) − Bᵀz_n, law, history ξ^{n−1}, k;
@@ -31,7 +50,7 @@ class StepData:
     @cached_property
     def b_norm(self) -> float:
         """‖b‖, over the support only."""
-        return float(np.linalg.norm(self.b if self.support is None else self.b[self.support]))
+        return norm(self.b if self.support is None else self.b[self.support])
 
 
 @dataclass(frozen=True)

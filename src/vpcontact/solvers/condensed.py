@@ -39,7 +39,7 @@ import scipy.linalg as la
 import scipy.sparse as sp
 
 from ..errors import CaseError
-from .base import ContactState, StepData, StepSolution
+from .base import ContactState, StepData, StepSolution, norm
 from .errors import NotConvergedError, SingularMatrixError
 from ..memory import available_memory
 from .factorization import factorize
@@ -72,15 +72,15 @@ class SolvedSpan:
         with Q only run over it."""
         on = support if support is not None and support is self._support else slice(None)
         b_on = b[on]
-        norm = np.linalg.norm(b_on)
+        size = norm(b_on)
         basis = self._basis[: self.size, on]
         coefficients = basis @ b_on
         combination = coefficients @ self._images[: self.size]
-        if norm == 0.0:
+        if size == 0.0:
             return combination
         remainder = b_on - coefficients @ basis
-        rest = np.linalg.norm(remainder)
-        if rest <= self.tolerance * norm:
+        rest = norm(remainder)
+        if rest <= self.tolerance * size:
             return combination
         observed = self._observe(self._solve(b))
         self.solves += 1
@@ -260,7 +260,7 @@ class CondensedNewton(SemismoothNewton):
             state = ContactState.evaluate(step, self.weights, solution.d, solution.lam, self.r)
             contact = self.N.T @ (state.force + solution.lam)
             R = self.A @ (u - self.Z @ (self.Z.T @ u)) + contact - step.b
-            balance = np.linalg.norm(self.Z.T @ R) / (max(self._b_norm, np.linalg.norm(contact)) or 1.0)
+            balance = np.linalg.norm(self.Z.T @ R) / (max(self._b_norm, norm(contact)) or 1.0)
             if balance <= self.tolerance or balance > STAGNATION * last:
                 break
             last = balance
@@ -332,7 +332,7 @@ class CondensedNewton(SemismoothNewton):
         d_u = self._free_penetration(step) - self.S @ self._load(state, d, lam)
         recovered = ContactState.evaluate(step, self.weights, d_u, lam, self.r)
         R_u = self._N_contact_T @ (recovered.force - state.force - self.reference * (d_u - d))
-        scale = max(self._b_norm, np.linalg.norm(self._N_contact_T @ (recovered.force + lam)))
+        scale = max(self._b_norm, norm(self._N_contact_T @ (recovered.force + lam)))
         load_size = np.abs(state.force) + np.abs(lam) + self.reference * np.abs(d + self.gap0)
         d_size = np.abs(self._d_free) + self._S_row_sums * load_size.max(initial=0.0) + np.abs(d)
         floor = ROUNDOFF * np.linalg.norm((self.reference + np.abs(recovered.tangent)) * d_size)

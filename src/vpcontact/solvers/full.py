@@ -22,7 +22,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .amg import AMGConjugateGradient
-from .base import ContactState, StepData, StepSolution
+from .base import ContactState, StepData, StepSolution, norm
 from .linear import direct_solver
 from .newton import ROUNDOFF, Evaluation, SemismoothNewton
 from .normal_frame import NormalFrame
@@ -85,7 +85,7 @@ class FullNewton(SemismoothNewton):
         state = ContactState.evaluate(step, self.weights, d, lam, self.r)
         contact = self.N.T @ (state.force + lam)
         R_u = self.A @ (u - self.Z @ (self.Z.T @ u)) + contact - step.b
-        scale = max(np.linalg.norm(step.b), np.linalg.norm(contact))
+        scale = max(step.b_norm, norm(contact))
         scale = scale if scale > 0 else 1.0
         magnitudes = self._A_abs @ np.abs(u) + self._N_abs.T @ (np.abs(state.force) + np.abs(lam)) + np.abs(step.b)
         return Evaluation(d, lam, state, np.concatenate([R_u, state.C]), np.linalg.norm(R_u) / scale,
