@@ -53,3 +53,29 @@ def test_the_assembly_benchmark_times_both_implementations_and_compares_them():
     assert abs(new["nonzeros"] - old["nonzeros"]) < 0.01 * old["nonzeros"]
     assert set(new["speedup"]) == set(stages) and new["peak_rss_ratio"] > 0
     assert all(difference <= 1e-13 for difference in new["relative_difference"].values()), new
+
+
+def test_the_targets_benchmark_measures_each_target_against_its_limit():
+    """benchmarks/targets.py --quick: every target's measurement at a small size, compared with nothing (its
+    limits are for the full sizes); the parts skipped are left out of the record."""
+    done = subprocess.run([sys.executable, str(BENCHMARKS / "targets.py"), "--quick", "--skip", "startup"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    record = json.loads(done.stdout)
+    assert record["machine"]["cores"] >= 1 and record["machine"]["processor"]
+    assert set(record["measurements"]) == {"finest", "viscoplastic", "peer", "reproduce"}
+    names = [t["target"] for t in record["targets"]]
+    assert names[:5] == ["1/32, β = 1, end to end (mesh to the last step)", "1/32, β = 1, time loop",
+                         "1/32, β = -1, end to end (mesh to the last step)", "1/32, β = -1, time loop",
+                         "assembly at 1/32 (1,856 triangles)"]
+    assert names[5].startswith("1/32, viscoplastic") and names[6].startswith("GetFEM / vpcontact")
+    finest = record["measurements"]["finest"]["records"]
+    for target in record["targets"]:
+        assert target["met"] is None and target["relation"] in ("<=", ">=")
+        if target["unit"] == "s":
+            assert 0 < target["measured"] < 60
+    for beta, runs in finest.items():
+        (run,) = runs
+        assert run["status"] == "complete" and run["time_loop_s"] < run["total_s"]
+    assert record["targets"][1]["measured"] == finest["beta=1"][0]["time_loop_s"]
+    assert record["met"] == "0 of 0"
