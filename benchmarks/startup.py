@@ -46,12 +46,21 @@ def processor() -> str:
     return platform.processor() or platform.machine()
 
 
+#: The environment of the timed processes: Python may cache the bytecode it compiles, as it has for an
+#: installed package (with PYTHONDONTWRITEBYTECODE set, every run would compile vpcontact again: 0.3 s).
+ENVIRONMENT = {name: value for name, value in os.environ.items() if name != "PYTHONDONTWRITEBYTECODE"}
+
+
 def wall(command: list[str], repeat: int) -> dict:
-    """Median, min and max wall seconds of ``repeat`` runs of ``command`` (each must exit 0)."""
+    """Median, min and max wall seconds of ``repeat`` runs of ``command`` (each must exit 0), after one run
+    that is not timed (it compiles what Python had not cached)."""
+    subprocess.run(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                   env=ENVIRONMENT)
     times = []
     for _ in range(repeat):
         started = time.perf_counter()
-        done = subprocess.run(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        done = subprocess.run(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                              env=ENVIRONMENT)
         times.append(time.perf_counter() - started)
         if done.returncode != 0:
             raise SystemExit(f"{' '.join(command)} exited {done.returncode}: {done.stderr.decode()[-2000:]}")
@@ -110,7 +119,7 @@ def phase_medians(case: Path, overrides: dict, repeat: int, folder: Path) -> dic
     records = []
     for k in range(repeat):
         command = [sys.executable, __file__, "--phases-of", str(case), json.dumps(overrides), str(folder / f"p{k}")]
-        done = subprocess.run(command, capture_output=True, text=True)
+        done = subprocess.run(command, capture_output=True, text=True, env=ENVIRONMENT)
         if done.returncode != 0:
             raise SystemExit(f"phases of {case}: {done.stderr[-2000:]}")
         records.append(json.loads(done.stdout))

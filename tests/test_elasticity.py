@@ -75,3 +75,21 @@ def test_manufactured_solution_converges_at_first_order_in_energy(hypothesis):
     rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
     assert np.all(np.abs(rates - 1.0) < 0.05), (errors, rates)
     assert errors[-1] < 0.06, errors
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_von_mises_is_that_of_the_deviator_of_the_3d_tensor(dim):
+    """sqrt(3/2 dev τ : dev τ) of the 3 × 3 tensor formed explicitly (in 2D: σ, σ33 and zero σ13, σ23), for
+    random tensors, symmetric or not (a user's 𝒢 may add a history that is not)."""
+    from vpcontact.material import von_mises
+
+    rng = np.random.default_rng(dim)
+    sigma = rng.standard_normal((dim, dim, 50))
+    sigma33 = rng.standard_normal(50) if dim == 2 else None
+    full = np.zeros((3, 3, 50))
+    full[:dim, :dim] = sigma
+    if dim == 2:
+        full[2, 2] = sigma33
+    dev = full - np.einsum("ii...->...", full) / 3 * np.eye(3)[:, :, None]
+    np.testing.assert_allclose(von_mises(sigma, sigma33), np.sqrt(1.5 * np.einsum("ij...,ij...->...", dev, dev)),
+                               rtol=1e-13)

@@ -52,20 +52,15 @@ class Elasticity:
         return self.lame[0] * (strain[0, 0] + strain[1, 1])
 
 
-def _stress_3d(sigma: np.ndarray, sigma33: np.ndarray | None) -> np.ndarray:
-    """The 3 × 3 stress (3, 3, n): σ itself in 3D; in 2D the in-plane σ (2, 2, n) with σ33 (n) added."""
-    if sigma33 is None:
-        return sigma
-    full = np.zeros((3, 3) + sigma.shape[2:])
-    full[:2, :2] = sigma
-    full[2, 2] = sigma33
-    return full
-
-
 def von_mises(sigma: np.ndarray, sigma33: np.ndarray | None = None) -> np.ndarray:
-    """von Mises stress sqrt(3/2 ‖dev σ‖²) of the 3D tensor (σ in 3D, σ and σ33 in 2D)."""
-    dev = deviator(_stress_3d(sigma, sigma33))
-    return np.sqrt(1.5 * np.einsum("ij...,ij...->...", dev, dev))
+    """von Mises stress sqrt(3/2 ‖dev σ‖²) of the 3D tensor (σ (3, 3, n) in 3D; in 2D σ (2, 2, n) with σ33
+    (n) and σ13 = σ23 = 0), as sqrt(½ Σ_(i<j) (σ_ii − σ_jj)² + 3/2 Σ_(i≠j) σ_ij²): no 3 × 3 array and no
+    deviator to form (a field step at 475k triangles)."""
+    d = sigma.shape[0]
+    diagonal = [sigma[i, i] for i in range(d)] + ([] if sigma33 is None else [sigma33])
+    normal = sum((diagonal[i] - diagonal[j]) ** 2 for i in range(3) for j in range(i + 1, 3))
+    shear = sum(sigma[i, j] ** 2 for i in range(d) for j in range(d) if i != j)
+    return np.sqrt(0.5 * normal + 1.5 * shear)
 
 
 # --- viscoplastic laws 𝒢(σ, ε) of (2.1) ------------------------------------------------------------
