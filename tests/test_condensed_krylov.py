@@ -151,6 +151,29 @@ def test_newton_systems_in_node_order_match_the_dense_solve_whatever_the_active_
     assert systems.iterations <= sum(2 * changed + 1 for changed in (0, 2, 5, 9))
 
 
+def test_the_kept_inverse_follows_changes_of_state_exactly_and_gmres_then_needs_one_iteration():
+    """Nodes that reach the limit (or leave it) change their columns of K: the kept inverse is updated by the
+    Sherman–Morrison–Woodbury formula, so with no tangent drifting it is K⁻¹ itself (to rounding), GMRES
+    takes one iteration, and no new inverse is made; the solutions are the dense ones."""
+    S, rng = condensed_like()
+    systems, m = newton_systems(S), S.shape[0]
+    tangent = -1.0 + 0.1 * rng.random(m)
+    active = np.zeros(m, dtype=bool)
+    iterations = []
+    for newly in ([], [3, 7, 11], [12], [7, 40, 41, 42, 59]):
+        active[newly] = ~active[newly]  # 7 reaches the limit, then leaves it
+        w = np.where(active, 1.0, tangent)
+        rhs = rng.standard_normal(m)
+        before = systems.iterations
+        z = systems.solve_iterative(~active, w, rhs)
+        iterations.append(systems.iterations - before)
+        np.testing.assert_allclose(z, systems.solve_direct(~active, w, rhs), rtol=1e-9, atol=0)
+        K = systems.matrix(~active, w)
+        assert np.abs(systems._inverse @ K - np.eye(m)).max() < 1e-10
+    assert systems.updates == 3 and systems.factorizations == 1 + 4  # one inverse, four dense solves
+    assert iterations == [1, 1, 1, 1]
+
+
 def test_a_nearly_singular_newton_matrix_is_solved_as_accurately_as_by_the_dense_lu():
     """Separated nodes of a body held only by contact: K = I − (1 − 1e-12) c0 S with c0 S of largest
     eigenvalue 1 (cond(K) ≈ 1e12). The relative residual cannot reach KRYLOV_TOLERANCE (the dense LU's is

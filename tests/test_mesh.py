@@ -297,3 +297,19 @@ def test_read_mesh_parts_must_be_boundary_edges(tmp_path):
     write22(diagonal, square, [triangles, ("line", np.array([[0, 2]]))], [1, 4])
     with pytest.raises(CaseError, match="physical group 4 is not a boundary edge"):
         read_mesh(diagonal)
+
+
+@pytest.mark.parametrize("make", [lambda: half_disc(0.1), lambda: rectangle(1.0, 0.5, 0.1)])
+def test_a_mesh_with_named_parts_keeps_its_facet_tables_and_they_are_the_meshs_own(make):
+    """The named mesh carries the facet tables built to find its boundary (not built twice), and they are
+    those scikit-fem builds from the elements alone: the parts' facet indices mean the same facets."""
+    mesh = make().mesh
+    assert {"_facets", "_t2f", "_f2t"} <= set(vars(mesh))
+    fresh = type(mesh)(mesh.p, mesh.t)
+    np.testing.assert_array_equal(mesh.facets, fresh.facets)
+    np.testing.assert_array_equal(mesh.t2f, fresh.t2f)
+    np.testing.assert_array_equal(mesh.f2t, fresh.f2t)
+    boundary = fresh.boundary_facets()
+    assert sum(facets.size for facets in mesh.boundaries.values()) == boundary.size
+    for name, facets in mesh.boundaries.items():
+        assert np.isin(facets, boundary).all(), name

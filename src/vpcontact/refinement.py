@@ -24,7 +24,7 @@ import numpy as np
 
 from .ball import quiet_bisection
 from .errors import CaseError
-from .mesh import SKFEM_MESH, Mesh, find_columns
+from .mesh import SKFEM_MESH, Mesh, find_columns, with_parts
 from .norms import Locator
 
 
@@ -48,7 +48,7 @@ def refine(mesh: Mesh, marked) -> Mesh:
     regions = {name: np.flatnonzero(np.isin(parent, elements)) for name, elements in mesh.regions.items()}
     p = _onto_curves(mesh, fine, parts, regions, first_new=old.p.shape[1])
     refined = kind(np.ascontiguousarray(p), np.ascontiguousarray(fine.t))
-    return Mesh(refined.with_boundaries(parts), parts, mesh.exact_normals, mesh.file, regions, mesh.curved_parts,
+    return Mesh(with_parts(refined, parts, built=fine), parts, mesh.exact_normals, mesh.file, regions, mesh.curved_parts,
                 mesh.curved_interfaces)
 
 

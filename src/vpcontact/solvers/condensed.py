@@ -108,6 +108,9 @@ MAX_REFINEMENTS = 4
 #: loop, one BLAS thread, docs/performance.md): dense LU against GMRES 0.46 against 0.50 s at m = 144
 #: (1/128), 1.47 against 1.13 s at 285 (1/256), 6.4 against 3.1 s at 570 (1/512).
 KRYLOV_FROM = 200
+#: Nodes whose change of state the kept inverse follows at once by a low-rank update (O(m² k) each time,
+#: against O(m³) for a new inverse: 64 of 570 nodes cost about a third of one).
+MAX_STATE_UPDATE = 64
 #: GMRES iterations at most with the inverse of an earlier Newton matrix; a system that needs more is
 #: solved again with the inverse of its own matrix (which then serves the next systems).
 MAX_KRYLOV_ITERATIONS = 20
@@ -131,7 +134,8 @@ class NewtonSystems:
 
     ``solve_direct`` factors K (an LU, O(m³)); ``solve_iterative`` runs GMRES on K applied as
     z ↦ 1_ℐ z + S (w z) (O(m²) per iteration, S being formed), preconditioned by the inverse of the
-    K of an earlier iteration (from its LU), kept across Newton iterations and time steps, and made again
+    K of an earlier iteration (from its LU), kept across Newton iterations and time steps, updated by a
+    low-rank formula for the nodes that change state since (``_follow_changes_of_state``), and made again
     only when GMRES needed more than MAX_KRYLOV_ITERATIONS with it (the system is then solved with the
     inverse of its own K).
 
@@ -143,13 +147,16 @@ class NewtonSystems:
     (fewer when the changes are small: the tangents of nodes in compliance drift from step to step).
     On the quarter ball the inverse of the first Newton matrix (no node in contact yet) serves every
     Newton iteration of the run, at about 6 GMRES iterations each; on the paper's half disc at 1/512, at
-    about 5 (docs/performance.md).
+    about 5, for β = −1 too (its nodes reach the limit one after another: the updates follow them, where
+    without them GMRES needed 9.2 iterations and 22 new inverses; docs/performance.md).
     """
 
     def __init__(self, S: np.ndarray, S_row_sums: np.ndarray, max_iterations: int = MAX_KRYLOV_ITERATIONS):
         self.S, self._S_row_sum = S, S_row_sums.max(initial=0.0)  # the largest row sum of |S|
         self.max_iterations = max_iterations
-        self._inverse = None  # K⁻¹ of an earlier iteration's K
+        self._inverse = None  # K⁻¹ of an earlier iteration's K, updated for the changes of state since
+        self._kept = None  # (1_ℐ, w) of the K the kept inverse is of, at the nodes whose state it follows
+        self.updates = 0  # low-rank updates of the kept inverse for changes of state
         self.iterations = 0  # GMRES iterations, in total
         self.factorizations = 0  # LU factorizations of Newton matrices (dense solves included)
 
@@ -182,6 +189,7 @@ class NewtonSystems:
         norm_K = 1.0 + np.abs(w).max(initial=0.0) * self._S_row_sum  # ≥ ‖K‖₁ and ‖K‖∞ (S symmetric), so ≥ ‖K‖₂
         floor = KRYLOV_ROUNDING * norm_K
         if self._inverse is not None:
+            self._follow_changes_of_state(inactive, w)
             solution = self._gmres(K, rhs, floor)
             if solution.converged:
                 return solution.x
@@ -205,6 +213,34 @@ class NewtonSystems:
             self._inverse = None
             raise SingularMatrixError("the condensed Newton matrix is singular (an exactly zero pivot)")
         self._inverse, _ = la.lapack.dgetri(lu, piv, overwrite_lu=True)
+        self._kept = (inactive.astype(float), w.copy())
+
+    def _follow_changes_of_state(self, inactive: np.ndarray, w: np.ndarray) -> None:
+        """Update the kept inverse for the nodes whose state (inactive or at the limit) changed since it was
+        made: their columns of K changed, K = K₀ + U E_cᵀ with U = (K − K₀)[:, c], and by the Sherman–Morrison–
+        Woodbury formula K⁻¹ = K₀⁻¹ − K₀⁻¹U (I + E_cᵀ K₀⁻¹ U)⁻¹ E_cᵀ K₀⁻¹: O(m² k) for k nodes instead of
+        O(m³) for a new inverse. Nodes reach the rigid limit one after another (β = −1 at 1/512: 22 new
+        inverses without this); GMRES is then left with the tangents' drift only, as when no state
+        changes. Up to MAX_STATE_UPDATE nodes at once; more, or a capacitance matrix that is singular to
+        working precision, and the inverse stays as it is (GMRES, and a new inverse if it needs too many
+        iterations, see ``solve_iterative``)."""
+        kept_inactive, kept_w = self._kept
+        changed = np.flatnonzero(inactive != kept_inactive)
+        if changed.size == 0 or changed.size > MAX_STATE_UPDATE:
+            return
+        U = self.S[:, changed] * (w[changed] - kept_w[changed])
+        U[changed, np.arange(changed.size)] += inactive[changed] - kept_inactive[changed]
+        PU = self._inverse @ U
+        capacitance = np.eye(changed.size) + PU[changed]
+        try:
+            correction = la.solve(capacitance, self._inverse[changed], check_finite=False)
+        except (la.LinAlgError, ValueError):
+            return
+        if np.linalg.cond(capacitance) > 1.0 / np.finfo(float).eps or not np.all(np.isfinite(correction)):
+            return
+        self._inverse -= PU @ correction
+        kept_inactive[changed], kept_w[changed] = inactive[changed], w[changed]
+        self.updates += 1
 
     def _gmres(self, K, rhs: np.ndarray, floor: float):
         """GMRES preconditioned by the kept inverse, at most ``max_iterations`` iterations (counted)."""
