@@ -63,6 +63,24 @@ def test_a_clamped_body_may_lift_off_the_foundation():
     assert np.all(d[:, 1:-1] < 0) and np.all(d[:, [0, -1]] == 0)  # held at the corners, lifted between
 
 
+def test_a_run_resumed_before_the_load_vanishes_fails_there_too(tmp_path):
+    """The largest pressure so far comes back with the levels of a checkpoint: resumed after step 4, the run
+    still fails at step 5, its first level (its rounding-level pressure is measured against steps 1–4, not
+    against itself alone)."""
+    from vpcontact import checkpoint
+    from vpcontact.problem import build_problem
+    from vpcontact.stepping import TimeLoop
+
+    case = vpcontact.Case.model_validate(cycle_case())
+    first = TimeLoop(build_problem(case), case.output)
+    first.run(stop=lambda: "stopped" if first.state.step == 4 else None)
+    checkpoint.save(first, tmp_path)
+    second = TimeLoop(build_problem(case), case.output)
+    assert checkpoint.restore(second, tmp_path) == 4
+    resumed = second.run()
+    assert resumed.status == "failed" and resumed.message.startswith("step 5 (t = 0.5) failed: at t = 0.5 no contact")
+
+
 def test_the_command_line_exits_3_with_the_message_on_one_line(tmp_path):
     import tomli_w
 

@@ -136,7 +136,7 @@ class TimeLoop:
         layout = DofLayout(free, mesh.dim(), mesh.nvertices, modes.matrix[free].toarray())
         rigid = modes.free_basis(free)
         self._held_by_contact_only = rigid.shape[1] > 0 and surface.size > 0  # see _floating
-        self._largest_pressure = 0.0  # the largest contact pressure of the levels so far (see _floating)
+        self._largest_pressure = None  # the largest contact pressure of the levels so far (see _floating)
         self._tolerance = options.tolerance
         self.solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
                                   surface.weights, surface.gap0, rigid=rigid,
@@ -342,6 +342,10 @@ class TimeLoop:
         zero force). None when the level is determined."""
         if not self._held_by_contact_only:
             return None
+        if self._largest_pressure is None:  # a new run, or one resumed with its levels so far
+            contact = self.result.contact
+            self._largest_pressure = max((float(np.max(c + r, initial=0.0)) for c, r in
+                                          zip(contact["pressure_compliance"], contact["pressure_rigid"])), default=0.0)
         w = self.problem.surface.weights
         rigid = np.divide(attempt.solution.lam, w, out=np.zeros_like(w), where=w > 0)
         largest = float(np.max(compliance + rigid, initial=0.0))

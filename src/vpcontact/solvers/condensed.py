@@ -109,7 +109,7 @@ MAX_REFINEMENTS = 4
 #: (1/128), 1.47 against 1.13 s at 285 (1/256), 6.4 against 3.1 s at 570 (1/512).
 KRYLOV_FROM = 200
 #: Nodes whose change of state the kept inverse follows at once by a low-rank update (O(m² k) each time,
-#: against O(m³) for a new inverse: 64 of 570 nodes cost about a third of one).
+#: against O(m³) for a new inverse: 64 of 570 nodes cost about a fifth of one).
 MAX_STATE_UPDATE = 64
 #: GMRES iterations at most with the inverse of an earlier Newton matrix; a system that needs more is
 #: solved again with the inverse of its own matrix (which then serves the next systems).
