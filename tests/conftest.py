@@ -98,3 +98,19 @@ def assert_refused(status, stderr, *words, untouched=()):
         assert word in stderr, (word, stderr)
     for folder, before in untouched:
         assert snapshot_tree(folder) == before, f"{folder} changed"
+
+
+def resumed_after(case, step: int, folder):
+    """A time loop of ``case`` (a Case) stopped after ``step``, checkpointed into ``folder`` and restored into a
+    new loop of the same case, not run yet: where a test of resuming starts."""
+    from vpcontact import checkpoint
+    from vpcontact.problem import build_problem
+    from vpcontact.stepping import TimeLoop
+
+    first = TimeLoop(build_problem(case), case.output)
+    assert first.run(stop=lambda: "stopped" if first.state.step == step else None).status == "interrupted"
+    folder.mkdir(parents=True, exist_ok=True)
+    checkpoint.save(first, folder)
+    second = TimeLoop(build_problem(case), case.output)
+    assert checkpoint.restore(second, folder) == step
+    return second

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import vpcontact
-from conftest import rectangle_case, run_cli
+from conftest import rectangle_case, resumed_after, run_cli
 
 #: the block on rollers at its sides (its vertical motion free), pressed by a load that falls to zero at
 #: t = 0.5 = step 5 of 10 and stays zero: 10 sin(2πt)⁺ (its rounding at t = 0.5 is 1e-15 of its peak)
@@ -67,17 +67,7 @@ def test_a_run_resumed_before_the_load_vanishes_fails_there_too(tmp_path):
     """The largest pressure so far comes back with the levels of a checkpoint: resumed after step 4, the run
     still fails at step 5, its first level (its rounding-level pressure is measured against steps 1–4, not
     against itself alone)."""
-    from vpcontact import checkpoint
-    from vpcontact.problem import build_problem
-    from vpcontact.stepping import TimeLoop
-
-    case = vpcontact.Case.model_validate(cycle_case())
-    first = TimeLoop(build_problem(case), case.output)
-    first.run(stop=lambda: "stopped" if first.state.step == 4 else None)
-    checkpoint.save(first, tmp_path)
-    second = TimeLoop(build_problem(case), case.output)
-    assert checkpoint.restore(second, tmp_path) == 4
-    resumed = second.run()
+    resumed = resumed_after(vpcontact.Case.model_validate(cycle_case()), 4, tmp_path).run()
     assert resumed.status == "failed" and resumed.message.startswith("step 5 (t = 0.5) failed: at t = 0.5 no contact")
 
 

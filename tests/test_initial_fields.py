@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 
 import vpcontact
-from conftest import assert_refused, half_disc_case, rectangle_case, run_cli, snapshot_tree
+from conftest import assert_refused, half_disc_case, rectangle_case, resumed_after, run_cli, snapshot_tree
 from test_3d_runs import ball_case
 from test_robustness import write
-from vpcontact import checkpoint
 from vpcontact.assembly import element_strain
 from vpcontact.case import load_case
 from vpcontact.problem import build_problem
@@ -114,13 +113,7 @@ def test_a_restart_is_resumed_from_its_checkpoint_as_if_never_stopped(tmp_path):
     restart["output"]["field_steps"] = "final"
     restart = load_case(restart)
     whole = TimeLoop(build_problem(restart), restart.output).run()
-    first = TimeLoop(build_problem(restart), restart.output)
-    assert first.run(stop=lambda: "stopped" if first.state.step == 2 else None).status == "interrupted"
-    (tmp_path / "stopped").mkdir()
-    checkpoint.save(first, tmp_path / "stopped")
-    second = TimeLoop(build_problem(restart), restart.output)
-    assert checkpoint.restore(second, tmp_path / "stopped") == 2
-    resumed = second.run()
+    resumed = resumed_after(restart, 2, tmp_path / "stopped").run()
     assert resumed.status == whole.status == "complete"
     np.testing.assert_array_equal(resumed.times, whole.times)
     assert resumed.times[0] == pytest.approx(0.7, rel=1e-15)

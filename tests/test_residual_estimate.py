@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import vpcontact
-from conftest import assert_refused, half_disc_case, rectangle_case, run_cli, snapshot_tree
+from conftest import assert_refused, half_disc_case, rectangle_case, resumed_after, run_cli, snapshot_tree
 from vpcontact.indicators import Level
 from vpcontact.norms import element_energies, energy_norm, transfer
 from vpcontact.residual_estimate import TERMS, ResidualEstimator, estimate
@@ -317,18 +317,9 @@ def test_a_sub_step_gets_the_estimate_of_its_own_time():
 
 
 def test_a_resumed_run_keeps_the_estimate_columns_and_indicators(tmp_path):
-    from vpcontact import checkpoint
-    from vpcontact.problem import build_problem
-    from vpcontact.stepping import TimeLoop
-
     case = vpcontact.Case.model_validate(estimating_half_disc())
     whole = vpcontact.solve(case)
-    first = TimeLoop(build_problem(case), case.output)
-    first.run(stop=lambda: "stopped" if first.state.step == 6 else None)
-    checkpoint.save(first, tmp_path)
-    second = TimeLoop(build_problem(case), case.output)
-    assert checkpoint.restore(second, tmp_path) == 6
-    resumed = second.run()
+    resumed = resumed_after(case, 6, tmp_path).run()
     assert resumed.status == "complete" and resumed.columns == whole.columns
     np.testing.assert_allclose(resumed.series("error_estimate"), whole.series("error_estimate"), rtol=1e-10)
     for step in (3, 11):  # saved with the checkpoint, and computed after it
