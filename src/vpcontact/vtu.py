@@ -1,10 +1,18 @@
 """VTK XML unstructured grids (``.vtu``, read by ParaView, VTK and meshio), written with NumPy alone.
 
 Every array is written inline in VTK's uncompressed binary format: base64 of its length in bytes (a
-UInt64) followed by its little-endian bytes. Without compression, writing costs little more than
-copying the arrays to disk. (Raw appended data would be smaller, but meshio's reader can mix up its
-arrays.) The points and cells of a body are the same at every field step: a :class:`Grid` encodes them
-once, and each file written on it encodes only its data.
+UInt64) followed by its little-endian bytes, header and data encoded together, as VTK's own writer
+does. Without compression, writing costs little more than copying the arrays to disk. (Raw appended
+data would be smaller, but meshio's reader can mix up its arrays.) The points and cells of a body are
+the same at every field step: a :class:`Grid` encodes them once, and each file written on it encodes
+only its data.
+
+The elements follow VTK's XML format (``VTKFile type="UnstructuredGrid"``, one ``Piece``): ``Points``
+one Float64 array of 3 components; ``Cells`` the arrays ``connectivity`` (the node numbers of every
+cell one after the other, one component: VTK 9.3 and later read no cell at all from a connectivity of
+several components), ``offsets`` (where each cell's nodes end in it) and ``types`` (UInt8, VTK's cell
+type numbers); ``NumberOfComponents`` only on arrays of more than one, and the 9 components of a
+tensor named XX, XY, … ZZ (row by row), as ParaView shows them.
 """
 
 from __future__ import annotations
@@ -20,11 +28,14 @@ import numpy as np
 CELL_TYPES = {"line": 3, "triangle": 5, "tetra": 10}
 #: VTK's name of each NumPy type written.
 VTK_TYPES = {np.dtype("<f8"): "Float64", np.dtype("<i8"): "Int64", np.dtype("<i4"): "Int32", np.dtype("u1"): "UInt8"}
+#: The names of the components of a 3 × 3 tensor, written row by row (``tensors_in_space``).
+TENSOR_COMPONENTS = ("XX", "XY", "XZ", "YX", "YY", "YZ", "ZX", "ZY", "ZZ")
 
 
 class Grid:
     """The points (n, 3) and cells (k, nodes per cell) of one cell type: the ``Points`` and ``Cells``
-    elements of a VTU file, encoded once for every file written on this grid."""
+    elements of a VTU file, encoded once for every file written on this grid (the connectivity is the
+    cells' rows one after the other)."""
 
     def __init__(self, points: np.ndarray, cell_type: str, cells: np.ndarray):
         self.points, self.cells = len(points), len(cells)
@@ -34,7 +45,7 @@ class Grid:
         offsets = np.arange(1, self.cells + 1, dtype=index) * cells.shape[1]
         types = np.full(self.cells, CELL_TYPES[cell_type], dtype=np.uint8)
         self.xml = "\n".join(["<Points>", _data_array("Points", points), "</Points>", "<Cells>",
-                              _data_array("connectivity", cells), _data_array("offsets", offsets),
+                              _data_array("connectivity", cells.ravel()), _data_array("offsets", offsets),
                               _data_array("types", types), "</Cells>"])
 
 
@@ -58,13 +69,16 @@ def write_vtu(path: str | Path, grid: Grid, point_data: Mapping[str, np.ndarray]
 
 
 def _data_array(name: str, values: np.ndarray) -> str:
-    """One DataArray element: ``values`` in VTK's uncompressed binary format (see the module docstring)."""
+    """One DataArray element: ``values`` (n,) or (n, components) in VTK's uncompressed binary format (see the
+    module docstring), the components of a 9-component array named as those of a tensor."""
     values = np.asarray(values)
     kind = values.dtype.kind
     dtype = "<f8" if kind == "f" else "u1" if kind in "bu" and values.itemsize == 1 else \
         "<i4" if values.dtype == np.int32 else "<i8"
     values = np.ascontiguousarray(values, dtype=dtype)
     components = f' NumberOfComponents="{values.shape[1]}"' if values.ndim == 2 else ""
+    if values.ndim == 2 and values.shape[1] == len(TENSOR_COMPONENTS):
+        components += "".join(f' ComponentName{i}="{c}"' for i, c in enumerate(TENSOR_COMPONENTS))
     encoded = base64.b64encode(np.uint64(values.nbytes).tobytes() + values.tobytes()).decode("ascii")
     return (f'<DataArray type="{VTK_TYPES[values.dtype]}" Name={quoteattr(name)}{components} format="binary">'
             f"{encoded}</DataArray>")

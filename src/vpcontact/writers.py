@@ -326,12 +326,27 @@ def field_meshes(discretization) -> tuple[tuple[np.ndarray, str, np.ndarray],
     return body, (in_space(surface.coordinates.T), facet_cells, surface.facets.T) if surface.size else None
 
 
+def body_data(discretization, fields) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """The point data and the cell data of the body's field files for ``fields`` (the Fields of one step) on
+    ``discretization``: point data the displacement (n, 3); cell data the stress (3 × 3 as 9 components row by
+    row, σ33 of the plane reduction in 2D), the von Mises stress, each element's material (an integer, its
+    index in the case's material list), E and ν, and the history z (9 components) and the error indicator
+    η_K when the run has them."""
+    cell_data = {"stress": tensors_in_space(fields.stress, fields.stress33), "von_mises": fields.von_mises,
+                 "material": discretization.material.astype(np.int32), "E": np.array(discretization.materials.E),
+                 "nu": np.array(discretization.materials.nu)}
+    if fields.z is not None:
+        cell_data["z"] = tensors_in_space(fields.z)
+    if fields.error_indicator is not None:
+        cell_data["error_indicator"] = fields.error_indicator
+    return {"displacement": in_space(fields.displacement)}, cell_data
+
+
 def field_frames(result: Result) -> Iterator[FieldFrame]:
-    """The field files' data at each field step, in step order: the body's displacement; its stress (3 × 3,
-    σ33 of the plane reduction in 2D), von Mises stress, each element's material (its index in the case's
-    material list), E and ν, the history z and the error indicator η_K when the run has them; on the contact
-    part the CONTACT_ARRAYS, the pressure (compliance + rigid), the normal, the contact force, the
-    displacement and the local layer parameters (``layer_columns``)."""
+    """The field files' data at each field step, in step order: the body's (``body_data``); on the contact
+    part the CONTACT_ARRAYS (``status`` an integer, the index in STATUS_NAMES), the pressure (compliance +
+    rigid), the normal, the contact force, the displacement and the local layer parameters
+    (``layer_columns``; ``part`` an integer)."""
     view = result.discretization
     surface = view.surface
     if surface.size:
@@ -339,26 +354,19 @@ def field_frames(result: Result) -> Iterator[FieldFrame]:
         layer = layer_columns(view)
         if "part" in layer:  # point data are numbers: the index in contact.parts
             layer["part"] = surface.owner
-        layer = {key: np.asarray(value, dtype=float) for key, value in layer.items()}
+        layer = {key: np.asarray(value, dtype=np.int32 if key == "part" else float) for key, value in layer.items()}
         end_rows = result.end_of_step_rows()
-    materials = {"material": view.material.astype(np.int32), "E": np.array(view.materials.E),
-                 "nu": np.array(view.materials.nu)}
     for step, fields in sorted(result.fields.items()):
-        displacement = in_space(fields.displacement)
-        cell_data = {"stress": tensors_in_space(fields.stress, fields.stress33), "von_mises": fields.von_mises,
-                     **materials}
-        if fields.z is not None:
-            cell_data["z"] = tensors_in_space(fields.z)
-        if fields.error_indicator is not None:
-            cell_data["error_indicator"] = fields.error_indicator
+        point_data, cell_data = body_data(view, fields)
         contact = None
         if surface.size:
-            data = {key: np.asarray(result.contact[key][end_rows[step]], dtype=float) for key in CONTACT_ARRAYS}
+            data = {key: np.asarray(result.contact[key][end_rows[step]], dtype=np.int32 if key == "status" else float)
+                    for key in CONTACT_ARRAYS}
             pressure = data["pressure_compliance"] + data["pressure_rigid"]
             contact = {**data, "pressure": pressure, "normal": normal,
                        "contact_force": -normal * (surface.weights * pressure)[:, None],
-                       "displacement": displacement[surface.nodes], **layer}
-        yield FieldFrame(step, float(view.times[step - 1]), {"displacement": displacement}, cell_data, contact)
+                       "displacement": point_data["displacement"][surface.nodes], **layer}
+        yield FieldFrame(step, float(view.times[step - 1]), point_data, cell_data, contact)
 
 
 def _write_fields(result: Result, folder: Path) -> None:

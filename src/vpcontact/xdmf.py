@@ -8,10 +8,13 @@ For each of the body and the contact part (with contact), two files in ``fields/
   whose topology and geometry point to the one ``/mesh`` of the HDF5 file and whose attributes point to
   that step's arrays.
 
-ParaView (its XDMF3 readers), VisIt and meshio's ``meshio.xdmf.TimeSeriesReader`` read them; a run of a
-thousand field steps stores its mesh once (the VTU files of ``fields/body.pvd`` store it in each file).
-The arrays are those of the VTU files (:func:`vpcontact.writers.field_frames`). Each file is written
-atomically, the HDF5 file before the XDMF file that describes it.
+VTK's ``vtkXdmfReader`` (ParaView's "XDMF Reader"; the tests read every series with it), ParaView's Xdmf3
+readers, VisIt and meshio's ``meshio.xdmf.TimeSeriesReader`` read them; a run of a thousand field steps
+stores its mesh once (the VTU files of ``fields/body.pvd`` store it in each file). The arrays are those of
+the VTU files (:func:`vpcontact.writers.field_frames`), of the same types (integers as Int); a 2D contact
+part's segments are a Polyline topology of 2 nodes per element (XDMF has no linear line cell: VTK reads
+them as poly lines of 2 points, meshio as lines). Each file is written atomically, the HDF5 file before
+the XDMF file that describes it.
 """
 
 from __future__ import annotations
