@@ -15,7 +15,9 @@ moment leaves the previous complete checkpoint. state.npz holds
 - the :class:`~vpcontact.stepping.LoopState`: the step reached, ξ, z and 𝒢 there (viscoplastic
   history), and the last StepSolution (u at the free dofs for the full solver, λ, d, the active set,
   its report) and its trend (how u, λ and d changed since the level before): the next Newton
-  iteration starts from the same prediction as in an uninterrupted run;
+  iteration starts from the same prediction as in an uninterrupted run; ``rigid``, the body's
+  position on the rigid motions only the contact holds (where a level that nothing presses leaves it,
+  :mod:`vpcontact.resting`);
 - the history rows (one array per column) and the per-node contact arrays so far (rows × m);
 - ``meta`` (JSON): the field steps saved, step cuts, wall time and linear solves so far, the steps
   where the run was resumed before, the versions.
@@ -104,6 +106,7 @@ def save(loop: TimeLoop, out: Path) -> None:
         "mesh_digest": np.array(mesh_digest(loop.problem)),
         "step": np.array(state.step),
         "xi": state.xi,
+        "rigid": loop.rigid_position(),
     }
     if state.z is not None:
         arrays["z"] = state.z
@@ -169,7 +172,8 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
                                 float(complementarity), True)
     trend = Trend(arrays.get("trend_u"), arrays["trend_lam"], arrays["trend_d"]) if "trend_lam" in arrays else None
     step = int(arrays["step"])
-    loop.state = LoopState(step, arrays["xi"], arrays.get("z"), arrays.get("rate"), previous, trend)
+    loop.state = LoopState(step, arrays["xi"], arrays.get("z"), arrays.get("rate"), previous, trend,
+                           rigid=arrays["rigid"])
     columns = {column: arrays[f"row_{column}"] for column in result.columns}
     rows = len(arrays["row_time"])
     result.rows = [{column: (int(values[i]) if column in INTEGER_COLUMNS else np.float64(values[i]))

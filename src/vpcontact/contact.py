@@ -230,6 +230,20 @@ class ContactLaw:
         """ρ K(ξ): the stiffness coefficient in force (the paper's K_ρ)."""
         return self.rho * self.stiffness(xi)
 
+    def violation(self, d: np.ndarray, xi: np.ndarray) -> tuple[str, int, float, str, float] | None:
+        """The first contact node where K(ξ) or p(d) is not a finite number ≥ 0 (a user's law that turns
+        negative, a law evaluated beyond its range, an overflow): (the law, "K(ξ)" or "p(r)"; the node's index;
+        the value; the argument's name, "ξ" or "r"; its value at the node), K checked first; None when both
+        laws are valid at every node."""
+        with np.errstate(all="ignore"):  # the values that are not valid are reported
+            for law, values, name, argument in (("K(ξ)", self.stiffness(xi), "ξ", xi), ("p(r)", self.p(d), "r", d)):
+                values = np.broadcast_to(np.asarray(values, dtype=float), np.shape(argument))
+                wrong = np.flatnonzero(~(np.isfinite(values) & (values >= 0.0)))
+                if wrong.size:
+                    i = int(wrong[0])
+                    return law, i, float(values[i]), name, float(argument[i])
+        return None
+
     def pressure(self, d: np.ndarray, xi_prev: np.ndarray, k: float) -> tuple[np.ndarray, np.ndarray]:
         """Compliance pressure ρ K(ξ_prev + k d⁺) p(d) and its derivative in d (the generalized one).
 

@@ -45,9 +45,11 @@ from .indicators import Level
 from .problem import Problem
 from .residual_estimate import ResidualEstimator
 from .results import Fields, Result, check_memory
+from .resting import least_shift, unbalanced
 from .rigid_modes import RigidModes
 from .solvers import DofLayout, StepData, StepSolution, make_solver
 from .solvers.errors import NotConvergedError, SingularMatrixError
+from .space import coordinates
 
 #: The solver's counters of work in the time loop that summary.json reports (summed over the sessions of a
 #: resumed run): solves with a factored matrix, Krylov iterations, Newton matrices factored.
@@ -64,6 +66,8 @@ class LoopState:
     rate: np.ndarray | None  # 𝒢(σ, ε) at the last level; None: 𝒢 = 0
     previous: StepSolution | None  # the last level's solution
     trend: Trend | None = None  # how it changed since the level before (None: no level before)
+    step_problem: StepData | None = None  # the last level's step problem (None: the initial level, or a resumed run)
+    rigid: np.ndarray | None = None  # Zᵀu at the last level, where known (see TimeLoop.rigid_position)
     _z_after: tuple = field(default=(None, None), init=False, repr=False, compare=False)  # (h, z_after(h))
 
     def z_after(self, h: float) -> np.ndarray | None:
@@ -103,13 +107,17 @@ class Trend:
 
 @dataclass
 class _Attempt:
-    """A (sub-)step tried from the current state."""
+    """A (sub-)step tried from the current state; ``resultant``: ‖Zᵀb‖, the loads' resultant on the rigid
+    motions held only by contact (0 when there are none); ``rigid``: Zᵀu where the time loop placed the
+    body itself (a level where nothing presses it: :mod:`vpcontact.resting`), else None."""
 
     t: float
     h: float
     step: StepData
     z: np.ndarray | None
     solution: StepSolution
+    resultant: float = 0.0
+    rigid: np.ndarray | None = None
 
 
 class TimeLoop:
@@ -135,8 +143,11 @@ class TimeLoop:
         modes = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs)
         layout = DofLayout(free, mesh.dim(), mesh.nvertices, modes.matrix[free].toarray())
         rigid = modes.free_basis(free)
-        self._held_by_contact_only = rigid.shape[1] > 0 and surface.size > 0  # see _floating
-        self._largest_pressure = None  # the largest contact pressure of the levels so far (see _floating)
+        self._held_by_contact_only = rigid.shape[1] > 0 and surface.size > 0  # see _resting
+        self._rigid = rigid  # Z: an orthonormal basis of the rigid motions held only by contact (free dofs, k)
+        self._rigid_at_contact = surface.operator[:, free] @ rigid  # N Z: how they move the contact nodes (m, k)
+        # the largest contact pressure, and resultant ‖Zᵀb‖ of the loads, of the levels so far (see _resting)
+        self._largest_pressure = self._largest_resultant = None
         self._tolerance = options.tolerance
         self.solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
                                   surface.weights, surface.gap0, rigid=rigid,
@@ -173,7 +184,8 @@ class TimeLoop:
             d0 = surface.operator @ u0 - surface.gap0
             start = StepSolution(u0[problem.free], np.zeros(surface.size), d0, np.zeros(surface.size, dtype=bool), 0,
                                  np.nan, np.nan, True)
-        return LoopState(0, initial.xi.copy(), z0 if history else None, rate, start)
+        return LoopState(0, initial.xi.copy(), z0 if history else None, rate, start,
+                         rigid=self._rigid.T @ u0[problem.free])
 
     # --- the loop ---------------------------------------------------------------------------------
     def run(self, *, progress: bool = False, after_step: Callable[["TimeLoop"], None] | None = None,
@@ -247,6 +259,9 @@ class TimeLoop:
             return f"step {n} (t = {t_n:g}) failed{'' if t == t_n else ' at a sub-step'}: {error}"
         if attempt.solution.converged:
             return self._accept(n, t == self.problem.times[n - 1], attempt)
+        pulled = self._pulled_off(n, attempt)
+        if pulled is not None:
+            return pulled
         if cuts == self.max_cuts:
             return self._failure_message(n, attempt, cuts)
         self.result.step_cuts += 1
@@ -258,11 +273,13 @@ class TimeLoop:
         problem, state = self.problem, self.state
         z = state.z_after(h)
         b = self._loads(t)
+        support = None if z is not None else self._loads.support
         try:
             with np.errstate(all="ignore"):  # the solvers report iterates that are not finite
                 if z is not None:
                     b -= stress_force(problem.basis, z)[problem.free]
-                step = StepData(b, problem.law, state.xi, h, None if z is not None else self._loads.support)
+                b, support, resultant = self._without_rounding_resultant(b, support)
+                step = StepData(b, problem.law, state.xi, h, support)
                 solution = self.solver.solve(step, state.start(h))
         except SingularMatrixError as error:
             solution = self._failed(f"the Newton matrix is singular ({error})",
@@ -271,7 +288,22 @@ class TimeLoop:
         except NotConvergedError as error:
             solution = self._failed(f"the Newton system was not solved ({error})",
                                     "try smaller time steps (time.steps), or solver.method = \"full\" (a direct solver)")
-        return _Attempt(t, h, step, z, solution)
+        return _Attempt(t, h, step, z, solution, resultant)
+
+    def _without_rounding_resultant(self, b: np.ndarray, support: np.ndarray | None) -> tuple:
+        """(b, its support, ‖Zᵀb‖) for a body that only the contact holds: a resultant of the loads on its free
+        rigid motions that is within ``solver.tolerance`` of zero, relative to the largest one of the run so far
+        (a load that passes through zero, evaluated at a time that misses the zero by a rounding: log(t) at
+        t = 1 + 2e-16), is the rounding of a zero resultant, and is removed, b − Z Zᵀb: no contact force can
+        pull, so a body pulled by a rounding error would have no solution."""
+        if not self._held_by_contact_only:
+            return b, support, 0.0
+        Z = self._rigid
+        r = Z.T @ b if support is None else Z[support].T @ b[support]
+        size = float(np.linalg.norm(r))
+        if 0.0 < size <= self._tolerance * self._largest_so_far()[1]:
+            return b - Z @ r, None, 0.0
+        return b, support, size
 
     def _failed(self, message: str, advice: str) -> StepSolution:
         """The record of a step whose Newton iteration stopped on a failed linear solve."""
@@ -288,10 +320,19 @@ class TimeLoop:
 
     def _accept_finite(self, n: int, ends_step: bool, attempt: _Attempt) -> str | None:
         problem, state, result = self.problem, self.state, self.result
-        solution, law, h = attempt.solution, problem.law, attempt.h
+        law, h = problem.law, attempt.h
+        compliance, _ = law.pressure(attempt.solution.d, state.xi, h)
+        if self._held_by_contact_only and np.all(np.isfinite(compliance)):
+            attempt, failure = self._resting(n, attempt, compliance)
+            if failure is not None:
+                return failure
+            compliance, _ = law.pressure(attempt.solution.d, state.xi, h)
+        solution = attempt.solution
         d = solution.d
-        compliance, _ = law.pressure(d, state.xi, h)
         xi = state.xi + h * np.maximum(d, 0.0)
+        invalid = self._invalid_law(n, attempt.t, d, xi)
+        if invalid is not None:
+            return invalid
         K = law.K(xi)
         fields, rate, computed = None, None, None
         G = problem.viscoplastic
@@ -319,9 +360,6 @@ class TimeLoop:
                      "float64 overflow: state the loads, moduli and laws in units that keep them far from 1e308")
             return (f"step {n} (t = {problem.times[n - 1]:g}) failed: {wrong[0]} is not finite at t = "
                     f"{attempt.t:.10g} ({cause})")
-        floating = self._floating(n, attempt, compliance)
-        if floating is not None:
-            return floating
         self._substep += 1
         result.record(n, attempt.t, solution, fields, xi=xi, K=K, compliance=compliance,
                       status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step)
@@ -330,32 +368,129 @@ class TimeLoop:
             level = Level(problem, n, attempt.t, h, fields, result.contact_row())
             result.record_estimate(self.estimator(level), fields)
         trend = None if state.previous is None else Trend.between(state.previous, solution, h)
-        self.state = LoopState(state.step, xi, attempt.z, rate, solution, trend)
+        self.state = LoopState(state.step, xi, attempt.z, rate, solution, trend, attempt.step, attempt.rigid)
+        if self._held_by_contact_only:
+            recorded = result.contact_row()
+            self._remember_largest(recorded["pressure_compliance"], recorded["pressure_rigid"])
         return None
 
-    def _floating(self, n: int, attempt: _Attempt, compliance: np.ndarray) -> str | None:
-        """The failure of a level at which no contact node carries a force while the Dirichlet conditions leave
-        a rigid motion free: nothing holds the body there, so the step problem does not determine its position
-        (any rigid motion that keeps the nodes separated solves it, and a Newton iteration would return the one
-        its start holds: the last levels' motion extrapolated). A node carries a force when its pressure is
-        above ``solver.tolerance`` times the largest pressure of the run so far (below is the rounding of a
-        zero force). None when the level is determined."""
-        if not self._held_by_contact_only:
-            return None
-        if self._largest_pressure is None:  # a new run, or one resumed with its levels so far
-            contact = self.result.contact
-            self._largest_pressure = max((float(np.max(c + r, initial=0.0)) for c, r in
-                                          zip(contact["pressure_compliance"], contact["pressure_rigid"])), default=0.0)
+    def _resting(self, n: int, attempt: _Attempt, compliance: np.ndarray) -> tuple[_Attempt, str | None]:
+        """A level of a body that only the contact holds, as accepted: the attempt itself while a contact node
+        carries a force (its pressure above ``solver.tolerance`` times the largest pressure of the run so far;
+        below is the rounding of a zero force); where none does, nothing presses the body on the foundation and
+        its position is not determined by the step problem (any rigid motion that keeps the nodes unloaded
+        solves it: the Newton iteration returns the one its start holds), so the body is placed where it
+        changes least from the last level (:mod:`vpcontact.resting`), its contact nodes unloaded. The failure's
+        message instead when no such place exists (a node that no free motion moves, beyond its room)."""
+        solution = attempt.solution
+        largest_pressure = self._largest_so_far()[0]
         w = self.problem.surface.weights
-        rigid = np.divide(attempt.solution.lam, w, out=np.zeros_like(w), where=w > 0)
-        largest = float(np.max(compliance + rigid, initial=0.0))
-        if largest > self._tolerance * self._largest_pressure:
-            self._largest_pressure = max(self._largest_pressure, largest)
+        rigid = np.divide(solution.lam, w, out=np.zeros_like(w), where=w > 0)
+        if np.max(compliance + rigid, initial=0.0) > self._tolerance * largest_pressure:
+            return attempt, None
+        NZ = self._rigid_at_contact
+        before = self.rigid_position()
+        now = self.solver.rigid_coordinates(attempt.step, solution)
+        room = self._room(attempt.step)
+        allowance = self._tolerance * self.problem.mesh.diameter  # the complementarity the Newton iteration allows
+        shift = least_shift(NZ, solution.d + NZ @ (before - now), room, allowance)
+        if shift is None:
+            return attempt, (f"step {n} (t = {self.problem.times[n - 1]:g}) failed: at t = {attempt.t:.10g} no "
+                             f"contact node carries a force, the Dirichlet conditions leave a rigid motion of the body "
+                             f"free, and no such motion takes every contact node off the layer: hold that motion with "
+                             f"boundary.dirichlet entries")
+        place = before + shift
+        m = solution.d.size
+        d = np.minimum(solution.d + NZ @ (place - now), room)  # the nodes placed at their room: exactly there
+        placed = replace(solution, u=None if solution.u is None else solution.u + self._rigid @ (place - now), d=d,
+                         lam=np.zeros(m), active=np.zeros(m, dtype=bool))
+        return replace(attempt, solution=placed, rigid=place), None
+
+    def _room(self, step: StepData) -> np.ndarray:
+        """The largest penetration at which each contact node carries no force: g where the layer carries none
+        up to g (K = 0: the Signorini condition with gap g), else 0 (the layer's surface)."""
+        law, m = step.law, step.xi_prev.size
+        g = np.broadcast_to(np.asarray(law.g, dtype=float), (m,))
+        room = np.zeros(m)
+        finite = np.isfinite(g)
+        if np.any(finite):
+            pressure, _ = law.pressure(np.where(finite, g, 0.0), step.xi_prev, step.k)
+            unloaded = finite & (pressure == 0.0)
+            room[unloaded] = g[unloaded]
+        return room
+
+    def rigid_position(self) -> np.ndarray:
+        """Zᵀu at the last level: the coordinates of the body's displacement on the rigid motions held only by
+        contact (empty when there are none); what a checkpoint keeps for the levels where nothing presses the
+        body (see ``_resting``)."""
+        state = self.state
+        if state.rigid is None:
+            known = self._rigid.shape[1] > 0
+            state.rigid = self.solver.rigid_coordinates(state.step_problem, state.previous) if known else np.zeros(0)
+        return state.rigid
+
+    def _largest_so_far(self) -> tuple[float, float]:
+        """The largest contact pressure and the largest resultant of the contact forces on the rigid motions held
+        only by contact (which balances the loads' ‖Zᵀb‖), over the levels so far (of a new run: none; of a
+        resumed one: from its recorded contact pressures, so that it decides as the uninterrupted run does)."""
+        if self._largest_pressure is None:
+            self._largest_pressure = self._largest_resultant = 0.0
+            contact = self.result.contact
+            for compliance, rigid in zip(contact["pressure_compliance"], contact["pressure_rigid"]):
+                self._remember_largest(compliance, rigid)
+        return self._largest_pressure, self._largest_resultant
+
+    def _remember_largest(self, compliance: np.ndarray, rigid: np.ndarray) -> None:
+        """Take a level, its compliance and rigid-base pressures as recorded, into the largest pressure and
+        resultant so far (see ``_largest_so_far``)."""
+        largest_pressure, largest_resultant = self._largest_so_far()
+        pressure = compliance + rigid
+        resultant = float(np.linalg.norm(self._rigid_at_contact.T @ (self.problem.surface.weights * pressure)))
+        self._largest_pressure = max(largest_pressure, float(np.max(pressure, initial=0.0)))
+        self._largest_resultant = max(largest_resultant, resultant)
+
+    def _pulled_off(self, n: int, attempt: _Attempt) -> str | None:
+        """The failure of a step whose loads have a resultant on the rigid motions held only by contact that no
+        contact pressures can balance, by more than ``solver.tolerance`` relative to the loads (they pull the
+        body off the foundation: no time step, however short, has a solution); None otherwise."""
+        if not self._held_by_contact_only or attempt.resultant == 0.0:
             return None
-        return (f"step {n} (t = {self.problem.times[n - 1]:g}) failed: at t = {attempt.t:.10g} no contact node carries "
-                f"a force and the Dirichlet conditions leave a rigid motion of the body free, so nothing holds the body "
-                f"and its position is not determined; keep a load pressing it on the foundation, or hold that motion "
-                f"with boundary.dirichlet entries")
+        step = attempt.step
+        Z = self._rigid
+        resultant = Z.T @ step.b if step.support is None else Z[step.support].T @ step.b[step.support]
+        pull = unbalanced(self._rigid_at_contact, resultant)
+        if not pull > self._tolerance * step.b_norm:
+            return None
+        motions = "a rigid motion" if Z.shape[1] == 1 else f"{Z.shape[1]} rigid motions"
+        it, that = ("it", "that motion") if Z.shape[1] == 1 else ("them", "those motions")
+        return (f"step {n} (t = {self.problem.times[n - 1]:g}) failed: at t = {attempt.t:.10g} the loads pull the body "
+                f"off the foundation: the Dirichlet conditions leave {motions} of the body free, and {pull:.3g} of the "
+                f"loads' resultant on {it} ({pull / attempt.resultant:.0%}) is a pull that no contact pressure can "
+                f"balance, so nothing holds the body; keep the loads pressing it on the foundation, or hold {that} with "
+                f"boundary.dirichlet entries")
+
+    def _invalid_law(self, n: int, t: float, d: np.ndarray, xi: np.ndarray) -> str | None:
+        """The failure of a level where the contact laws K(ξ) or p(r) are not finite numbers ≥ 0 at some contact
+        node (a layer cannot pull: a user's law that turns negative, or one evaluated beyond its range); None when
+        they are valid everywhere."""
+        wrong = self._law_violation(d, xi)
+        if wrong is None:
+            return None
+        return f"step {n} (t = {self.problem.times[n - 1]:g}) failed: at t = {t:.10g} {wrong}"
+
+    def _law_violation(self, d: np.ndarray, xi: np.ndarray) -> str | None:
+        """Where the contact laws are not finite numbers ≥ 0 (see ContactLaw.violation), in words: the law, its
+        value, the node, where it is and the law's argument there, and what to check; None if nowhere."""
+        violation = self.problem.law.violation(d, xi)
+        if violation is None:
+            return None
+        law, i, value, argument, at = violation
+        surface = self.problem.surface
+        names = ", ".join(coordinates(surface.coordinates.shape[0]))
+        where = ", ".join(f"{c:.6g}" for c in surface.coordinates[:, i])
+        key = "contact.stiffness" if law.startswith("K") else "contact.p"
+        return (f"the contact law {law} is {value:.6g} at contact node {i} ({names}) = ({where}), where {argument} = "
+                f"{at:.6g}; it must be a finite number >= 0 (a layer cannot pull): check {key} at this {argument}")
 
     def _fields(self, u_free: np.ndarray, strain: np.ndarray, sigma: np.ndarray, z: np.ndarray | None) -> Fields:
         """The Fields of a level from its displacement at the free dofs, ε, σ and z (elements last)."""
@@ -379,6 +514,9 @@ class TimeLoop:
             counts = (f"; contact nodes separated/in compliance/at limit = {int(np.sum(status == SEPARATED))}/"
                       f"{int(np.sum(status == IN_COMPLIANCE))}/{int(np.sum(status == AT_LIMIT))}")
         advice = f"; {s.advice}" if s.advice else ""
+        if s.d.size and np.all(np.isfinite(s.d)):
+            wrong = self._law_violation(s.d, self.state.xi + attempt.h * np.maximum(s.d, 0.0))
+            advice = f"; at the last iterate {wrong}" if wrong is not None else advice
         if attempt.z is not None and not np.isfinite(s.residual) and self.state.rate is not None:
             advice = (f"; the viscoplastic history reaches |z| = {np.abs(attempt.z).max():.3g}: is the explicit step "
                       f"k = {self.problem.k:g} small against the law's relaxation time?")

@@ -279,6 +279,7 @@ class CondensedNewton(SemismoothNewton):
         self.recoveries = self.refinements = 0
         self._step, self._load_vector, self._d_free, self._b_norm = None, None, None, 0.0
         self._pending = None  # the split solve of this step's load, when N A0⁻¹ b came from one
+        self._rigid_solved = None  # (Y, N Y), Y = A0⁻¹ Z: see rigid_coordinates
 
     def solve(self, step: StepData, previous: StepSolution | None) -> StepSolution:
         solution = super().solve(step, previous)
@@ -394,8 +395,11 @@ class CondensedNewton(SemismoothNewton):
         return np.where(active, s, z), np.where(active, z, -lam)
 
     def solution(self, step, x, ev: Evaluation, iterations, converged, message="", advice="") -> StepSolution:
-        return StepSolution(None, x[1], ev.d_solution, ev.state.active, iterations, ev.residual,
-                            ev.complementarity, converged, message, advice)
+        """The penetration of the displacement returned, or, of an iteration that stopped on values that are not
+        finite, the iterate's own d where it is finite (where the laws were evaluated: the failure names them)."""
+        d = ev.d_solution if converged or np.all(np.isfinite(ev.d_solution)) else ev.d
+        return StepSolution(None, x[1], d, ev.state.active, iterations, ev.residual, ev.complementarity, converged,
+                            message, advice)
 
     def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
         """u at the free dofs: the refined one, or u = A0⁻¹ (b − Nᵀ q) (at most one solve)."""
@@ -403,6 +407,21 @@ class CondensedNewton(SemismoothNewton):
             return solution.u
         self._free_penetration(step)
         return self._recover(solution)
+
+    def rigid_coordinates(self, step: StepData, solution: StepSolution) -> np.ndarray:
+        """Zᵀu, the coordinates of the solution's displacement on the rigid motions held only by contact,
+        without recovering u: Zᵀ A0⁻¹ (b − Nᵀq) = Yᵀ b − (N Y)ᵀ q with Y = A0⁻¹ Z, solved once (k columns)
+        when first asked for (only a body that the contact alone holds, at a level where nothing presses it,
+        and its checkpoints ask)."""
+        if solution.u is not None:
+            return self.Z.T @ solution.u
+        if self._rigid_solved is None:
+            Y = self.factorization.solve(self.Z)
+            self._rigid_solved = (Y, self.N @ Y)
+        Y, NY = self._rigid_solved
+        state = ContactState.evaluate(step, self.weights, solution.d, solution.lam, self.r)
+        b = self._load_vector if step is self._step else step.b
+        return Y.T @ b - NY.T @ self._load(state, solution.d, solution.lam)
 
 
 def condensed_memory(N: sp.csr_matrix, n: int) -> int:

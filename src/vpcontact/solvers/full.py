@@ -130,6 +130,10 @@ class FullNewton(SemismoothNewton):
         """u at the free dofs (the iterate itself)."""
         return solution.u
 
+    def rigid_coordinates(self, step: StepData, solution: StepSolution) -> np.ndarray:
+        """Zᵀu: the coordinates of the solution's displacement on the rigid motions held only by contact."""
+        return self.Z.T @ solution.u
+
 
 #: The inexact Newton method's forcing: the linear residual is at most this fraction of the nonlinear
 #: residual squared (superlinear convergence), and never needs to be below a tenth of the tolerance.
