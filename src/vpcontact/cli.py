@@ -45,7 +45,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--out", type=Path, required=True, help="output directory")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a case value, e.g. --set contact.stiffness.beta=-1 (repeatable)")
-    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--quiet", action="store_true", help="no progress lines or bar")
     replace = run.add_mutually_exclusive_group()
     replace.add_argument("--overwrite", action="store_true", help="replace a non-empty output directory")
     replace.add_argument("--resume", action="store_true",
@@ -88,12 +88,13 @@ def _refuse(error) -> int:
 
 def _run(args) -> int:
     from .case import load_case
+    from .progress import SILENT, Log
     from .rundir import EXIT_SIGNAL, run
 
     try:
         case = load_case(args.case, args.overrides)
-        progress = case.output.progress and not args.quiet and sys.stderr.isatty()
-        outcome = run(case, args.out, resume=args.resume, overwrite=args.overwrite, progress=progress)
+        with (Log() if case.output.progress and not args.quiet else SILENT) as progress:  # lines on stderr
+            outcome = run(case, args.out, resume=args.resume, overwrite=args.overwrite, progress=progress)
     except CaseError as error:
         return _refuse(error)
     except OSError as error:  # the run directory was replaced, or a write failed: the run stopped
