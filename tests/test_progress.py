@@ -241,7 +241,26 @@ def test_the_first_lines_are_held_back_and_dropped_if_the_run_fails_then():
             assert stream.getvalue() == "[00:00] method: condensed\n"  # the loop starts: the set-up went through
 
 
-# --- adaptive runs ------------------------------------------------------------------------
+# --- studies and adaptive runs ------------------------------------------------------------------------
+def test_a_study_logs_each_run_as_it_starts_and_ends(tmp_path):
+    (tmp_path / "base.toml").write_text(tomli_w.dumps(rectangle_case()))
+    (tmp_path / "study.toml").write_text('base = "base.toml"\n[[vary]]\n"contact.g" = [0.1, 0.2]\n'
+                                         '[[runs]]\nid = "stuck"\n"solver.max_iterations" = 1\n'
+                                         '"solver.method" = "full"\n"solver.max_step_cuts" = 0\n')
+    lines, status = streamed_run("study", tmp_path / "study.toml", "--out", tmp_path / "out", "--workers", "2")
+    assert status == 3, lines
+    text = [STAMP.sub("", line) for line, _, _ in lines if STAMP.match(line)]
+    assert text[0] == "study: 3 runs to do, on 2 worker processes", text
+    for run in ("g=0.1", "g=0.2"):
+        started, ended = text.index(f"run '{run}' started"), next(
+            i for i, line in enumerate(text) if line.startswith(f"run '{run}' complete ("))
+        assert started < ended, text
+    events = [line for line in text if line.startswith("run 'stuck'")]
+    assert [line.split(" (")[0].split(", ")[0] for line in events] == [
+        "run 'stuck' started", "run 'stuck' failed", "run 'stuck' started again", "run 'stuck' failed"], events
+    assert "to be tried again: step 1 (t = 0.1) failed" in events[1] and "3 of 3 runs done, 1 failed" in events[3]
+
+
 def test_an_adaptive_run_logs_each_cycle_and_its_refinement(tmp_path):
     case = half_disc_case(h=0.25)
     case["adapt"] = {"cycles": 2}
