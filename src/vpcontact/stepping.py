@@ -147,9 +147,7 @@ class TimeLoop:
                                   augmentation=options.augmentation, tolerance=options.tolerance,
                                   max_iterations=options.max_iterations, length_scale=problem.mesh.diameter,
                                   factorization=options.factorization, layout=layout, progress=progress,
-                                  setup_estimate=lambda method: estimate_seconds(
-                                      method, mesh.dim(), free.size, len(problem.times), history,
-                                      problem.timings["build"])["solver setup"])
+                                  setup_estimate=self._setup_estimate(history))
         self.max_cuts = options.max_step_cuts
         self._loads = problem.loads.on(free)  # F(t) at the free dofs
         self.result = Result.start(problem, self.solver, output)
@@ -163,6 +161,16 @@ class TimeLoop:
         # computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
         self._level_without_fields: tuple | None = None
         self._u = np.zeros(problem.basis.N)
+
+    def _setup_estimate(self, history: bool) -> Callable[[str], float] | None:
+        """The seconds the set-up of a method is expected to take (:mod:`vpcontact.time_estimate`, from the
+        problem's build time), for the progress lines; None for a problem without a build time."""
+        problem = self.problem
+        build = problem.timings.get("build")
+        if build is None:
+            return None
+        return lambda method: estimate_seconds(method, problem.mesh.dim, problem.free.size, len(problem.times), history,
+                                               build)["solver setup"]
 
     def _initial_state(self) -> LoopState:
         """The level t_0: ξ_0, z_0 = σ_0 − ℰε(u_0) and 𝒢(σ_0, ε(u_0)) (the j = 0 term of z), and u_0 with
