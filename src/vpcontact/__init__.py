@@ -31,7 +31,7 @@ API = {"Case": "case", "Model": "case", "load_case": "case", "CaseError": "error
 
 #: The modules of the package a user may reach as ``vpcontact.<name>`` after ``import vpcontact``.
 SUBMODULES = ("adapt", "assembly", "case", "check", "checkpoint", "compose", "contact", "discretization", "errors",
-              "expressions", "indicators", "material", "mesh", "norms", "plots", "problem", "refinement",
+              "expressions", "indicators", "material", "mesh", "norms", "plots", "problem", "progress", "refinement",
               "reproduction", "results", "run_reader", "rundir", "solvers", "stepping", "studies", "writers")
 
 
@@ -50,7 +50,7 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(API) | set(SUBMODULES))
 
 
-def solve(case, *, progress: bool = False, **laws) -> Result:
+def solve(case, *, progress=False, **laws) -> Result:
     """Solve a case (a :class:`Case`, or a path or dict for :func:`load_case`).
 
     ``laws`` replace parts of the case by Python objects (see :func:`build_problem`): ``p`` and
@@ -59,15 +59,19 @@ def solve(case, *, progress: bool = False, **laws) -> Result:
     replaces the case's traction on that part), ``body_force`` (f(x, y, t) -> (fx, fy): replaces the case's
     body forces), ``viscoplastic`` (𝒢(σ, ε)) and the initial state's arrays ``initial_displacement``
     (nodes, d), ``initial_stress`` (elements, d, d) or (d, d), ``initial_xi`` (contact nodes,).
-    Bad objects are a :class:`CaseError` before the first step.
+    Bad objects are a :class:`CaseError` before the first step. Nothing is printed, unless ``progress`` is
+    True (the set-up phases and the steps reported on stderr, as the command line does) or a reporter
+    (:mod:`vpcontact.progress`).
     """
     from .case import Case, load_case
     from .problem import build_problem
+    from .progress import reporting
     from .stepping import solve_problem
 
     if not isinstance(case, Case):
         case = load_case(case)
-    return solve_problem(build_problem(case, **laws), output=case.output, progress=progress)
+    with reporting(progress) as reporter:
+        return solve_problem(build_problem(case, progress=reporter, **laws), output=case.output, progress=reporter)
 
 
 __all__ = ["Case", "CaseError", "Model", "Problem", "Result", "build_problem", "compose", "load_case", "solve",

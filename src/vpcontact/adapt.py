@@ -29,6 +29,7 @@ from .errors import CaseError
 from .indicators import Indicators, Level
 from .mesh import Mesh
 from .problem import Problem
+from .progress import SILENT, Progress, duration, reporting
 from .refinement import refine
 from .residual_estimate import ResidualEstimator
 from .results import Result
@@ -96,13 +97,15 @@ def dorfler(values: np.ndarray, theta: float) -> np.ndarray:
 
 
 def solve_and_estimate(problem: Problem, settings: AdaptSection, output: OutputSection | None = None, *,
-                       stop: Callable[[], str | None] | None = None, progress: bool = False,
-                       after_step: Callable[[TimeLoop], None] | None = None) -> tuple[Result, np.ndarray]:
+                       stop: Callable[[], str | None] | None = None, progress: Progress = SILENT,
+                       after_step: Callable[[TimeLoop], None] | None = None,
+                       label: str = "time steps") -> tuple[Result, np.ndarray]:
     """Run the whole history of ``problem`` (with the outputs ``output``) and fold the indicators of
     ``settings.estimator`` at each step into the time functional ``settings.functional`` (see the module
-    docstring): (the run, F_K per element)."""
+    docstring): (the run, F_K per element); ``progress`` hears of the solver's set-up and of the steps
+    (``label``: their name on a terminal's bar)."""
     estimator = ESTIMATORS[settings.estimator](problem)
-    loop = TimeLoop(problem, output)
+    loop = TimeLoop(problem, output, progress)
     wanted = loop.result.field_steps
     loop.result.field_steps = range(1, len(problem.times) + 1)  # every step's fields, dropped once folded
     functional = np.zeros(problem.mesh.mesh.t.shape[1])
@@ -122,7 +125,7 @@ def solve_and_estimate(problem: Problem, settings: AdaptSection, output: OutputS
         if after_step is not None:
             after_step(loop)
 
-    result = loop.run(progress=progress, after_step=fold, stop=stop)
+    result = loop.run(after_step=fold, stop=stop, label=label)
     result.field_steps = wanted
     return result, functional
 
@@ -137,19 +140,30 @@ def check_start(problem: Problem, settings: AdaptSection) -> None:
 
 def adapt(problem: Problem, settings: AdaptSection, output: OutputSection | None = None, *,
           after_cycle: Callable[[Cycle], None] | None = None, stop: Callable[[], str | None] | None = None,
-          progress: bool = False, after_step: Callable[[TimeLoop], None] | None = None) -> Adaptation:
+          progress: bool | Progress = False, after_step: Callable[[TimeLoop], None] | None = None) -> Adaptation:
     """The adaptive cycles of ``settings`` (a case's ``[adapt]``, :class:`~vpcontact.case.AdaptSection`) from
     the mesh of ``problem``, each run with the outputs ``output`` (see the module docstring);
     ``after_cycle(cycle)`` is called after each (its outputs), ``stop`` and ``after_step`` are the time
-    loop's hooks."""
+    loop's hooks; ``progress``: True for each cycle, its set-up, steps and refinement reported on stderr
+    (:mod:`vpcontact.progress`), or a reporter."""
+    with reporting(progress) as reporter:
+        return _cycles(problem, settings, output, after_cycle, stop, reporter, after_step)
+
+
+def _cycles(problem: Problem, settings: AdaptSection, output: OutputSection | None, after_cycle, stop,
+            progress: Progress, after_step) -> Adaptation:
+    """The cycles of `adapt`, reported to ``progress``."""
     check_start(problem, settings)
     adaptation = Adaptation()
     started = clock.perf_counter() - problem.timings["build"]
     for number in range(1, settings.cycles + 1):
+        progress.note(f"adapt: cycle {number} of at most {settings.cycles}, {problem.basis.N:,} dofs")
         result, functional = solve_and_estimate(problem, settings, output, stop=stop, progress=progress,
-                                                after_step=after_step)
+                                                after_step=after_step, label=f"cycle {number}")
         now = clock.perf_counter()
         cycle = Cycle(number, result, functional, now - started)
+        progress.note(f"adapt: cycle {number} {result.status}, estimate {cycle.estimate:.4g} "
+                      f"({duration(cycle.wall_time_s)})")
         adaptation.rows.append(cycle.row)
         adaptation.last = cycle
         if after_cycle is not None:
@@ -166,13 +180,16 @@ def adapt(problem: Problem, settings: AdaptSection, output: OutputSection | None
             adaptation.message = f"cycle {number}: the estimate is zero, nothing to refine"
             break
         try:
-            mesh = refine(problem.mesh, marked)
+            with progress.phase("refinement", f"{marked.size:,} of {functional.size:,} elements marked "
+                                f"(adapt.theta = {settings.theta:g})") as phase:
+                mesh = refine(problem.mesh, marked)
+                phase.done(f"{mesh.mesh.p.shape[1]:,} nodes, {mesh.mesh.t.shape[1]:,} elements")
             dofs = mesh.dim * mesh.mesh.p.shape[1]
             if dofs > settings.max_dofs:
                 adaptation.message = (f"cycle {number}: the next mesh would have {dofs} dofs, more than adapt.max_dofs "
                                       f"= {settings.max_dofs}")
                 break
-            problem = problem.on(mesh)
+            problem = problem.on(mesh, progress)
         except CaseError as error:
             adaptation.status, adaptation.message = "failed", f"after cycle {number}: {error}"
             break

@@ -45,7 +45,7 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--out", type=Path, required=True, help="output directory")
     run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                      help="override a case value, e.g. --set contact.stiffness.beta=-1 (repeatable)")
-    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--quiet", action="store_true", help="no progress lines or bar")
     replace = run.add_mutually_exclusive_group()
     replace.add_argument("--overwrite", action="store_true", help="replace a non-empty output directory")
     replace.add_argument("--resume", action="store_true",
@@ -61,13 +61,14 @@ def _parser() -> argparse.ArgumentParser:
     where = study.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
     where.add_argument("--scheduler", default=None, metavar="ADDRESS", help="a Dask scheduler, e.g. tcp://host:8786")
-    study.add_argument("--quiet", action="store_true", help="no progress bar")
+    study.add_argument("--quiet", action="store_true", help="no progress lines or bar")
     reproduce = commands.add_parser("reproduce", help="regenerate every result of Sect. 4 of the paper, with a report")
     reproduce.add_argument("--out", type=Path, required=True, help="output directory (report.md, report.html, ...)")
     reproduce.add_argument("--quick", action="store_true", help="a coarse version (under 2 minutes)")
     reproduce.add_argument("--workers", type=int, default=None, help="worker processes of the studies (default: cores)")
     reproduce.add_argument("--overwrite", action="store_true", help="replace an earlier reproduction in --out")
-    reproduce.add_argument("--quiet", action="store_true", help="no progress lines")
+    reproduce.add_argument("--quiet", action="store_true",
+                           help="no progress lines (on stdout: the parts; on stderr: the runs)")
     return parser
 
 
@@ -88,12 +89,13 @@ def _refuse(error) -> int:
 
 def _run(args) -> int:
     from .case import load_case
+    from .progress import SILENT, Log
     from .rundir import EXIT_SIGNAL, run
 
     try:
         case = load_case(args.case, args.overrides)
-        progress = case.output.progress and not args.quiet and sys.stderr.isatty()
-        outcome = run(case, args.out, resume=args.resume, overwrite=args.overwrite, progress=progress)
+        with (Log() if case.output.progress and not args.quiet else SILENT) as progress:  # lines on stderr
+            outcome = run(case, args.out, resume=args.resume, overwrite=args.overwrite, progress=progress)
     except CaseError as error:
         return _refuse(error)
     except OSError as error:  # the run directory was replaced, or a write failed: the run stopped
@@ -187,6 +189,7 @@ def _describe(error: OSError) -> str:
 
 
 def _study(args) -> int:
+    from .progress import SILENT, Log
     from .rundir import EXIT_SIGNAL, StopOnSignals
     from .studies import load_study, run_study
 
@@ -197,10 +200,9 @@ def _study(args) -> int:
         study = load_study(args.study, args.out)
         if args.scheduler is not None:
             client = _connect(args.scheduler)
-        with StopOnSignals() as stopper:
+        with StopOnSignals() as stopper, (Log(hold=0.0, watch=False) if not args.quiet else SILENT) as progress:
             report = run_study(study, args.out, executor=client.get_executor() if client else None,
-                               workers=args.workers, progress=not args.quiet and sys.stderr.isatty(),
-                               stop=stopper.reason)
+                               workers=args.workers, progress=progress, stop=stopper.reason)
     except CaseError as error:
         return _refuse(error)
     except OSError as error:  # the study directory was replaced, or a write failed: the study stopped
@@ -237,13 +239,15 @@ def _connect(address: str):
 
 
 def _reproduce(args) -> int:
+    from .progress import SILENT, Log
     from .reproduction.reproduce import OutputError, ReproduceError, run
 
     if args.workers is not None and args.workers < 1:
         return _refuse(f"--workers {args.workers}: must be at least 1")
     log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
     try:
-        run(args.out, quick=args.quick, workers=args.workers, overwrite=args.overwrite, log=log)
+        with (SILENT if args.quiet else Log(hold=0.0)) as progress:  # its workers are spawned: a thread is safe
+            run(args.out, quick=args.quick, workers=args.workers, overwrite=args.overwrite, log=log, progress=progress)
     except OutputError as error:  # --out unusable: nothing was run
         return _refuse(error)
     except ReproduceError as error:

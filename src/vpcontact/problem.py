@@ -31,6 +31,7 @@ from .expressions import parse_expression, values_at
 from .initial import InitialState, initial_state
 from .material import Elasticity
 from .materials import AtCentroids, Materials, body_materials
+from .progress import SILENT, Progress
 from .rigid_modes import RigidModes
 from .space import CELLS, component, coordinates
 from .time_grid import TimeGrid
@@ -82,17 +83,19 @@ class Problem:
         """The options of the step solver (:class:`~vpcontact.case.SolverSection`)."""
         return self.model.solver
 
-    def on(self, mesh: meshes.Mesh) -> "Problem":
+    def on(self, mesh: meshes.Mesh, progress: Progress = SILENT) -> "Problem":
         """The same problem on ``mesh`` (a refinement, with the same parts and regions): the model and the
-        Python objects again, except arrays of an initial state, which belong to the mesh they were given on."""
+        Python objects again, except arrays of an initial state, which belong to the mesh they were given on;
+        ``progress`` hears of its assembly."""
         given = [name for name in INITIAL_ARRAYS if self.objects.get(name) is not None]
         if given:
             raise CaseError(f"{given[0]} is an array on the mesh the problem was built on: a problem with initial "
                             f"arrays cannot be built on another mesh; give the initial state by expressions instead")
-        return build_problem(self.model, mesh=mesh, **self.objects)
+        return build_problem(self.model, mesh=mesh, progress=progress, **self.objects)
 
-    def solve(self, *, output=None, progress: bool = False):
-        """The :class:`~vpcontact.results.Result` of the time loop (:func:`~vpcontact.stepping.solve_problem`)."""
+    def solve(self, *, output=None, progress: bool | Progress = False):
+        """The :class:`~vpcontact.results.Result` of the time loop (:func:`~vpcontact.stepping.solve_problem`);
+        ``progress``: True for lines on stderr (:mod:`vpcontact.progress`), or a reporter."""
         from .stepping import solve_problem
 
         return solve_problem(self, output=output, progress=progress)
@@ -111,7 +114,7 @@ INITIAL_ARRAYS = ("initial_displacement", "initial_stress", "initial_xi")
 def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable | None = None,
                   stiffness_law: Callable | None = None, tractions: Mapping | None = None,
                   body_force: Density | None = None, viscoplastic: Callable | None = None, initial_displacement=None,
-                  initial_stress=None, initial_xi=None) -> Problem:
+                  initial_stress=None, initial_xi=None, progress: Progress = SILENT) -> Problem:
     """Assemble the problem of ``model`` (a :class:`~vpcontact.model.Model`, or a whole
     :class:`~vpcontact.model.Case`, whose outputs and adaptive meshes are not part of the problem) on
     ``mesh``; the other keyword arguments replace parts of the model by Python objects:
@@ -139,7 +142,10 @@ def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable 
 
     Each is tried before the run (a law at 0 and 10⁻³ (at every contact node for a law of x), a load at
     every step time, 𝒢 at (σ_0, ε(u_0))): one that is not callable, takes other arguments, returns the wrong
-    shape or a value that is not finite is a CaseError."""
+    shape or a value that is not finite is a CaseError.
+
+    ``progress`` (:mod:`vpcontact.progress`) hears of the two phases: the mesh (when made here) and the assembly
+    (the operators, the loads, the contact surface and every check above)."""
     started = time.perf_counter()
     objects = {name: value for name, value in dict(
         p=p, stiffness_law=stiffness_law, tractions=tractions, body_force=body_force, viscoplastic=viscoplastic,
@@ -155,13 +161,30 @@ def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable 
     if mesh is None:
         if not isinstance(model, Case):
             raise CaseError("a model without [mesh] needs a mesh: build_problem(model, mesh=...)")
-        mesh = make_mesh(model.mesh, model.base_dir)
+        with progress.phase("mesh", mesh_words(model.mesh)) as phase:
+            mesh = make_mesh(model.mesh, model.base_dir)
+            phase.done(_mesh_size(mesh))
     model = model.model if isinstance(model, Case) else model
     if model.contact is None and (p is not None or stiffness_law is not None):
         raise CaseError("p and stiffness_law are laws of the contact, and the case has no [contact]")
     p = None if p is None else _api_law(p, "p")
     stiffness_law = None if stiffness_law is None else _api_law(stiffness_law, "stiffness_law")
     meshed = time.perf_counter()
+    with progress.phase("assembly", "stiffness, loads, contact surface and checks") as phase:
+        problem = _assembled(model, mesh, p, stiffness_law, tractions, body_force, viscoplastic, initial_displacement,
+                             initial_stress, initial_xi)
+        phase.done(f"{problem.free.size:,} free dofs of {problem.basis.N:,}, {problem.surface.size:,} contact nodes, "
+                   f"a stiffness of {problem.A.nnz:,} entries")
+    done = time.perf_counter()
+    problem.objects, problem.source = objects, source
+    problem.timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
+    return problem
+
+
+def _assembled(model: Model, mesh: meshes.Mesh, p, stiffness_law, tractions, body_force, viscoplastic,
+               initial_displacement, initial_stress, initial_xi) -> Problem:
+    """The problem of ``model`` on ``mesh`` (the laws of the API already wrapped; see build_problem), without
+    its timings, the objects of the API and the source."""
     dim = mesh.dim
     _check_dimension(model, dim)
     materials = body_materials(model, mesh)
@@ -211,10 +234,23 @@ def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable 
     grid = TimeGrid(model.time.T, model.time.steps, initial.start)
     loads.check(grid)
     _check_first_history(basis, initial, model.initial.stress, strain0, z0, viscoplastic, law_name, grid.k)
-    done = time.perf_counter()
-    timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
-    return Problem(model, objects, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic, timings,
-                   initial=initial, initial_strain=strain0, initial_history=z0, source=source)
+    return Problem(model, {}, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic,
+                   initial=initial, initial_strain=strain0, initial_history=z0)
+
+
+def mesh_words(m: MeshSection) -> str:
+    """The mesh a ``[mesh]`` section makes, in words: "reading FILE", or the shape and its sizes."""
+    if m.file is not None:
+        return f"reading {m.file}"
+    sizes = [f"{key} = {getattr(m, key):g}" for key in ("h", "h_bottom", "radius", "width", "depth", "height",
+                                                         "coating") if getattr(m, key) is not None]
+    return f"{m.shape.replace('_', ' ')}, {', '.join(sizes)}"
+
+
+def _mesh_size(mesh: meshes.Mesh) -> str:
+    """The sizes of a mesh, in words: nodes, elements, dofs."""
+    nodes, elements = mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
+    return f"{nodes:,} nodes, {elements:,} {CELLS[mesh.dim][2]}, {mesh.dim * nodes:,} dofs"
 
 
 def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:

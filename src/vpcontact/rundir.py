@@ -45,6 +45,7 @@ from .case import Case
 from .errors import CaseError
 from .mesh_file import write_mesh
 from .problem import Problem, build_problem
+from .progress import Progress, reporting
 from .results import Result
 from .run_reader import read_case, read_summary
 from .stepping import TimeLoop
@@ -70,11 +71,12 @@ class Outcome:
 
 
 def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = False,
-        progress: bool = False) -> Outcome:
+        progress: bool | Progress = False) -> Outcome:
     """Solve ``case`` into the run directory ``out`` (see the module's docstring). Bad input, an
     unusable ``out`` or a checkpoint of another case raise CaseError before anything is written; a
     run directory removed or replaced during the run raises DirectoryReplaced (an OSError, as does a
-    write that fails) and nothing more is written."""
+    write that fails) and nothing more is written. ``progress``: True for the set-up phases, the steps and
+    the outputs reported on stderr (:mod:`vpcontact.progress`), or a reporter."""
     out = Path(out)
     if resume and overwrite:
         raise CaseError("--resume and --overwrite exclude each other")
@@ -97,8 +99,8 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
     held = directory.acquire(out)  # before any computation: an unusable directory is refused at once
     started = False
     try:
-        with StopOnSignals() as stopper:
-            problem = build_problem(case)
+        with StopOnSignals() as stopper, reporting(progress) as progress:
+            problem = build_problem(case, progress=progress)
             if case.adapt is not None:
                 from .adapt import check_start  # an adaptive run only (as _adapt_locked)
 
@@ -107,10 +109,12 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
                 adaptation = _adapt_locked(problem, case, held, clear=overwrite and used, stopper=stopper,
                                            progress=progress)
                 return Outcome(adaptation.last.result, adaptation.status, adaptation.message, stopper.signal)
-            loop = TimeLoop(problem, case.output)
+            loop = TimeLoop(problem, case.output, progress)
             resuming = resume and checkpoint.exists(out)
             if resuming:
-                checkpoint.restore(loop, out)
+                with progress.phase("checkpoint", f"restoring {checkpoint.folder(out)}") as phase:
+                    checkpoint.restore(loop, out)
+                    phase.done(f"{loop.state.step:,} of {len(problem.times):,} steps done")
                 now = versions()
                 changed = [f"{name} {loop.stored_versions.get(name)} -> {version}" for name, version in now.items()
                            if loop.stored_versions.get(name) != version]
@@ -126,7 +130,8 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
     return Outcome(result, result.status, result.message, stopper.signal)
 
 
-def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool, stopper, progress: bool) -> Result:
+def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool, stopper,
+                progress: Progress) -> Result:
     """The run proper, in a directory this process holds: prepare it, loop with checkpoints, write.
     Every step and every write first checks that the directory is still the one locked."""
     out = held.path
@@ -144,19 +149,20 @@ def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool
             write_outputs(loop.result, out, history_only=True)
             cadence.saved(loop.state.step)
 
-    result = loop.run(progress=progress, after_step=after_step, stop=stopper.reason)
+    result = loop.run(after_step=after_step, stop=stopper.reason)
     if result.status == "interrupted":
         if cadence.last_step != loop.state.step or not checkpoint.exists(out):
             checkpoint.save(loop, out)
         result.message += f"; continue with --resume (checkpoint in {checkpoint.folder(out)})"
-    write_outputs(result, out)
+    with progress.phase("outputs", f"writing into {out}"):
+        write_outputs(result, out)
     if result.status != "interrupted":
         checkpoint.remove(out)
     return result
 
 
 def _adapt_locked(problem: Problem, case: Case, held: directory.Held, *, clear: bool, stopper,
-                  progress: bool) -> Adaptation:
+                  progress: Progress) -> Adaptation:
     """The adaptive cycles of ``case.adapt`` from ``problem`` (the case's) in a directory this process holds
     (see the module docstring)."""
     from .adapt import COLUMNS, adapt
@@ -174,7 +180,8 @@ def _adapt_locked(problem: Problem, case: Case, held: directory.Held, *, clear: 
         directory.mkdir(out / "cycles")
         folder = out / "cycles" / str(cycle.number)
         directory.mkdir(folder)
-        write_outputs(cycle.result, folder)
+        with progress.phase("outputs", f"writing cycle {cycle.number} into {folder}"):
+            write_outputs(cycle.result, folder)
         rows.append(cycle.row)
         with replacing(out / "adapt.csv") as temporary, temporary.open("w", newline="") as handle:
             writer = csv.DictWriter(handle, fieldnames=COLUMNS)

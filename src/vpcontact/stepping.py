@@ -35,7 +35,6 @@ from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
-from tqdm.auto import tqdm
 
 from .assembly import NonFiniteLoad, element_strain, stress_force
 from .case import OutputSection
@@ -43,6 +42,7 @@ from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from .material import von_mises
 from .indicators import Level
 from .problem import Problem
+from .progress import SILENT, Progress, StepReport, reporting
 from .residual_estimate import ResidualEstimator
 from .results import Fields, Result, check_memory
 from .resting import least_shift, unbalanced
@@ -50,6 +50,7 @@ from .rigid_modes import RigidModes
 from .solvers import DofLayout, StepData, StepSolution, make_solver
 from .solvers.errors import NotConvergedError, SingularMatrixError
 from .space import coordinates
+from .time_estimate import estimate_seconds
 
 #: The solver's counters of work in the time loop that summary.json reports (summed over the sessions of a
 #: resumed run): solves with a factored matrix, Krylov iterations, Newton matrices factored.
@@ -129,11 +130,14 @@ class TimeLoop:
     ``run`` takes two hooks: ``after_step(loop)``, called after every completed time step (the
     checkpoints of :mod:`vpcontact.rundir`), and ``stop()``, asked before every step (a signal
     asked the run to stop: the status becomes "interrupted").
+
+    ``progress`` (:mod:`vpcontact.progress`; default: silent) hears of the solver's set-up phases here, of
+    the time steps in ``run``.
     """
 
-    def __init__(self, problem: Problem, output: OutputSection | None = None):
+    def __init__(self, problem: Problem, output: OutputSection | None = None, progress: Progress = SILENT):
         started = clock.perf_counter()
-        self.problem = problem
+        self.problem, self.progress = problem, progress
         output = OutputSection() if output is None else output
         free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
@@ -153,7 +157,8 @@ class TimeLoop:
                                   surface.weights, surface.gap0, rigid=rigid,
                                   augmentation=options.augmentation, tolerance=options.tolerance,
                                   max_iterations=options.max_iterations, length_scale=problem.mesh.diameter,
-                                  factorization=options.factorization, layout=layout)
+                                  factorization=options.factorization, layout=layout, progress=progress,
+                                  setup_estimate=self._setup_estimate(history))
         self.max_cuts = options.max_step_cuts
         self._loads = problem.loads.on(free)  # F(t) at the free dofs
         self.result = Result.start(problem, self.solver, output)
@@ -167,6 +172,16 @@ class TimeLoop:
         # computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
         self._level_without_fields: tuple | None = None
         self._u = np.zeros(problem.basis.N)
+
+    def _setup_estimate(self, history: bool) -> Callable[[str], float] | None:
+        """The seconds the set-up of a method is expected to take (:mod:`vpcontact.time_estimate`, from the
+        problem's build time), for the progress lines; None for a problem without a build time."""
+        problem = self.problem
+        build = problem.timings.get("build")
+        if build is None:
+            return None
+        return lambda method: estimate_seconds(method, problem.mesh.dim, problem.free.size, len(problem.times), history,
+                                               build)["solver setup"]
 
     def _initial_state(self) -> LoopState:
         """The level t_0: ξ_0, z_0 = σ_0 − ℰε(u_0) and 𝒢(σ_0, ε(u_0)) (the j = 0 term of z), and u_0 with
@@ -188,14 +203,16 @@ class TimeLoop:
                          rigid=self._rigid.T @ u0[problem.free])
 
     # --- the loop ---------------------------------------------------------------------------------
-    def run(self, *, progress: bool = False, after_step: Callable[["TimeLoop"], None] | None = None,
-            stop: Callable[[], str | None] | None = None) -> Result:
-        """Advance from the current state to T (or to a failure, or until ``stop()`` returns a reason)."""
+    def run(self, *, progress: bool | Progress | None = None, after_step: Callable[["TimeLoop"], None] | None = None,
+            stop: Callable[[], str | None] | None = None, label: str = "time steps") -> Result:
+        """Advance from the current state to T (or to a failure, or until ``stop()`` returns a reason);
+        ``progress``: the reporter of the steps (default: the loop's; True: lines on stderr), ``label``: their
+        name on a terminal's bar."""
         started = clock.perf_counter()
         problem, result = self.problem, self.result
         times = problem.times
-        with tqdm(total=len(times), initial=self.state.step, disable=not progress, unit="step",
-                  desc="time steps") as bar:
+        with (reporting(self.progress if progress is None else progress) as reporter,
+              reporter.steps(len(times), self.state.step, label) as steps):
             for n in range(self.state.step + 1, len(times) + 1):
                 reason = stop() if stop is not None else None
                 if reason:
@@ -203,16 +220,15 @@ class TimeLoop:
                     result.message = (f"{reason} after step {n - 1} (t = {times[n - 2] if n > 1 else times.start:g}) "
                                       f"of {len(times)}")
                     break
+                steps.started(n, times[n - 1])
+                step_started, cuts = clock.perf_counter(), result.step_cuts
                 self._substep = 0
                 failure = self._history_failure(n) or self._advance(n, times[n - 1], problem.k, 0)
                 if failure is not None:
                     result.fail(failure)
                     break
                 self.state.step = n
-                row = result.rows[-1]
-                bar.set_postfix(newton=row["newton_iterations"], residual=f"{row['residual']:.1e}",
-                                at_limit=row["nodes_at_limit"], cuts=result.step_cuts, refresh=False)
-                bar.update()
+                steps.finished(self._report(n, clock.perf_counter() - step_started, result.step_cuts - cuts))
                 if after_step is not None:
                     after_step(self)
         if self._level_without_fields is not None:  # the last level's fields, not kept at its step
@@ -225,6 +241,14 @@ class TimeLoop:
                        **({"earlier_sessions": self.earlier_time} if result.resumed_at else {})})
         result.wall_time_s += self.earlier_time
         return result
+
+    def _report(self, n: int, seconds: float, cuts: int) -> StepReport:
+        """Step n, just done in ``seconds`` with ``cuts`` step cuts, for the progress reporter."""
+        rows = self.result.rows[-self._substep:]
+        contact = self.problem.surface.size > 0
+        return StepReport(n, rows[-1]["t"], sum(row["newton_iterations"] for row in rows), rows[-1]["residual"],
+                          rows[-1]["nodes_at_limit"] if contact else None,
+                          rows[-1]["nodes_in_compliance"] if contact else None, cuts, self.result.step_cuts, seconds)
 
     def counts(self) -> dict[str, int]:
         """The COUNTERS of the run so far, earlier sessions included."""
@@ -524,10 +548,14 @@ class TimeLoop:
                 f"complementarity {s.complementarity:.3e}{counts}{advice}")
 
 
-def solve_problem(problem: Problem, *, output: OutputSection | None = None, progress: bool = False) -> Result:
+def solve_problem(problem: Problem, *, output: OutputSection | None = None,
+                  progress: bool | Progress = False) -> Result:
     """Run the time loop of ``problem`` and return the result (status "failed" if a step fails); ``output``:
-    the fields kept and the error estimate (:class:`~vpcontact.case.OutputSection`, default: its defaults)."""
-    return TimeLoop(problem, output).run(progress=progress)
+    the fields kept and the error estimate (:class:`~vpcontact.case.OutputSection`, default: its defaults);
+    ``progress``: True for the solver's set-up and the steps reported on stderr (:mod:`vpcontact.progress`),
+    or a reporter."""
+    with reporting(progress) as reporter:
+        return TimeLoop(problem, output, reporter).run()
 
 
 def viscoplastic_rate(G, sigma: np.ndarray, strain: np.ndarray) -> np.ndarray:

@@ -36,21 +36,22 @@ import math
 import os
 import re
 import signal
+import time
 import tomllib
 import unicodedata
+from collections import deque
 from collections.abc import Callable, Collection
 from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from tqdm.auto import tqdm
-
 from . import directory
 from .case import _brief, load_case
 from .errors import CaseError
 from .inputs import MAX_TOML_BYTES, check_regular_file
 from .norms import Snapshot, differences
+from .progress import Progress, duration, reporting
 from .run_reader import read_case, read_summary, snapshots_at
 from .space import COORDINATES
 from .writers import check_room, replacing
@@ -248,7 +249,7 @@ def is_complete(spec: RunSpec) -> bool:
 
 
 def run_study(study: Study, out: str | os.PathLike, *, executor: Executor | None = None, workers: int | None = None,
-              progress: bool = False, stop: Callable[[], str | None] | None = None) -> dict:
+              progress: bool | Progress = False, stop: Callable[[], str | None] | None = None) -> dict:
     """Run every incomplete run (each failed one retried once), then write DIR/study.csv.
 
     DIR is held while the study runs (see :mod:`vpcontact.directory`: CaseError before any run if it
@@ -257,6 +258,10 @@ def run_study(study: Study, out: str | os.PathLike, *, executor: Executor | None
     workers of the local pool are killed and waited for: nothing is written after run_study returns;
     on a Dask cluster, runs already started finish there), study.csv marks them "interrupted", and a
     rerun of the study does them.
+
+    ``progress`` (True: lines on stderr, :mod:`vpcontact.progress`; or a reporter, which should run no watcher
+    thread: the workers of the local pool are forked) hears of each run as it starts and ends (its id,
+    status and wall time) and, while runs go on, of which ones (a line after 10 s of silence, and so on).
 
     Returns a report: {"skipped", "completed", "failed", "retried", "interrupted": [ids], "stopped":
     the reason or None}.
@@ -269,7 +274,8 @@ def run_study(study: Study, out: str | os.PathLike, *, executor: Executor | None
         pending = [spec for spec in study.runs if not is_complete(spec)]
         report = {"skipped": [s.id for s in study.runs if s not in pending], "completed": [], "failed": [],
                   "retried": [], "interrupted": [], "stopped": None}
-        errors = _run_pending(pending, report, held, executor, workers, progress, stop)
+        with reporting(progress, hold=0.0, watch=False) as reporter:
+            errors = _run_pending(pending, report, held, executor, workers, reporter, stop)
         write_study_table(study, out, errors, report["interrupted"])
     finally:
         held.release()
@@ -281,21 +287,47 @@ POLL_SECONDS = 0.1
 
 
 def _run_pending(pending: list[RunSpec], report: dict, held: directory.Held, executor: Executor | None,
-                 workers: int | None, progress: bool, stop) -> dict[str, str]:
+                 workers: int | None, progress: Progress, stop) -> dict[str, str]:
     """Run ``pending`` (filling ``report``) until done or ``stop()``; returns {id: message} of the runs
     that ended with an exception (they wrote nothing). The study directory ``held`` removed or
-    replaced meanwhile stops the study too (DirectoryReplaced)."""
+    replaced meanwhile stops the study too (DirectoryReplaced). The local pool is given as many runs at a
+    time as it has workers, so that a run reported as started is one that runs; the executor of a cluster
+    is given them all (its scheduler decides: they are reported as submitted)."""
     errors = {}
     owned = executor is None
     if owned:
-        executor = ProcessPoolExecutor(max_workers=workers or os.cpu_count(), initializer=_start_worker,
+        workers = workers or os.cpu_count() or 1
+        executor = ProcessPoolExecutor(max_workers=workers, initializer=_start_worker,
                                        initargs=(held.path, held.identity))
-    futures = {}
+    capacity, started_words = (workers, "started") if owned else (len(pending), "submitted")
+    queue, futures, started = deque(pending), {}, {}  # started: id -> when its run was given to the executor
+    total = len(pending)
+    ended = lambda: len(report["completed"]) + len(report["failed"])  # noqa: E731
+    failed = lambda: f", {len(report['failed'])} failed" if report["failed"] else ""  # noqa: E731
+
+    def submit() -> None:
+        while queue and len(futures) < capacity:
+            spec = queue.popleft()
+            futures[executor.submit(execute_run, spec)] = spec
+            started[spec.id] = time.monotonic()
+            again = " again" if spec.id in report["retried"] else ""
+            progress.note(f"run '{spec.id}' {started_words}{again}")
+
+    def describe() -> str:
+        now = time.monotonic()
+        going = ", ".join(f"'{run_id}' for {duration(now - since)}" for run_id, since in list(started.items()))
+        return f"study: {ended()} of {total} runs done{failed()}; running: {going}"
+
+    if pending:
+        where = f"on {workers} worker process{'es' if workers != 1 else ''}" if owned else "given to the executor"
+        skipped = f" ({len(report['skipped'])} already complete)" if report["skipped"] else ""
+        progress.note(f"study: {total} run{'s' if total != 1 else ''} to do{skipped}, {where}")
     try:
-        with tqdm(total=len(pending), disable=not progress, unit="run", desc="runs") as bar:
-            futures = {executor.submit(execute_run, spec): spec for spec in pending}
+        with progress.runs(total, describe) as runs:
+            submit()
             while futures:
                 done, _ = wait(futures, timeout=POLL_SECONDS, return_when=FIRST_COMPLETED)
+                progress.tick()
                 if stop is not None and (reason := stop()):  # before the results: a signal sent to the
                     report["stopped"] = reason              # whole process group has ended the workers too
                     break
@@ -309,28 +341,32 @@ def _run_pending(pending: list[RunSpec], report: dict, held: directory.Held, exe
                         report["stopped"] = (f"stopped: a worker process died (killed, or out of memory) while "
                                              f"running '{spec.id}' or a run beside it")
                         break
-                    if summary.get("status") == "complete":
+                    status, took = summary.get("status"), duration(time.monotonic() - started.pop(spec.id))
+                    why = f": {summary.get('message')}" if status != "complete" and summary.get("message") else ""
+                    if status == "complete":
                         report["completed"].append(spec.id)
                     elif spec.id not in report["retried"]:
                         report["retried"].append(spec.id)
-                        futures[executor.submit(execute_run, spec)] = spec
+                        queue.appendleft(spec)
+                        progress.note(f"run '{spec.id}' {status} ({took}), to be tried again{why}")
                         continue
                     else:
                         report["failed"].append(spec.id)
-                        if summary.get("status") == "error":
+                        if status == "error":
                             errors[spec.id] = summary.get("message", "")
-                    bar.update()
-                    bar.set_postfix(done=len(report["completed"]), failed=len(report["failed"]),
-                                    left=len(futures), refresh=False)
+                    progress.note(f"run '{spec.id}' {status} ({took}); {ended()} of {total} runs done{failed()}{why}")
+                    runs.advance(done=len(report["completed"]), failed=len(report["failed"]),
+                                 left=len(futures) + len(queue))
                 if report["stopped"]:
                     break
+                submit()
     finally:
-        if futures:  # stopped (or an exception): abandon the runs not finished
+        if futures or queue:  # stopped (or an exception): abandon the runs not finished
             for future in futures:
                 future.cancel()
             if owned:
                 _stop_workers(executor)
-            for spec in futures.values():  # one may have completed just before
+            for spec in [*futures.values(), *queue]:  # one may have completed just before
                 report["completed" if is_complete(spec) else "interrupted"].append(spec.id)
         if owned:
             executor.shutdown(cancel_futures=True)

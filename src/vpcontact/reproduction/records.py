@@ -11,6 +11,7 @@ import numpy as np
 
 from ..case import load_case
 from ..norms import differences
+from ..progress import SILENT, Progress
 from ..run_reader import read_summary, read_table, snapshots_at
 from ..studies import norm_column
 from .paper import T
@@ -117,19 +118,19 @@ def rate_record(rows: list[dict], ids: list[str], x: list[float]) -> dict:
     return record
 
 
-def adaptive_record(base: Path, plan: Plan, out: Path, uniform: dict) -> dict:
+def adaptive_record(base: Path, plan: Plan, out: Path, uniform: dict, progress: Progress = SILENT) -> dict:
     """Adaptive meshes ([adapt], the residual estimator, Dörfler θ = 0.5, the maximum over the steps) from
     h = 1/adapt_level with the rate in h's time steps, each cycle's error ‖u − u_ref‖_E at t = 1.1 against
     that study's reference; and the DOFs the cycles need to reach the error of its finest uniform mesh
     (``uniform``: the rate in h's record; log–log interpolation between the two cycles around it; NaN if
-    no cycle reaches it)."""
+    no cycle reaches it); ``progress`` hears of the adaptive run (its cycles, their set-up and steps)."""
     from ..rundir import run as run_directory
 
     case = load_case(base, {"mesh.h": level_overrides(plan.adapt_level)["mesh.h"], "time.steps": plan.h_steps,
                             "output.field_steps": "final", "adapt.cycles": plan.adapt_cycles,
                             "adapt.max_dofs": plan.adapt_max_dofs})
     folder = out / "cases" / "adaptive"
-    outcome = run_directory(case, folder)
+    outcome = run_directory(case, folder, progress=progress)
     if outcome.status != "complete":
         raise ReproduceError(f"the adaptive run failed: {outcome.message} (outputs in {folder})")
     cycles = read_table(folder / "adapt.csv")

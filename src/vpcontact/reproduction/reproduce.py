@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Callable
 
 from .. import __version__, directory, writers
+from ..progress import SILENT, Progress
 from ..writers import json_safe
 from . import figures, report
 from .calibration import calibrate
@@ -81,8 +82,11 @@ def run(
     workers: int | None = None,
     overwrite: bool = False,
     log: Callable[[str], None] = print,
+    progress: Progress = SILENT,
 ) -> dict:
-    """The whole reproduction into ``out``; returns the content of reproduce.json."""
+    """The whole reproduction into ``out``; returns the content of reproduce.json. ``log`` hears of each part
+    as it starts and ends; ``progress`` (:mod:`vpcontact.progress`) of each run as it starts and ends, and of
+    the adaptive run's cycles."""
     timer = Timer()
     out = Path(out)
     prepare(out, overwrite)
@@ -109,7 +113,7 @@ def run(
                    for spec in load_cases(plan)}
         calibration = executor.submit(calibrate, base, plan)
         specs = figure_cases(plan)
-        results = {spec.name: solve_case(base, spec, out / "cases" / spec.name) for spec in specs}
+        results = {spec.name: solve_case(base, spec, out / "cases" / spec.name, progress) for spec in specs}
         data["cases"] = {spec.name: case_record(spec, results[spec.name]) for spec in specs}
         frames = figure_frames(results, plan)
         log(f"  {timer.part('Figs. 2–7: contact conditions (8 runs)', t0)}")
@@ -124,21 +128,21 @@ def run(
 
         log(f"Figs. 8, 9: ρ study ({len(plan.rho) + 1} runs, {workers} workers) ...")
         t0 = clock()
-        rho_rows = run_named_study(out, "rho_sweep", rho_study_text(plan), executor)
+        rho_rows = run_named_study(out, "rho_sweep", rho_study_text(plan), executor, progress)
         data["rho_study"] = rho_record(rho_rows, plan)
         frames.update(rho_frames(out / "studies" / "rho_sweep", plan))
         log(f"  {timer.part(f'Figs. 8, 9: ρ study ({len(plan.rho) + 1} runs)', t0)}")
 
         log(f"Fig. 10: h–k study (1/{plan.levels[0]} … 1/{plan.levels[-1]}, reference 1/{plan.reference_level}) ...")
         t0 = clock()
-        hk_rows = run_named_study(out, "hk_convergence", hk_study_text(plan), executor)
+        hk_rows = run_named_study(out, "hk_convergence", hk_study_text(plan), executor, progress)
         data["hk_study"] = hk_record(hk_rows, plan, out / "studies" / "hk_convergence")
         log(f"  {timer.part(f'Fig. 10: h–k study ({len(plan.levels) + 1} runs)', t0)}")
 
         log("beyond the paper: the rates in h and in k separately ...")
         t0 = clock()
-        h_rows = run_named_study(out, "h_convergence", h_study_text(plan), executor)
-        k_rows = run_named_study(out, "k_convergence", k_study_text(plan), executor)
+        h_rows = run_named_study(out, "h_convergence", h_study_text(plan), executor, progress)
+        k_rows = run_named_study(out, "k_convergence", k_study_text(plan), executor, progress)
         data["rates"] = {
             "h": rate_record(h_rows, [h_id(level) for level in plan.h_levels], [1.0 / level for level in plan.h_levels]),
             "k": rate_record(k_rows, [k_id(steps) for steps in plan.k_steps], [T / steps for steps in plan.k_steps]),
@@ -148,7 +152,7 @@ def run(
 
         log("beyond the paper: adaptive meshes against uniform ones ...")
         t0 = clock()
-        data["adaptive"] = adaptive_record(base, plan, out, data["rates"]["h"])
+        data["adaptive"] = adaptive_record(base, plan, out, data["rates"]["h"], progress)
         cycles = len(data["adaptive"]["dofs"])
         log(f"  {timer.part(f'beyond the paper: adaptive meshes ({cycles} cycles)', t0)}")
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..case import load_case
+from ..progress import SILENT, Progress
 from ..results import INTEGER_COLUMNS
 from ..run_reader import read_table
 from .paper import T
@@ -21,13 +22,16 @@ def recorded_case(base: Path, spec: CaseSpec, out: Path) -> dict:
     return case_record(spec, solve_case(base, spec, out))
 
 
-def solve_case(base: Path, spec: CaseSpec, out: Path):
-    """Solve one case and write its standard outputs; raises ReproduceError if a step fails."""
+def solve_case(base: Path, spec: CaseSpec, out: Path, progress: Progress = SILENT):
+    """Solve one case and write its standard outputs; raises ReproduceError if a step fails. ``progress``
+    hears of the run as a phase (its start, life while it runs, its status and wall time)."""
     from .. import solve
     from ..writers import write_run
 
-    result = solve(load_case(base, spec.overrides))
-    write_run(result, out, overwrite=True)
+    with progress.phase(f"run '{spec.name}'") as phase:
+        result = solve(load_case(base, spec.overrides))
+        write_run(result, out, overwrite=True)
+        phase.done(result.status)
     if result.status != "complete":
         raise ReproduceError(f"run '{spec.name}' failed: {result.message} (outputs in {out})")
     return result
@@ -80,8 +84,9 @@ def mesh_record(result) -> dict:
     }
 
 
-def run_named_study(out: Path, name: str, text: str, executor) -> list[dict]:
-    """Write DIR/studies/NAME.toml, run it into DIR/studies/NAME with ``executor``, return study.csv's rows."""
+def run_named_study(out: Path, name: str, text: str, executor, progress: Progress = SILENT) -> list[dict]:
+    """Write DIR/studies/NAME.toml, run it into DIR/studies/NAME with ``executor``, return study.csv's rows;
+    ``progress`` hears of its runs (``studies.run_study``)."""
     from ..studies import load_study, run_study
 
     folder = out / "studies"
@@ -89,7 +94,7 @@ def run_named_study(out: Path, name: str, text: str, executor) -> list[dict]:
     path = folder / f"{name}.toml"
     path.write_text(text, encoding="utf-8")
     study = load_study(path, folder / name)
-    report = run_study(study, folder / name, executor=executor)
+    report = run_study(study, folder / name, executor=executor, progress=progress)
     if report["failed"]:
         raise ReproduceError(
             f"study '{name}': runs {', '.join(report['failed'])} failed (see {folder / name / 'study.csv'})"

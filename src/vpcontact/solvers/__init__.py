@@ -12,6 +12,7 @@ once, Newton on the contact nodes), "auto" (a choice from the sizes and the memo
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,6 +22,7 @@ from .choice import check_iterative_memory, chosen_method
 from .condensed import CondensedNewton
 from .full import FullNewton, IterativeNewton
 from ..errors import CaseError
+from ..progress import SILENT, Progress
 from .errors import SingularMatrixError, SolverMemoryError
 from .factorization import installed_backends
 
@@ -41,21 +43,27 @@ class DofLayout:
 
 def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float | None, tolerance: float,
                 max_iterations: int, length_scale: float, factorization: str = "auto",
-                layout: DofLayout):
+                layout: DofLayout, progress: Progress = SILENT, setup_estimate: Callable[[str], float] | None = None):
     """The step solver ``method`` for stiffness A and contact operator N (both on the free dofs);
     ``rigid``: an orthonormal basis of the rigid motions held only by contact, (free dofs, k);
-    ``layout``: the dofs' nodal layout."""
+    ``layout``: the dofs' nodal layout; ``progress`` (:mod:`vpcontact.progress`) hears of the method chosen
+    and of the set-up phases, each with ``setup_estimate(method)``, the seconds its set-up is expected to take
+    (:mod:`vpcontact.time_estimate`)."""
     r = augmentation_parameter(A, N, augmentation)
     method, reason = chosen_method(method, A, N, layout.dim)
+    progress.note(f"method: {method} ({reason})")
+    expected = None if setup_estimate is None else setup_estimate(method)
     common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale, rigid)
     if method == CondensedNewton.name:
-        solver = _built(lambda: CondensedNewton(*common, factorization=factorization), factorization, A)
+        solver = _built(lambda: CondensedNewton(*common, factorization=factorization, progress=progress,
+                                                expected_seconds=expected), factorization, A)
     elif method == IterativeNewton.name:
         check_iterative_memory(A)
         solver = IterativeNewton(*common, near_nullspace=layout.rigid_motions, free=layout.free, dim=layout.dim,
-                                 nodes=layout.nodes)
+                                 nodes=layout.nodes, progress=progress, expected_seconds=expected)
     else:
-        solver = _built(lambda: FullNewton(*common, factorization), factorization, A)
+        solver = _built(lambda: FullNewton(*common, factorization, progress=progress, expected_seconds=expected),
+                        factorization, A)
     solver.reason = reason
     return solver
 

@@ -30,6 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..progress import SILENT, Progress
 from .errors import NotConvergedError
 
 #: The prolongation smoothed by energy minimization, and one block Gauss–Seidel sweep before (forward)
@@ -53,9 +54,13 @@ class AMGConjugateGradient:
 
     name = "amg-cg"
 
-    def __init__(self, free: np.ndarray, dim: int, nodes: int, near_nullspace: np.ndarray):
+    def __init__(self, free: np.ndarray, dim: int, nodes: int, near_nullspace: np.ndarray,
+                 progress: Progress = SILENT, expected: str = ""):
+        """``progress`` hears of each hierarchy built (its start line ends with ``expected``: what is expected
+        of it, in words)."""
         self.free, self.dim, self.size = np.asarray(free), dim, dim * nodes
         self.near_nullspace = near_nullspace
+        self.progress, self._expected = progress, expected
         self.hierarchy = None
         self.iterations = 0  # CG iterations of all solves
         self.factorizations = 0  # none: the hierarchy is built (``setups``), never a factor
@@ -68,6 +73,13 @@ class AMGConjugateGradient:
 
     def analyse(self, A: sp.spmatrix) -> None:
         """The smoothed-aggregation hierarchy of A (free dofs), in nodal blocks."""
+        again = " again (the last solve needed too many iterations)" if self.setups else ""
+        with self.progress.phase("multigrid", f"the smoothed-aggregation hierarchy of the Newton matrix{again}, "
+                                 f"{A.shape[0]:,} dofs in {self.dim} x {self.dim} blocks{self._expected}") as phase:
+            self._analyse(A)
+            phase.done(f"{self.levels} levels, operator complexity {self.operator_complexity:.2f}")
+
+    def _analyse(self, A: sp.spmatrix) -> None:
         import pyamg
 
         started = time.perf_counter()

@@ -42,7 +42,8 @@ from ..errors import CaseError
 from .base import ContactState, StepData, StepSolution, norm
 from .errors import NotConvergedError, SingularMatrixError
 from ..memory import available_memory
-from .factorization import factorize
+from ..progress import SILENT, Progress, duration, size
+from .factorization import BACKENDS, chosen_backend, factorize
 from .gmres import gmres
 from .newton import ROUNDOFF, STAGNATION, Evaluation, SemismoothNewton
 
@@ -260,8 +261,11 @@ class CondensedNewton(SemismoothNewton):
     name = "condensed"
 
     def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations,
-                 length_scale, rigid: np.ndarray, factorization: str = "auto", krylov_from: int = KRYLOV_FROM):
-        super().__init__(weights, r, tolerance, max_iterations, length_scale)
+                 length_scale, rigid: np.ndarray, factorization: str = "auto", krylov_from: int = KRYLOV_FROM,
+                 progress: Progress = SILENT, expected_seconds: float | None = None):
+        """``progress`` hears of the factorization (with ``expected_seconds``, the time its set-up is expected
+        to take, and the memory of its dense algebra) and of the condensation."""
+        super().__init__(weights, r, tolerance, max_iterations, length_scale, progress)
         m = N.shape[0]
         check_condensed_memory(N, A.shape[0])
         self.A, self.N, self.gap0, self.Z = A, N.tocsr(), gap0, rigid
@@ -269,9 +273,17 @@ class CondensedNewton(SemismoothNewton):
         self._N_contact_T = self.N[:, np.unique(self.N.indices)].T.tocsr()
         self.reference = np.full(m, r)
         started = time.perf_counter()
-        self.factorization = factorize(A + self.N.T @ sp.diags(self.reference) @ self.N, self.N, factorization)
+        backend = chosen_backend(factorization)
+        expected = f"{duration(expected_seconds)} with the condensation, " if expected_seconds is not None else ""
+        with progress.phase("factorization", f"A0 = A + r NᵀN, {A.shape[0]:,} dofs, by {BACKENDS[backend].label}; "
+                            f"expected: {expected}{size(condensed_memory(self.N, A.shape[0]))} of dense algebra "
+                            f"({size(available_memory())} available)", estimate=expected_seconds) as phase:
+            self.factorization = factorize(A + self.N.T @ sp.diags(self.reference) @ self.N, self.N, backend, progress)
+            phase.done(f"a factor of {self.factorization.factor_nonzeros:,} entries")
         factored = time.perf_counter()
-        self.S = self.factorization.condensed_operator()
+        with progress.phase("condensation", f"S = N A0⁻¹ Nᵀ for {m:,} contact nodes "
+                            f"{self.factorization.condensation_words()}"):
+            self.S = self.factorization.condensed_operator()
         self._S_row_sums = np.abs(self.S).sum(axis=1)  # bounds |S| |q| by its rows' sums times max |q|
         self.timings = {"factorization": factored - started, "condensation": time.perf_counter() - factored}
         self.systems, self.krylov_from = NewtonSystems(self.S, self._S_row_sums), krylov_from

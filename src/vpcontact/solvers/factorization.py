@@ -21,6 +21,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..memory import available_memory
+from ..progress import SILENT, Progress, size
 from .errors import SingularMatrixError, SolverMemoryError
 
 #: Columns of Nᵀ solved at once when S is built by block solves.
@@ -58,6 +60,7 @@ class PardisoFactorization:
     """
 
     name = "pardiso"
+    label = "MKL PARDISO"
     PLAIN_AFTER = 50
 
     @staticmethod
@@ -70,13 +73,15 @@ class PardisoFactorization:
             return False
         return True
 
-    def __init__(self, A: sp.spmatrix, N: sp.csr_matrix):
+    def __init__(self, A: sp.spmatrix, N: sp.csr_matrix, progress: Progress = SILENT):
         from .pardiso import Pardiso
 
         self._A, self._N = A, N
         self._dofs = np.unique(N.indices)
         self._N_contact = N[:, self._dofs].toarray()
-        self._pardiso = Pardiso(A, self._dofs)
+        self._pardiso = Pardiso(A, self._dofs, analysed=lambda needed: progress.note(
+            f"{self.label}'s analysis: the factor and the Schur complement take about {size(needed)} "
+            f"({size(available_memory())} available)"))
         self.factor_nonzeros = self._pardiso.factor_nonzeros  # of the factor made here, in Schur mode
         self._schur_mode = self._dofs.size > 0
         self.solves = self.splits = 0
@@ -109,6 +114,10 @@ class PardisoFactorization:
 
         return SplitSolve(N_contact @ pardiso.diagonal(forward)[dofs], finish, 0)
 
+    def condensation_words(self) -> str:
+        """How ``condensed_operator`` computes S, in words."""
+        return f"from the Schur complement on the {self._dofs.size:,} contact dofs"
+
     def condensed_operator(self) -> np.ndarray:
         if self._dofs.size == 0:
             return np.zeros((self._N_contact.shape[0],) * 2)
@@ -127,12 +136,13 @@ class SuperLUFactorization:
     ``factor_nonzeros`` counts L and U."""
 
     name = "superlu"
+    label = "SciPy's SuperLU"
 
     @staticmethod
     def available() -> bool:
         return True
 
-    def __init__(self, A: sp.spmatrix, N: sp.csr_matrix):
+    def __init__(self, A: sp.spmatrix, N: sp.csr_matrix, progress: Progress = SILENT):
         self._N = N
         self._lu = splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                         options={"SymmetricMode": True})
@@ -144,6 +154,10 @@ class SuperLUFactorization:
     def split(self, b: np.ndarray) -> SplitSolve:
         """Two solves (SuperLU has no partial substitutions)."""
         return split_by_two_solves(self.solve, self._N, b)
+
+    def condensation_words(self) -> str:
+        """How ``condensed_operator`` computes S, in words."""
+        return f"by {self._N.shape[0]:,} solves with the factor, {BLOCK} at a time"
 
     def condensed_operator(self) -> np.ndarray:
         """S = N A0⁻¹ Nᵀ by block solves with BLOCK columns of Nᵀ at a time, symmetrized."""
@@ -174,7 +188,12 @@ def installed_backends() -> list[str]:
     return [name for name, backend in BACKENDS.items() if backend.available()]
 
 
-def factorize(A: sp.spmatrix, N: sp.csr_matrix, backend: str = "auto"):
-    """Factor the SPD matrix A with ``backend`` ("auto": the fastest one installed)."""
-    name = installed_backends()[0] if backend == "auto" else backend
-    return BACKENDS[name](A, N)
+def chosen_backend(backend: str = "auto") -> str:
+    """The backend ``backend`` stands for ("auto": the fastest one installed)."""
+    return installed_backends()[0] if backend == "auto" else backend
+
+
+def factorize(A: sp.spmatrix, N: sp.csr_matrix, backend: str = "auto", progress: Progress = SILENT):
+    """Factor the SPD matrix A with ``backend`` ("auto": the fastest one installed); ``progress`` hears of the
+    memory the factor takes when the backend knows it before (MKL PARDISO's analysis)."""
+    return BACKENDS[chosen_backend(backend)](A, N, progress)

@@ -17,12 +17,15 @@ fixed, and one sparsity pattern for every active set. Two methods solve it:
 from __future__ import annotations
 
 import time
+from contextlib import nullcontext
 
 import numpy as np
 import scipy.sparse as sp
 
+from ..progress import SILENT, Progress, duration, size
 from .amg import AMGConjugateGradient
 from .base import ContactState, StepData, StepSolution, norm
+from .choice import iterative_memory
 from .linear import direct_solver
 from .newton import ROUNDOFF, Evaluation, SemismoothNewton
 from .normal_frame import NormalFrame
@@ -34,8 +37,12 @@ class FullNewton(SemismoothNewton):
     name = "full"
 
     def __init__(self, A: sp.csr_matrix, N: sp.csr_matrix, weights, gap0, r, tolerance, max_iterations, length_scale,
-                 rigid: np.ndarray, factorization: str = "auto"):
-        super().__init__(weights, r, tolerance, max_iterations, length_scale)
+                 rigid: np.ndarray, factorization: str = "auto", progress: Progress = SILENT,
+                 expected_seconds: float | None = None):
+        """``progress`` hears of the linear solver's set-up (with ``expected_seconds``, the time the set-up is
+        expected to take)."""
+        super().__init__(weights, r, tolerance, max_iterations, length_scale, progress)
+        self._expected = f"; expected: {duration(expected_seconds)}" if expected_seconds is not None else ""
         started = time.perf_counter()
         self.A, self.N, self.gap0, self.Z = A, N.tocsr(), gap0, rigid
         # |A| and |N| for the rounding level of the residual; |A| shares A's index arrays
@@ -51,8 +58,11 @@ class FullNewton(SemismoothNewton):
     def _linear_solver(self, factorization: str) -> tuple:
         """The linear solver, and whether it has been analysed: a direct one is, here, on the pattern
         every Newton matrix shares (Q A Q's; a factor that will not fit is refused now)."""
-        solver = direct_solver(factorization)
-        solver.analyse(self.rotated)
+        solver = direct_solver(factorization, self.progress)
+        with (self.progress.phase("analysis", f"{solver.analysis} of the Newton matrices' pattern, "
+                                  f"{self.rotated.shape[0]:,} dofs, by {solver.label}{self._expected}")
+              if solver.analysis else nullcontext()):
+            solver.analyse(self.rotated)
         return solver, True
 
     @property
@@ -145,9 +155,10 @@ class IterativeNewton(FullNewton):
 
     name = "iterative"
 
-    def __init__(self, *args, near_nullspace: np.ndarray, free: np.ndarray, dim: int, nodes: int):
+    def __init__(self, *args, near_nullspace: np.ndarray, free: np.ndarray, dim: int, nodes: int,
+                 progress: Progress = SILENT, expected_seconds: float | None = None):
         self._layout = (free, dim, nodes, near_nullspace)
-        super().__init__(*args)
+        super().__init__(*args, progress=progress, expected_seconds=expected_seconds)
 
     @property
     def timings(self) -> dict[str, float]:
@@ -156,7 +167,9 @@ class IterativeNewton(FullNewton):
     def _linear_solver(self, factorization: str) -> tuple[AMGConjugateGradient, bool]:
         """AMG-preconditioned CG, the rigid motions in the normal frame as near-null space."""
         free, dim, nodes, near_nullspace = self._layout
-        return AMGConjugateGradient(free, dim, nodes, self.frame.Q @ near_nullspace), False
+        memory = f"{size(iterative_memory(self.A))} at the method's peak"
+        expected = f"{self._expected}, {memory}" if self._expected else f"; expected: {memory}"
+        return AMGConjugateGradient(free, dim, nodes, self.frame.Q @ near_nullspace, self.progress, expected), False
 
     def _linear_tolerance(self, ev: Evaluation, rhs: np.ndarray) -> float:
         """Relative to ‖rhs‖: a linear residual of FORCING × the nonlinear residual squared, at least a

@@ -9,7 +9,8 @@ the full-system methods.
     solver.iterations             Krylov iterations of all solves so far (0 for a direct backend)
     solver.factorizations         numeric factorizations so far (0 for the iterative backend)
 
-Backends: "pardiso" (MKL PARDISO: analysis once, a numeric refactorisation per matrix), "superlu"
+Each backend has a ``label`` and, if it has a separate symbolic phase, its ``analysis`` in words
+(progress reports). Backends: "pardiso" (MKL PARDISO: analysis once, a numeric refactorisation per matrix), "superlu"
 (SciPy's LU, always installed) and "amg-cg" (:mod:`.amg`: conjugate gradients preconditioned by
 smoothed aggregation, its hierarchy built once). Failures are typed (:mod:`.errors`). The Schur
 complement the condensed method needs is PARDISO's too; it lives in :mod:`.factorization`.
@@ -20,6 +21,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..memory import available_memory
+from ..progress import SILENT, Progress, size
 from .factorization import installed_backends, splu
 
 
@@ -28,18 +31,24 @@ class PardisoSolver:
     matrix (on one thread: see :class:`.pardiso.Pardiso`)."""
 
     name = "pardiso"
+    label = "MKL PARDISO"
+    analysis = "METIS ordering and symbolic factorization"
 
-    def __init__(self):
+    def __init__(self, progress: Progress = SILENT):
         self._pardiso = None
         self.iterations = 0
         self.factorizations = 0
+        self.progress = progress
 
     def analyse(self, A: sp.spmatrix) -> None:
-        """Order A and analyse its factor's structure (and memory: SolverMemoryError if it will not fit)."""
+        """Order A and analyse its factor's structure (and memory: SolverMemoryError if it will not fit; the
+        progress reporter hears of it)."""
         from .pardiso import Pardiso
 
         self._pardiso = None  # release an earlier factor first
-        self._pardiso = Pardiso(A, refactorable=True)
+        self._pardiso = Pardiso(A, refactorable=True, analysed=lambda needed: self.progress.note(
+            f"each factor of a Newton matrix will take about {size(needed)} ({size(available_memory())} "
+            f"available)"))
 
     def factor(self, A: sp.spmatrix) -> None:
         self._pardiso.refactor(A)
@@ -54,8 +63,10 @@ class SuperLUSolver:
     separate symbolic phase, so each matrix is ordered and factored anew."""
 
     name = "superlu"
+    label = "SciPy's SuperLU"
+    analysis = None  # none: each matrix is ordered and factored anew
 
-    def __init__(self):
+    def __init__(self, progress: Progress = SILENT):
         self._lu = None
         self.iterations = 0
         self.factorizations = 0
@@ -76,6 +87,7 @@ class SuperLUSolver:
 DIRECT = {backend.name: backend for backend in (PardisoSolver, SuperLUSolver)}
 
 
-def direct_solver(backend: str = "auto"):
-    """The direct backend ``backend`` ("auto": the fastest one installed)."""
-    return DIRECT[installed_backends()[0] if backend == "auto" else backend]()
+def direct_solver(backend: str = "auto", progress: Progress = SILENT):
+    """The direct backend ``backend`` ("auto": the fastest one installed); ``progress`` hears of what its
+    analysis finds (the memory of a factor)."""
+    return DIRECT[installed_backends()[0] if backend == "auto" else backend](progress)

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
+from ..progress import SILENT, Progress
 from .base import ContactState, StepData, StepSolution
 
 #: Jacobian-only stiffness (relative to r) on inactive nodes with no compliance stiffness at all (a
@@ -68,9 +69,11 @@ class SemismoothNewton:
     #: factorizations of Newton matrices; none unless a solver counts them.
     krylov_iterations = newton_factorizations = 0
 
-    def __init__(self, weights: np.ndarray, r: float, tolerance: float, max_iterations: int, length_scale: float):
+    def __init__(self, weights: np.ndarray, r: float, tolerance: float, max_iterations: int, length_scale: float,
+                 progress: Progress = SILENT):
         self.weights, self.r = weights, r
         self.tolerance, self.max_iterations, self.length_scale = tolerance, max_iterations, length_scale
+        self.progress = progress  # hears of each iterate (vpcontact.progress: what a long step is doing)
 
     def jacobian_tangent(self, state: ContactState) -> np.ndarray:
         """The compliance tangent T_i used in the Newton matrix (regularized where it vanishes)."""
@@ -103,6 +106,7 @@ class SemismoothNewton:
         x = self.initial(step, previous)
         ev, last_residual = self.evaluate(step, x), None
         for iteration in range(self.max_iterations + 1):
+            self.progress.newton(iteration, ev.residual)
             if not (np.isfinite(ev.residual) and np.isfinite(ev.complementarity)):
                 return self.solution(step, x, ev, iteration, False, "the iterates are not finite",
                                      "try smaller time steps (time.steps), and check that the contact laws stay finite")

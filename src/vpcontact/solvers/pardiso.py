@@ -27,6 +27,7 @@ import glob
 import os
 import sys
 from ctypes.util import find_library
+from typing import Callable
 
 import numpy as np
 import scipy.sparse as sp
@@ -73,13 +74,15 @@ class Pardiso:
     ``schur_dofs`` (in ascending dof order) when they were given, and ``factor_nonzeros`` the entries
     PARDISO stores for its supernodal factor (iparm[17]; more than the factor's nonzeros).
 
-    ``Pardiso(A, refactorable=True)`` only analyses A; ``refactor`` then factors each matrix of A's
+    ``analysed(bytes)``, if given, hears of the memory the factorization will take, once the analysis
+    has found it. ``Pardiso(A, refactorable=True)`` only analyses A; ``refactor`` then factors each matrix of A's
     pattern. Such a handle runs every phase on one MKL thread: with MKL 2026.2 a refactorisation on
     two threads after a solve on one (or after an analysis on two) crashes the process (measured:
     a segmentation fault in phase 22, reproducible on a 3D contact matrix of 1,056 dofs).
     """
 
-    def __init__(self, A: sp.spmatrix, schur_dofs: np.ndarray | None = None, refactorable: bool = False):
+    def __init__(self, A: sp.spmatrix, schur_dofs: np.ndarray | None = None, refactorable: bool = False,
+                 analysed: Callable[[int], None] | None = None):
         upper = _upper(A)
         self.n = A.shape[0]
         self._data = np.ascontiguousarray(upper.data, dtype=np.float64)
@@ -96,7 +99,9 @@ class Pardiso:
             self._iparm[35] = 2
             self._perm[np.asarray(schur_dofs)] = 1
         self._call(11)
-        self._check_memory(8 * size * size)
+        needed = self._check_memory(8 * size * size)
+        if analysed is not None:
+            analysed(needed)  # the bytes the factorization will take (a progress report)
         self.factor_nonzeros = int(self._iparm[17])
         if refactorable:
             return
@@ -117,15 +122,16 @@ class Pardiso:
         self._data[:] = upper.data
         self._call(22)
 
-    def _check_memory(self, schur_bytes: int) -> None:
+    def _check_memory(self, schur_bytes: int) -> int:
         """After the symbolic analysis (phase 11): refuse, before allocating it, a factorization whose
         memory (PARDISO's estimate, max(iparm[14], iparm[15] + iparm[16]) kB, and the dense Schur
-        complement it returns) is more than the memory available."""
+        complement it returns) is more than the memory available; else that memory (bytes)."""
         needed = 1024 * max(int(self._iparm[14]), int(self._iparm[15]) + int(self._iparm[16])) + schur_bytes
         available = available_memory()
         if needed > available:
             raise SolverMemoryError(f"MKL PARDISO needs about {needed / 2**30:.1f} GiB to factor this {self.n} x "
                                     f"{self.n} matrix, {available / 2**30:.1f} GiB are available")
+        return needed
 
     def _call(self, phase: int, b: np.ndarray | None = None, x: np.ndarray | None = None, nrhs: int = 1) -> None:
         """One PARDISO phase; solves (reproducible: see the module's docstring) and every phase of a
