@@ -62,9 +62,11 @@ def solve(case, *, progress: bool = False, **laws) -> Result:
     Bad objects are a :class:`CaseError` before the first step.
     """
     from .case import Case, load_case
+    from .errors import flag
     from .problem import build_problem
     from .stepping import solve_problem
 
+    progress = flag("progress", progress)
     if not isinstance(case, Case):
         case = load_case(case)
     return solve_problem(build_problem(case, **laws), output=case.output, progress=progress)

@@ -110,7 +110,7 @@ class _Term:
             try:
                 if len(values) != d:
                     raise ValueError
-                values = np.stack([np.broadcast_to(np.asarray(f, dtype=float), shape) for f in values])
+                values = np.stack([np.broadcast_to(_real(f), shape) for f in values])
             except (TypeError, ValueError):
                 raise CaseError(f"{self.name}: {self.signature} must return {self.returns}, each a number or an "
                                 f"array of x's shape {shape}; it returned {_kind(values)}") from None
@@ -176,6 +176,15 @@ class _Term:
             at = self.points.reshape(len(self.names), -1)[:, point]
             where = f"({', '.join(self.names)}) = ({', '.join(f'{c:.6g}' for c in at)})"
         return f"{what}: not finite ({value}) at {where}, {when}; a load must be finite wherever it is applied"
+
+
+def _real(value) -> np.ndarray:
+    """``value`` (a component a user's function returned) as floats; TypeError unless it holds real numbers (a
+    complex value would lose its imaginary part, a boolean is no load)."""
+    array = np.asarray(value)
+    if array.dtype.kind not in "iuf":
+        raise TypeError(f"not real numbers: {array.dtype}")
+    return array.astype(float)
 
 
 def _kind(value) -> str:

@@ -23,10 +23,10 @@ from skfem import Basis
 from . import mesh as meshes
 from .assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
-from .case import Case, MeshSection, Model, _brief, _material_keys
+from .case import Case, MeshSection, Model, OutputSection, _brief, _material_keys, section
 from .contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
                       PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
-from .errors import CaseError, quoted
+from .errors import CaseError, flag, quoted
 from .expressions import parse_expression, values_at
 from .initial import InitialState, initial_state
 from .material import Elasticity
@@ -92,16 +92,25 @@ class Problem:
         return build_problem(self.model, mesh=mesh, **self.objects)
 
     def solve(self, *, output=None, progress: bool = False):
-        """The :class:`~vpcontact.results.Result` of the time loop (:func:`~vpcontact.stepping.solve_problem`)."""
+        """The :class:`~vpcontact.results.Result` of the time loop (:func:`~vpcontact.stepping.solve_problem`);
+        ``output``: the ``[output]`` table (a dict, or an :class:`~vpcontact.case.OutputSection`)."""
         from .stepping import solve_problem
 
-        return solve_problem(self, output=output, progress=progress)
+        return solve_problem(self, output=section(OutputSection, output, "output"), progress=flag("progress", progress))
 
     def __repr__(self) -> str:
         """One line: the sizes (not the operators)."""
         return (f"Problem(dofs={self.basis.N}, free_dofs={self.free.size}, elements={self.mesh.mesh.t.shape[1]}, "
                 f"nodes={self.mesh.mesh.p.shape[1]}, contact_nodes={self.surface.size}, steps={len(self.times)}, "
                 f"k={self.k:g})")
+
+
+def checked_problem(problem) -> Problem:
+    """``problem`` if it is a :class:`Problem`, else CaseError (a time loop or an adaptation given something else)."""
+    if not isinstance(problem, Problem):
+        raise CaseError(f"problem = {_brief(problem)}: expected a vpcontact.Problem (vpcontact.compose or "
+                        f"vpcontact.build_problem)")
+    return problem
 
 
 #: The keyword arguments of build_problem that are arrays on the mesh.
@@ -182,6 +191,7 @@ def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable 
     body_terms = [(f"boundary.body_force[{i}].value", _density(f.value, f"boundary.body_force[{i}].value"))
                   for i, f in enumerate(model.boundary.body_force)]
     if body_force is not None:
+        _check_density_arguments("body_force", body_force, mesh.dim)
         body_terms = [("body_force", body_force)]
     loads = LoadVector(basis, mesh, _traction_terms(model, mesh, tractions), body_terms)
 
@@ -306,6 +316,7 @@ def _traction_terms(model: Model, mesh: meshes.Mesh, tractions: Mapping | None) 
     for part, density in tractions.items():
         if not (isinstance(part, (str, int)) and str(part) in mesh.parts):
             raise CaseError(f"tractions: unknown part {_brief(part)}; the mesh has parts: {', '.join(mesh.part_names)}")
+        _check_density_arguments(f"tractions[{_brief(part)}]", density, mesh.dim)
         facets = mesh.facets(part)
         terms = [term for term in terms if not np.array_equal(mesh.facets(term[1]), facets)]
         terms.append((f"tractions[{_brief(part)}]", part, density))
@@ -350,6 +361,24 @@ def _arguments(law: Callable, name: str) -> int:
     return 2
 
 
+def _check_density_arguments(name: str, density, dim: int) -> None:
+    """CaseError unless a load density of the API takes the coordinates and the time, f(x, y, t) (f(x, y, z, t) in
+    3D), as far as its signature tells (a NumPy ufunc or a builtin does not; a value that is not a function is
+    refused where the load is made)."""
+    if not callable(density):
+        return
+    try:
+        signature = inspect.signature(density)
+    except (TypeError, ValueError):
+        return
+    arguments = ", ".join(coordinates(dim) + ("t",))
+    try:
+        signature.bind(*range(dim + 1))
+    except TypeError:
+        raise CaseError(f"{name} = {_brief(density)} takes the arguments ({', '.join(signature.parameters)}): "
+                        f"expected f({arguments}) -> ({', '.join('f' + c for c in coordinates(dim))})") from None
+
+
 def _required_arguments(function: Callable) -> list[str]:
     """The names of the positional arguments ``function`` requires, from its signature; none when Python
     cannot tell (a NumPy ufunc) or when it takes any number (*args)."""
@@ -387,9 +416,13 @@ class LawOfNodes:
 def _check_returned(name: str, call: str, values, shape: tuple) -> None:
     """CaseError unless ``values`` (what ``call`` returned) are finite numbers broadcasting to ``shape``."""
     try:
-        array = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        raise CaseError(f"{name}: {call} returned a value of type {type(values).__name__}, not numbers") from None
+        array = np.asarray(values)
+    except (TypeError, ValueError):  # a ragged list
+        array = None
+    if array is None or array.dtype.kind not in "iuf":  # complex, boolean, strings, objects: not real numbers
+        what = f"ndarray of {array.dtype}" if isinstance(values, np.ndarray) else type(values).__name__
+        raise CaseError(f"{name}: {call} returned a value of type {what}, not numbers")
+    array = array.astype(float)
     try:
         broadcast = np.broadcast_shapes(array.shape, shape) == shape
     except ValueError:

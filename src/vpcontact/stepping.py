@@ -38,11 +38,11 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .assembly import NonFiniteLoad, element_strain, stress_force
-from .case import OutputSection
+from .case import OutputSection, section
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from .material import von_mises
 from .indicators import Level
-from .problem import Problem
+from .problem import Problem, checked_problem
 from .residual_estimate import ResidualEstimator
 from .results import Fields, Result, check_memory
 from .rigid_modes import RigidModes
@@ -125,8 +125,8 @@ class TimeLoop:
 
     def __init__(self, problem: Problem, output: OutputSection | None = None):
         started = clock.perf_counter()
-        self.problem = problem
-        output = OutputSection() if output is None else output
+        self.problem = checked_problem(problem)
+        output = section(OutputSection, output, "output")  # a dict is the [output] table
         free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
         history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
