@@ -106,7 +106,11 @@ class _Term:
         given), shape (d, cells, points); NonFiniteLoad where a value is not finite."""
         d, shape = self.points.shape[0], self.points.shape[1:]
         with np.errstate(all="ignore"):  # a non-finite value is reported below, with where it is
-            values = self.density(*self.points, t)
+            try:
+                values = self.density(*self.points, t)
+            except Exception as error:  # noqa: BLE001 - a user's function may raise anything
+                raise CaseError(f"{self.name}: {self.signature} at t = {t:.10g} raised {type(error).__name__}: "
+                                f"{error}") from error
             try:
                 if len(values) != d:
                     raise ValueError

@@ -66,7 +66,7 @@ def _expression_value(value):
     """An expression: a string (parsed later with its key in the message) or a number."""
     if isinstance(value, bool) or not isinstance(value, (str, int, float)):
         raise ValueError(f"expected an expression (a string such as \"-1000*t\") or a number, got {_brief(value)}")
-    if isinstance(value, float) and not math.isfinite(value):
+    if isinstance(value, (int, float)) and not _finite(value):  # an int too, beyond float64's range
         raise ValueError(f"expected a finite number, got {_brief(value)}")
     return value
 
@@ -107,6 +107,8 @@ def _thickness(value):
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
         raise ValueError(f"g = {_brief(value)}: must be > 0 (a number, \"inf\" or an expression in the "
                          f"coordinates)")
+    if isinstance(value, int) and not _finite(value):
+        raise ValueError(f"g = {_brief(value)}: beyond the range of float64; \"inf\" is a layer without rigid base")
     return value
 
 
@@ -405,6 +407,27 @@ Stiffness = Annotated[
 #: The lengths a vector contact.normal may have: only its direction counts (it is divided by its length), and
 #: squares of its entries must neither underflow nor overflow in float64 (so [0, 0, -1e-200] is refused).
 NORMAL_LENGTHS = (1e-100, 1e100)
+def _normal(value):
+    """contact.normal: "body", or a nonzero vector of 2 or 3 finite numbers (made floats) whose length is in
+    NORMAL_LENGTHS."""
+    if value == "body":
+        return value
+    if not (isinstance(value, list) and 2 <= len(value) <= 3 and
+            all(isinstance(c, (int, float)) and not isinstance(c, bool) and _finite(c) for c in value)):
+        raise ValueError(f"contact.normal = {_show(value)}: expected \"body\" or a vector of 2 or 3 finite numbers, "
+                         f"the foundation's outward direction seen from the body (e.g. [0, 0, -1])")
+    vector = [float(c) for c in value]
+    length = math.hypot(*vector)
+    if not length > 0:
+        raise ValueError(f"contact.normal = {_brief(vector)}: expected \"body\" or a nonzero vector (the "
+                         f"foundation's outward direction seen from the body, e.g. [0, 0, -1])")
+    if not NORMAL_LENGTHS[0] <= length <= NORMAL_LENGTHS[1]:
+        raise ValueError(f"contact.normal = {_brief(vector)}: its length {length:.3g} is outside "
+                         f"[{NORMAL_LENGTHS[0]:g}, {NORMAL_LENGTHS[1]:g}], where it is made a unit vector without "
+                         f"underflow or overflow; give the direction with entries of order 1, e.g. [0, 0, -1]")
+    return vector
+
+
 #: The keys of one layer: stated in [contact] for one contact part, in each entry of contact.parts for several.
 LAYER_KEYS = ("part", "g", "gap", "p", "exponent", "stiffness")
 #: The keys of the whole contact, one value for all its parts.
@@ -445,24 +468,9 @@ class ContactSection(_Section):
     exponent: Optional[Exponent] = None
     rho: NonNegativeFloat = 1.0
     probe: Optional[Annotated[list[float], Field(min_length=2, max_length=3)]] = None
-    normal: Union[Literal["body"], Annotated[list[float], Field(min_length=2, max_length=3)]] = "body"
+    normal: Annotated[Any, AfterValidator(_normal)] = "body"
     stiffness: Optional[Stiffness] = None
     parts: Optional[Annotated[list[ContactPartSection], Field(min_length=1)]] = None
-
-    @field_validator("normal")
-    @classmethod
-    def _direction(cls, value):
-        if not isinstance(value, list):
-            return value
-        length = math.hypot(*value)
-        if not length > 0:
-            raise ValueError(f"contact.normal = {_brief(value)}: expected \"body\" or a nonzero vector (the "
-                             f"foundation's outward direction seen from the body, e.g. [0, 0, -1])")
-        if not NORMAL_LENGTHS[0] <= length <= NORMAL_LENGTHS[1]:
-            raise ValueError(f"contact.normal = {_brief(value)}: its length {length:.3g} is outside "
-                             f"[{NORMAL_LENGTHS[0]:g}, {NORMAL_LENGTHS[1]:g}], where it is made a unit vector without "
-                             f"underflow or overflow; give the direction with entries of order 1, e.g. [0, 0, -1]")
-        return value
 
     @model_validator(mode="after")
     def _one_form(self, info: ValidationInfo):

@@ -234,9 +234,8 @@ def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:
         raise CaseError(f"viscoplastic = {_brief(G)}: expected a function G(sigma, strain) of arrays of shape "
                         f"(d, d, elements), or G(sigma, strain, x) with x the element centroids (d, elements)")
     required = _required_arguments(G)
-    if len(required) > 3:
-        raise CaseError(f"viscoplastic takes {len(required)} arguments ({', '.join(required)}): expected "
-                        f"G(sigma, strain) or G(sigma, strain, x)")
+    if len(required) > 3 or not (len(required) == 3 or _accepts(G, 2)):
+        raise CaseError(f"viscoplastic takes {_parameters(G)}: expected G(sigma, strain) or G(sigma, strain, x)")
     if len(required) == 3:
         return AtCentroids(G, mesh.centroids)
     return G
@@ -344,39 +343,49 @@ def _api_law(law, name: str):
         return LawOfNodes(law, derivative, name)
     for what, f in ((name, law), (f"{name}.derivative", derivative)) if derivative else ((name, law),):
         sample = np.array(_LAW_SAMPLE)
-        with np.errstate(all="ignore"):  # a non-finite value is reported below
-            values = f(sample.copy())
-        _check_returned(what, f"{what}({', '.join(map(str, _LAW_SAMPLE))})", values, sample.shape)
+        call = f"{what}({', '.join(map(str, _LAW_SAMPLE))})"
+        _check_returned(what, call, _tried(what, call, f, sample.copy()), sample.shape)
     return law if derivative else CallableLaw(law)
 
 
 def _arguments(law: Callable, name: str) -> int:
     """The arguments ``law`` takes, from its signature: 1 (r), or 2 (r, x); CaseError for more."""
     required = _required_arguments(law)
-    if len(required) <= 1:
-        return 1
-    if len(required) > 2:
-        raise CaseError(f"{name} takes {len(required)} arguments ({', '.join(required)}): expected f(r), or f(r, x) "
-                        f"with x the coordinates of the contact nodes")
-    return 2
+    if len(required) > 2 or not (len(required) == 2 or _accepts(law, 1)):
+        raise CaseError(f"{name} takes {_parameters(law)}: expected f(r), or f(r, x) with x the coordinates of the "
+                        f"contact nodes")
+    return len(required) if required else 1
 
 
 def _check_density_arguments(name: str, density, dim: int) -> None:
     """CaseError unless a load density of the API takes the coordinates and the time, f(x, y, t) (f(x, y, z, t) in
     3D), as far as its signature tells (a NumPy ufunc or a builtin does not; a value that is not a function is
     refused where the load is made)."""
-    if not callable(density):
-        return
+    if callable(density) and not _accepts(density, dim + 1):
+        raise CaseError(f"{name} = {_brief(density)} takes {_parameters(density)}: expected "
+                        f"f({', '.join(coordinates(dim) + ('t',))}) -> ({', '.join('f' + c for c in coordinates(dim))})")
+
+
+def _accepts(function: Callable, count: int) -> bool:
+    """May ``function`` be called with ``count`` positional arguments, as far as its signature tells (True when
+    Python cannot tell, for a NumPy ufunc or some builtins)?"""
     try:
-        signature = inspect.signature(density)
-    except (TypeError, ValueError):
-        return
-    arguments = ", ".join(coordinates(dim) + ("t",))
-    try:
-        signature.bind(*range(dim + 1))
+        inspect.signature(function).bind(*range(count))
     except TypeError:
-        raise CaseError(f"{name} = {_brief(density)} takes the arguments ({', '.join(signature.parameters)}): "
-                        f"expected f({arguments}) -> ({', '.join('f' + c for c in coordinates(dim))})") from None
+        return False
+    except ValueError:  # no signature
+        return True
+    return True
+
+
+def _parameters(function: Callable) -> str:
+    """The parameters of ``function`` in words: "2 arguments (x, y)", "1 argument (r)", "no argument"."""
+    try:
+        names = list(inspect.signature(function).parameters)
+    except (TypeError, ValueError):
+        return "other arguments"
+    count = f"{len(names)} argument{'s' * (len(names) != 1)}"
+    return f"{count} ({', '.join(names)})" if names else "no argument"
 
 
 def _required_arguments(function: Callable) -> list[str]:
@@ -406,11 +415,22 @@ class LawOfNodes:
             if f is None:
                 continue
             for r in _LAW_SAMPLE:
-                with np.errstate(all="ignore"):  # a non-finite value is reported below
-                    values = f(np.full(m, r), points.copy())
-                _check_returned(what, f"{what}({r}, x) at the {m} contact nodes", values, (m,))
+                call = f"{what}({r}, x) at the {m} contact nodes"
+                _check_returned(what, call, _tried(what, call, f, np.full(m, r), points.copy()), (m,))
         derivative = None if self.derivative is None else AtNodes(self.derivative, points)
         return CallableLaw(AtNodes(self.function, points), derivative)
+
+
+def _tried(name: str, call: str, function: Callable, *arguments):
+    """``function(*arguments)``, the trial ``call`` of the API's law ``name`` (values that are not finite are
+    reported by the caller); CaseError, caused by the function's own exception, when it raises one."""
+    try:
+        with np.errstate(all="ignore"):
+            return function(*arguments)
+    except CaseError:
+        raise
+    except Exception as error:  # noqa: BLE001 - a user's function may raise anything
+        raise CaseError(f"{name}: {call} raised {type(error).__name__}: {error}") from error
 
 
 def _check_returned(name: str, call: str, values, shape: tuple) -> None:
@@ -445,8 +465,7 @@ def _check_first_history(basis: Basis, initial: InitialState, written, strain0: 
     rate = 0.0
     call = "G(initial.stress, 0)" if not initial.moves else "G(initial.stress, strain(initial.displacement))"
     if G is not None:
-        with np.errstate(all="ignore"):  # a value that is not finite is reported
-            rate = G(sigma.copy(), strain0.copy())
+        rate = _tried(law_name, call, G, sigma.copy(), strain0.copy())
         _check_returned(law_name, call, rate, sigma.shape)
     with np.errstate(all="ignore"):  # an overflow is reported below
         z = z0 + k * np.asarray(rate, dtype=float)
