@@ -407,6 +407,8 @@ Stiffness = Annotated[
 #: The lengths a vector contact.normal may have: only its direction counts (it is divided by its length), and
 #: squares of its entries must neither underflow nor overflow in float64 (so [0, 0, -1e-200] is refused).
 NORMAL_LENGTHS = (1e-100, 1e100)
+
+
 def _normal(value):
     """contact.normal: "body", or a nonzero vector of 2 or 3 finite numbers (made floats) whose length is in
     NORMAL_LENGTHS."""

@@ -55,8 +55,8 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     - ``material``: a ``[material]`` table ({"E": ..., "nu": ..., "hypothesis": ..., "viscoplastic": {...}}), or
       a list of them, each with its ``region``; ``viscoplastic``: a Python law 𝒢(σ, ε) (or 𝒢(σ, ε, x)) for the
       whole body instead of the tables' laws;
-    - ``dirichlet``: {part: components} (components "x", ["x", "y"], or None for all), or the list of
-      ``[[boundary.dirichlet]]`` tables;
+    - ``dirichlet``: {part: components} (components "x", ["x", "y"], or None for all: u = 0 there; a table of
+      prescribed values is refused, not supported yet), or the list of ``[[boundary.dirichlet]]`` tables;
     - ``traction``: {part: value}, value the list of d expressions in x, y, (z,) t, or a Python function
       f(x, y, (z,) t) -> (fx, fy, (fz)); ``body_force``: one such value for the whole body;
     - ``contact``: the ``[contact]`` table; its ``stiffness`` may be a Python law K(ξ) and its ``p`` a law p(r);

@@ -96,7 +96,8 @@ class Problem:
         ``output``: the ``[output]`` table (a dict, or an :class:`~vpcontact.case.OutputSection`)."""
         from .stepping import solve_problem
 
-        return solve_problem(self, output=section(OutputSection, output, "output"), progress=flag("progress", progress))
+        output = section(OutputSection, output, "output")
+        return solve_problem(self, output=output, progress=flag("progress", progress))
 
     def __repr__(self) -> str:
         """One line: the sizes (not the operators)."""
@@ -349,12 +350,13 @@ def _api_law(law, name: str):
 
 
 def _arguments(law: Callable, name: str) -> int:
-    """The arguments ``law`` takes, from its signature: 1 (r), or 2 (r, x); CaseError for more."""
+    """The arguments ``law`` takes, from its signature: 2 when it requires two (r, x), else 1 (r); CaseError when
+    it requires more, or cannot take one (lambda: 1)."""
     required = _required_arguments(law)
     if len(required) > 2 or not (len(required) == 2 or _accepts(law, 1)):
         raise CaseError(f"{name} takes {_parameters(law)}: expected f(r), or f(r, x) with x the coordinates of the "
                         f"contact nodes")
-    return len(required) if required else 1
+    return 2 if len(required) == 2 else 1
 
 
 def _check_density_arguments(name: str, density, dim: int) -> None:
@@ -362,8 +364,9 @@ def _check_density_arguments(name: str, density, dim: int) -> None:
     3D), as far as its signature tells (a NumPy ufunc or a builtin does not; a value that is not a function is
     refused where the load is made)."""
     if callable(density) and not _accepts(density, dim + 1):
+        names = coordinates(dim)
         raise CaseError(f"{name} = {_brief(density)} takes {_parameters(density)}: expected "
-                        f"f({', '.join(coordinates(dim) + ('t',))}) -> ({', '.join('f' + c for c in coordinates(dim))})")
+                        f"f({', '.join(names)}, t) -> ({', '.join('f' + c for c in names)})")
 
 
 def _accepts(function: Callable, count: int) -> bool:
