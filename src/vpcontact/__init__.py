@@ -64,10 +64,12 @@ def solve(case, *, progress=False, **laws) -> Result:
     (:mod:`vpcontact.progress`).
     """
     from .case import Case, load_case
+    from .errors import flag
     from .problem import build_problem
     from .progress import reporting
     from .stepping import solve_problem
 
+    progress = flag("progress", progress)
     if not isinstance(case, Case):
         case = load_case(case)
     with reporting(progress) as reporter:

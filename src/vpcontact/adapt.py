@@ -24,11 +24,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import recovery_estimate
-from .case import AdaptSection, OutputSection
+from .case import AdaptSection, OutputSection, section
 from .errors import CaseError
 from .indicators import Indicators, Level
 from .mesh import Mesh
-from .problem import Problem
+from .problem import Problem, checked_problem
 from .progress import SILENT, Progress, duration, reporting
 from .refinement import refine
 from .residual_estimate import ResidualEstimator
@@ -144,8 +144,10 @@ def adapt(problem: Problem, settings: AdaptSection, output: OutputSection | None
     """The adaptive cycles of ``settings`` (a case's ``[adapt]``, :class:`~vpcontact.case.AdaptSection`) from
     the mesh of ``problem``, each run with the outputs ``output`` (see the module docstring);
     ``after_cycle(cycle)`` is called after each (its outputs), ``stop`` and ``after_step`` are the time
-    loop's hooks; ``progress``: True for each cycle, its set-up, steps and refinement reported on stderr
-    (:mod:`vpcontact.progress`), or a reporter."""
+    loop's hooks. ``settings`` and ``output`` may be dicts (the tables [adapt] and [output]); ``progress``:
+    True for each cycle, its set-up, steps and refinement reported on stderr (:mod:`vpcontact.progress`), or a
+    reporter."""
+    settings, output = section(AdaptSection, settings, "adapt"), section(OutputSection, output, "output")
     with reporting(progress) as reporter:
         return _cycles(problem, settings, output, after_cycle, stop, reporter, after_step)
 
@@ -153,7 +155,7 @@ def adapt(problem: Problem, settings: AdaptSection, output: OutputSection | None
 def _cycles(problem: Problem, settings: AdaptSection, output: OutputSection | None, after_cycle, stop,
             progress: Progress, after_step) -> Adaptation:
     """The cycles of `adapt`, reported to ``progress``."""
-    check_start(problem, settings)
+    check_start(checked_problem(problem), settings)
     adaptation = Adaptation()
     started = clock.perf_counter() - problem.timings["build"]
     for number in range(1, settings.cycles + 1):

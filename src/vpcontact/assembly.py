@@ -106,11 +106,15 @@ class _Term:
         given), shape (d, cells, points); NonFiniteLoad where a value is not finite."""
         d, shape = self.points.shape[0], self.points.shape[1:]
         with np.errstate(all="ignore"):  # a non-finite value is reported below, with where it is
-            values = self.density(*self.points, t)
+            try:
+                values = self.density(*self.points, t)
+            except Exception as error:  # noqa: BLE001 - a user's function may raise anything
+                raise CaseError(f"{self.name}: {self.signature} at t = {t:.10g} raised {type(error).__name__}: "
+                                f"{error}") from error
             try:
                 if len(values) != d:
                     raise ValueError
-                values = np.stack([np.broadcast_to(np.asarray(f, dtype=float), shape) for f in values])
+                values = np.stack([np.broadcast_to(_real(f), shape) for f in values])
             except (TypeError, ValueError):
                 raise CaseError(f"{self.name}: {self.signature} must return {self.returns}, each a number or an "
                                 f"array of x's shape {shape}; it returned {_kind(values)}") from None
@@ -176,6 +180,15 @@ class _Term:
             at = self.points.reshape(len(self.names), -1)[:, point]
             where = f"({', '.join(self.names)}) = ({', '.join(f'{c:.6g}' for c in at)})"
         return f"{what}: not finite ({value}) at {where}, {when}; a load must be finite wherever it is applied"
+
+
+def _real(value) -> np.ndarray:
+    """``value`` (a component a user's function returned) as floats; TypeError unless it holds real numbers (a
+    complex value would lose its imaginary part, a boolean is no load)."""
+    array = np.asarray(value)
+    if array.dtype.kind not in "iuf":
+        raise TypeError(f"not real numbers: {array.dtype}")
+    return array.astype(float)
 
 
 def _kind(value) -> str:

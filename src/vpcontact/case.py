@@ -14,10 +14,11 @@ import os
 import re
 import tomllib
 import typing
-from collections.abc import Collection
+from collections.abc import Collection, Mapping
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
+import numpy as np
 import tomli_w
 from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, ValidationError,
                       ValidationInfo, field_validator, model_validator)
@@ -52,6 +53,8 @@ def _brief(value) -> str:
         text = repr(value)
     except Exception:  # noqa: BLE001 - an object of the API may have any repr
         return f"a value of type {type(value).__name__}"
+    if "\n" in text:  # an object shown over several lines (a scikit-fem mesh, a table): one line
+        text = " ".join(text.split())
     return shown(text)
 
 
@@ -63,7 +66,7 @@ def _expression_value(value):
     """An expression: a string (parsed later with its key in the message) or a number."""
     if isinstance(value, bool) or not isinstance(value, (str, int, float)):
         raise ValueError(f"expected an expression (a string such as \"-1000*t\") or a number, got {_brief(value)}")
-    if isinstance(value, float) and not math.isfinite(value):
+    if isinstance(value, (int, float)) and not _finite(value):  # an int too, beyond float64's range
         raise ValueError(f"expected a finite number, got {_brief(value)}")
     return value
 
@@ -104,6 +107,8 @@ def _thickness(value):
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
         raise ValueError(f"g = {_brief(value)}: must be > 0 (a number, \"inf\" or an expression in the "
                          f"coordinates)")
+    if isinstance(value, int) and not _finite(value):
+        raise ValueError(f"g = {_brief(value)}: beyond the range of float64; \"inf\" is a layer without rigid base")
     return value
 
 
@@ -340,7 +345,15 @@ class DirichletSection(_Section):
     """u = 0 on a part, for the listed components (all when omitted)."""
 
     part: Part
-    components: Optional[list[Literal["x", "y", "z"]]] = None
+    components: Optional[list[Literal["x", "y", "z"]]] = None  # None: all
+
+    @field_validator("components")
+    @classmethod
+    def _some(cls, value):
+        if value == []:  # not "all": an empty list would hold nothing, and read as None it would hold everything
+            raise ValueError("= []: no component; list the components held at 0, or leave out components to hold "
+                             "all of them")
+        return value
 
 
 class TractionSection(_Section):
@@ -391,6 +404,32 @@ Stiffness = Annotated[
 ]
 
 
+#: The lengths a vector contact.normal may have: only its direction counts (it is divided by its length), and
+#: squares of its entries must neither underflow nor overflow in float64 (so [0, 0, -1e-200] is refused).
+NORMAL_LENGTHS = (1e-100, 1e100)
+
+
+def _normal(value):
+    """contact.normal: "body", or a nonzero vector of 2 or 3 finite numbers (made floats) whose length is in
+    NORMAL_LENGTHS."""
+    if value == "body":
+        return value
+    if not (isinstance(value, list) and 2 <= len(value) <= 3 and
+            all(isinstance(c, (int, float)) and not isinstance(c, bool) and _finite(c) for c in value)):
+        raise ValueError(f"contact.normal = {_show(value)}: expected \"body\" or a vector of 2 or 3 finite numbers, "
+                         f"the foundation's outward direction seen from the body (e.g. [0, 0, -1])")
+    vector = [float(c) for c in value]
+    length = math.hypot(*vector)
+    if not length > 0:
+        raise ValueError(f"contact.normal = {_brief(vector)}: expected \"body\" or a nonzero vector (the "
+                         f"foundation's outward direction seen from the body, e.g. [0, 0, -1])")
+    if not NORMAL_LENGTHS[0] <= length <= NORMAL_LENGTHS[1]:
+        raise ValueError(f"contact.normal = {_brief(vector)}: its length {length:.3g} is outside "
+                         f"[{NORMAL_LENGTHS[0]:g}, {NORMAL_LENGTHS[1]:g}], where it is made a unit vector without "
+                         f"underflow or overflow; give the direction with entries of order 1, e.g. [0, 0, -1]")
+    return vector
+
+
 #: The keys of one layer: stated in [contact] for one contact part, in each entry of contact.parts for several.
 LAYER_KEYS = ("part", "g", "gap", "p", "exponent", "stiffness")
 #: The keys of the whole contact, one value for all its parts.
@@ -431,17 +470,9 @@ class ContactSection(_Section):
     exponent: Optional[Exponent] = None
     rho: NonNegativeFloat = 1.0
     probe: Optional[Annotated[list[float], Field(min_length=2, max_length=3)]] = None
-    normal: Union[Literal["body"], Annotated[list[float], Field(min_length=2, max_length=3)]] = "body"
+    normal: Annotated[Any, AfterValidator(_normal)] = "body"
     stiffness: Optional[Stiffness] = None
     parts: Optional[Annotated[list[ContactPartSection], Field(min_length=1)]] = None
-
-    @field_validator("normal")
-    @classmethod
-    def _direction(cls, value):
-        if isinstance(value, list) and not math.hypot(*value) > 0:
-            raise ValueError(f"contact.normal = {_brief(value)}: expected \"body\" or a nonzero vector (the "
-                             f"foundation's outward direction seen from the body, e.g. [0, 0, -1])")
-        return value
 
     @model_validator(mode="after")
     def _one_form(self, info: ValidationInfo):
@@ -535,6 +566,14 @@ class SolverSection(_Section):
     @classmethod
     def _automatic(cls, value):
         return None if value == "auto" else value
+
+    @model_validator(mode="after")
+    def _factorization_used(self):
+        if self.method == "iterative" and self.factorization != "auto":
+            raise ValueError(f"solver.factorization = {_show(self.factorization)} is not used by solver.method = "
+                             f"\"iterative\" (it factors nothing): remove it, or choose the method \"condensed\" "
+                             f"or \"full\"")
+        return self
 
 
 class OutputSection(_Section):
@@ -679,8 +718,8 @@ def load_case(source: str | Path | dict, overrides: dict | list[str] | None = No
 def _load_case(source, overrides) -> Case:
     base_dir = "."
     if isinstance(source, dict):
-        _check_tree(source)
-        data = _deep_copy(source)
+        data = plain(source)
+        _check_tree(data)
     elif isinstance(source, (str, os.PathLike)):
         try:
             path = Path(source)
@@ -751,12 +790,52 @@ def _type_name(value) -> str:
     return f"a value of type {type(value).__name__}"
 
 
-def _deep_copy(data):
-    if isinstance(data, dict):
-        return {k: _deep_copy(v) for k, v in data.items()}
-    if isinstance(data, list):
-        return [_deep_copy(v) for v in data]
-    return data
+#: The Python value a NumPy number of each kind is in a case (a complex number, a date: none, refused by key).
+_PLAIN = {"b": bool, "i": int, "u": int, "f": float, "U": str}
+
+
+def plain(value, depth: int = 0):
+    """A copy of ``value`` (a case's table, list or value given from Python) holding the plain values a case
+    file holds instead of NumPy's, through its tables (any mapping, made a dict) and lists: a NumPy number
+    (``np.float32(1000)``, ``np.int64(10)``) and a 0-d array of one become the Python float or int,
+    ``np.bool_`` a bool, ``np.str_`` a str, an array of one or more dimensions and a tuple the (nested) list
+    of their values (``np.array([0, -1])`` -> ``[0, -1]``). Anything else is left as it is, for the
+    validation to accept or refuse by its key (a complex number, an object): NaN and inf stay NaN and inf,
+    refused where a finite number is wanted, and a NumPy bool is a bool, refused where a number is wanted.
+    Below MAX_NESTING levels nothing is changed (:func:`_check_tree` refuses such nesting)."""
+    if depth > MAX_NESTING:
+        return value
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, np.generic):
+        convert = _PLAIN.get(value.dtype.kind)
+        return value if convert is None else convert(value)
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, Mapping):
+        return {key: plain(item, depth + 1) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain(item, depth + 1) for item in value]
+    return value
+
+
+def section(model: type[_Section], value, key: str):
+    """The table ``value`` of the section [``key``] given from Python (an argument of the API) as its
+    ``model`` (:class:`OutputSection`, :class:`AdaptSection`, ...): None its defaults, an instance of it as it
+    is, a dict validated as the case file's table (NumPy values as numbers, see :func:`plain`); anything
+    else, or a bad value in it, is a CaseError naming the key (``output.field_steps = ...``)."""
+    if isinstance(value, model):
+        return value
+    if value is not None and not isinstance(value, Mapping):
+        raise CaseError(f"{key} = {_brief(value)}: expected a table (dict) of the [{key}] keys (or a "
+                        f"vpcontact.case.{model.__name__})")
+    data = plain(dict(value or {}))
+    _check_tree(data, (key,))
+    try:
+        return model.model_validate(data)
+    except ValidationError as error:
+        first = error.errors()[0]
+        raise CaseError(_describe({**first, "loc": (key, *first["loc"])})) from None
 
 
 def _parse_overrides(overrides) -> dict:
@@ -766,7 +845,7 @@ def _parse_overrides(overrides) -> dict:
         for key in overrides:
             if not isinstance(key, str):
                 raise CaseError(f"override key {_type_name(key)}: expected a dotted key such as contact.stiffness.beta")
-        return dict(overrides)
+        return {key: plain(value) for key, value in overrides.items()}
     if not isinstance(overrides, (list, tuple)):
         raise CaseError(f"overrides: expected a dict or a list of \"key=value\" strings, not {type(overrides).__name__}")
     parsed = {}

@@ -31,11 +31,12 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
+import skfem
 from pydantic import ValidationError
 
 from . import mesh as meshes
-from .case import MeshSection, Model, _brief, _check_expressions, _describe
-from .errors import CaseError, one_line
+from .case import MeshSection, Model, _brief, _check_expressions, _check_tree, _describe, _material_keys, plain, section
+from .errors import CaseError
 from .problem import Problem, build_problem, make_mesh
 
 #: The contact keys that may be Python laws instead of tables, and the build_problem argument each becomes.
@@ -54,8 +55,8 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     - ``material``: a ``[material]`` table ({"E": ..., "nu": ..., "hypothesis": ..., "viscoplastic": {...}}), or
       a list of them, each with its ``region``; ``viscoplastic``: a Python law 𝒢(σ, ε) (or 𝒢(σ, ε, x)) for the
       whole body instead of the tables' laws;
-    - ``dirichlet``: {part: components} (components "x", ["x", "y"], or None for all), or the list of
-      ``[[boundary.dirichlet]]`` tables;
+    - ``dirichlet``: {part: components} (components "x", ["x", "y"], or None for all: u = 0 there; a table of
+      prescribed values is refused, not supported yet), or the list of ``[[boundary.dirichlet]]`` tables;
     - ``traction``: {part: value}, value the list of d expressions in x, y, (z,) t, or a Python function
       f(x, y, (z,) t) -> (fx, fy, (fz)); ``body_force``: one such value for the whole body;
     - ``contact``: the ``[contact]`` table; its ``stiffness`` may be a Python law K(ξ) and its ``p`` a law p(r);
@@ -63,7 +64,9 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     - ``initial``: the ``[initial]`` table; its ``displacement`` (nodes, d), ``stress`` (elements, d, d) or
       (d, d) and ``xi`` (contact nodes,) may be NumPy arrays.
 
-    Every value is checked before anything is assembled: a bad one is a CaseError naming it."""
+    Numbers may be NumPy numbers, lists NumPy arrays or tuples (see :func:`vpcontact.case.plain`). Every
+    value is checked before anything is assembled: a bad one, or one the problem would not use, is a
+    CaseError naming it."""
     mesh = _mesh(mesh)
     objects = {} if viscoplastic is None else {"viscoplastic": viscoplastic}
     tables = {"material": material, "time": time, "solver": {} if solver is None else solver,
@@ -81,14 +84,22 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     if initial is not None:
         initial = _table("initial", initial)
         for key, argument in INITIAL_ARRAYS.items():
-            if isinstance(initial.get(key), np.ndarray):
+            if isinstance(initial.get(key), np.ndarray) and initial[key].ndim > 0:
                 objects[argument] = initial.pop(key)
         tables["initial"] = initial
+    tables = plain(tables)
+    _check_tree(tables)
     try:
         model = Model.model_validate(tables, context={"python_laws": python_laws})
     except ValidationError as error:
-        raise CaseError(one_line(_describe(error.errors()[0]))) from None
+        raise CaseError(_describe(error.errors()[0])) from None
     _check_expressions(model)
+    if viscoplastic is not None:
+        tabled = [key for key, entry in _material_keys(model) if entry.viscoplastic is not None]
+        if tabled:
+            raise CaseError(f"{tabled[0]}.viscoplastic and viscoplastic = {_brief(viscoplastic)}: the Python law "
+                            f"replaces the tables' laws on the whole body, so {tabled[0]}.viscoplastic would not be "
+                            f"used; give one of them")
     return build_problem(model, mesh=mesh, **{name: value for name, value in objects.items() if value is not None})
 
 
@@ -99,12 +110,11 @@ def _mesh(mesh) -> meshes.Mesh:
     if isinstance(mesh, (str, os.PathLike)):
         return meshes.read_mesh(mesh)
     if isinstance(mesh, Mapping):
-        try:
-            section = MeshSection.model_validate(dict(mesh))
-        except ValidationError as error:
-            raise CaseError(one_line(_describe({**error.errors()[0], "loc": ("mesh", *error.errors()[0]["loc"])})))\
-                from None
-        return make_mesh(section)
+        return make_mesh(section(MeshSection, mesh, "mesh"))
+    if isinstance(mesh, skfem.Mesh):
+        raise CaseError(f"mesh = a scikit-fem {type(mesh).__name__} without named boundary parts: not accepted yet; "
+                        f"pass vpcontact.mesh.Mesh(m, parts={{name: indices of boundary facets}}, exact_normals={{}}) "
+                        f"(or save it to a mesh file with physical groups and pass its name)")
     raise CaseError(f"mesh = {_brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, quarter_ball, "
                     f"rectangle, block or read_mesh), a mesh file's name or a [mesh] table")
 
@@ -117,15 +127,31 @@ def _table(key: str, value) -> dict:
 
 
 def _dirichlet(dirichlet) -> list:
-    """The [[boundary.dirichlet]] tables of {part: components} (or of the tables themselves)."""
+    """The [[boundary.dirichlet]] tables of {part: components} (or of the tables themselves): u = 0 on the
+    part's components, "x", ["x", "y"] (a list, tuple or array of names) or None for all. A table of
+    values ({"z": "-0.01*t"}) would prescribe a displacement, which vpcontact does not do yet: refused, as
+    is any other value, rather than read as u = 0."""
     if isinstance(dirichlet, Mapping):
-        return [{"part": part} if components is None else
-                {"part": part, "components": [components] if isinstance(components, str) else list(components)}
-                for part, components in dirichlet.items()]
+        return [{"part": part, **_components(part, components)} for part, components in dirichlet.items()]
     if isinstance(dirichlet, Sequence) and not isinstance(dirichlet, str):
         return list(dirichlet)
     raise CaseError(f"dirichlet = {_brief(dirichlet)}: expected {{part: components}} (components \"x\", [\"x\", \"y\"] "
                     f"or None for all) or a list of [[boundary.dirichlet]] tables")
+
+
+def _components(part, components) -> dict:
+    """The "components" key of the [[boundary.dirichlet]] table of ``dirichlet[part] = components``."""
+    where = f"dirichlet[{_brief(part)}] = {_brief(components)}"
+    if isinstance(components, Mapping):
+        raise CaseError(f"{where}: prescribed displacements are not supported yet (only u = 0): give the components "
+                        f"held at 0 (\"x\", [\"x\", \"y\"] or None for all)")
+    if components is None:
+        return {}
+    if isinstance(components, str):
+        return {"components": [components]}
+    if isinstance(components, (Sequence, np.ndarray)):
+        return {"components": list(components)}
+    raise CaseError(f"{where}: expected the components held at 0: \"x\", [\"x\", \"y\"] or None for all")
 
 
 def _tractions(traction) -> tuple[list, dict | None]:

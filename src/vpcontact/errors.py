@@ -6,8 +6,15 @@ import json
 class CaseError(ValueError):
     """Bad input in a case (file, override or API call): a one-line message naming the bad value.
 
-    The command line prints the message alone (no traceback) and exits with status 2.
+    The message is made one line when the error is made (:func:`one_line`), whatever it quotes (a
+    value whose repr spans lines, a name with a newline): the command line prints it alone (no
+    traceback) and exits with status 2, and the API shows the same line.
     """
+
+    def __init__(self, *args):
+        if args and isinstance(args[0], str):
+            args = (one_line(args[0]), *args[1:])
+        super().__init__(*args)
 
 
 #: Most characters of a user's value a message shows; a longer value is cut and its length given, so
@@ -30,6 +37,14 @@ def quoted(text: str) -> str:
     if len(escaped) <= SHOWN:
         return f'"{escaped}"'
     return f'"{escaped[:SHOWN]}…" ({len(text)} characters)'
+
+
+def flag(name: str, value) -> bool:
+    """``value`` of the API's switch ``name`` (overwrite, progress, ...) as a bool: True or False (a NumPy bool
+    too), else CaseError: a string such as "no" is not read as true."""
+    if type(value).__name__ in ("bool", "bool_") and type(value).__module__ in ("builtins", "numpy"):
+        return bool(value)
+    raise CaseError(f"{name} = {shown(repr(value))}: expected True or False")
 
 
 #: Longest message of a refusal (the command line cuts longer ones): a user's values are shown

@@ -345,6 +345,8 @@ class _Compiler:
             # column after its end instead of at column 0.
             tree = ast.parse(self.body + "\n", mode="eval")
         except SyntaxError as exc:
+            if exc.msg.startswith("Exceeds the limit"):  # an integer literal of more than 4300 digits
+                raise self.error("a number of thousands of digits, out of the float64 range") from None
             raise self.error(f"not a valid expression ({exc.msg}{self.position(exc)})") from None
         except ValueError as exc:  # e.g. null bytes on some Python versions
             raise self.error(f"not a valid expression ({exc})") from None

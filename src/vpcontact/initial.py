@@ -20,7 +20,9 @@ admissible); ξ_0 ≥ 0; everything finite. A refusal is a CaseError naming the 
 
 from __future__ import annotations
 
+import os
 import zipfile
+import zlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -165,11 +167,16 @@ def _at_contact_nodes(source, surface: ContactSurface) -> np.ndarray:
 
 # --- the arrays of the API -------------------------------------------------------------------------
 def _api_array(name: str, value, shapes: list[tuple], expected: str) -> np.ndarray:
-    """``value`` as a float array of one of ``shapes``, else CaseError."""
+    """``value`` as a float array of one of ``shapes``, else CaseError (an array of complex numbers, booleans or
+    strings too: they are not real numbers)."""
     try:
-        array = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise CaseError(f"{name} = {_brief(value)}: expected an array of numbers of shape {expected}") from None
+        array = np.asarray(value)
+    except (TypeError, ValueError):  # a ragged list
+        array = None
+    if array is None or array.dtype.kind not in "iuf":
+        what = "" if array is None else f" (real numbers, not {array.dtype})"
+        raise CaseError(f"{name} = {_brief(value)}: expected an array of numbers of shape {expected}{what}")
+    array = array.astype(float)
     if array.shape not in shapes:
         sizes = " or ".join(str(shape) for shape in shapes)
         raise CaseError(f"{name}: an array of shape {array.shape}; expected {expected} = {sizes}")
@@ -265,41 +272,92 @@ def read_run_state(model: Model, mesh: Mesh, surface: ContactSurface) -> RunStat
     the case's mesh (same nodes, coordinates and elements) and contact nodes; CaseError otherwise."""
     folder, step = model.from_run_path, model.initial.step
     where = f"initial.from_run = {quoted(model.initial.from_run)}"
-    if not folder.is_dir():
+    if not os.path.isdir(folder):  # (False for a name the file system refuses, too long or with a NUL)
         raise CaseError(f"{where}: '{folder}' is not a run directory (give the --out folder of a vpcontact run)")
     path = folder / "solution.npz"
-    if not path.exists():
+    if not os.path.lexists(path):
         raise CaseError(f"{where}: '{path}' not found: the run kept no fields (output.field_steps) or has not ended")
     check_regular_file(path, f"{where}: the file", MAX_SOLUTION_BYTES)
     cells = CELLS[mesh.dim][2]
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {key: data[key] for key in ("points", cells, "steps", "times", "displacement", "stress",
-                                                 "contact_nodes", "xi") if key in data.files or key in _NEEDED}
-        points, elements, steps, times = arrays["points"], arrays[cells], arrays["steps"], arrays["times"]
-    except KeyError as error:
-        raise CaseError(f"{where}: '{path}' has no array {error} (the case's mesh has {cells}): is it the solution "
-                        f"of a {mesh.dim}D vpcontact run?") from None
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
-        raise CaseError(f"{where}: '{path}' cannot be read ({error})") from None
-    _check_same_mesh(where, points, elements, mesh, cells)
-    written = [int(s) for s in steps]
+    arrays = _read_arrays(where, path, cells, mesh.dim)
+    _check_same_mesh(where, arrays["points"], arrays[cells], mesh, cells)
+    _check_shapes(where, path, arrays, mesh, cells)
+    written = arrays["steps"].tolist()
     if step not in written:
         kept = ", ".join(map(str, written)) or "none"
         raise CaseError(f"initial.step = {step}: the run in {quoted(model.initial.from_run)} wrote its fields at the "
                         f"steps {kept} (its output.field_steps): give one of them")
     at = written.index(step)
+    time = float(arrays["times"][at])
+    if not np.isfinite(time):
+        raise CaseError(f"{where}: '{path}' gives step {step} the time {time}: the file is damaged")
     xi = None
     if "xi" in arrays:
-        run_nodes = arrays.get("contact_nodes", np.zeros(0, dtype=np.int64))
+        run_nodes = arrays["contact_nodes"]
         if not np.array_equal(run_nodes, surface.nodes):
             parts = "', '".join(str(layer.part) for _, layer in model.contact.layers()) if model.contact else ""
             ours = (f"the case's contact part '{parts}' has {surface.size} other nodes"
                     if model.contact is not None else "the case has no [contact]")
             raise CaseError(f"{where}: the run's contact part has {run_nodes.size} nodes and {ours}: a restart "
                             f"needs the same contact part")
-        xi = arrays["xi"][at]
-    return RunState(arrays["displacement"][at], arrays["stress"][at], xi, float(times[at]))
+        xi = arrays["xi"][at].astype(float)
+    return RunState(arrays["displacement"][at].astype(float), arrays["stress"][at].astype(float), xi, time)
+
+
+#: The arrays of solution.npz a restart reads besides the elements, and whether they hold integers.
+_INTEGERS = {"points": False, "steps": True, "times": False, "displacement": False, "stress": False,
+             "contact_nodes": True, "xi": False}
+
+
+def _read_arrays(where: str, path, cells: str, dim: int) -> dict[str, np.ndarray]:
+    """The arrays of the solution.npz at ``path`` a restart reads, each of real numbers (integers where
+    _INTEGERS says so, and the elements); CaseError for a file that is not such an archive, or damaged."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            if not isinstance(data, np.lib.npyio.NpzFile):
+                raise ValueError("not a NumPy .npz archive")
+            names = [name for name in (*_INTEGERS, cells) if name in data.files]
+            arrays = {name: data[name] for name in names}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error, AttributeError, TypeError) as error:
+        # AttributeError, TypeError: np.load returned an array or an object (a .npy file), not an archive
+        reason = error if not isinstance(error, (AttributeError, TypeError)) else "not a NumPy .npz archive"
+        raise CaseError(f"{where}: '{path}' cannot be read ({reason})") from None
+    missing = [name for name in (*_NEEDED, cells) if name not in arrays]
+    if missing:
+        raise CaseError(f"{where}: '{path}' has no array '{missing[0]}' (the case's mesh has {cells}): is it the "
+                        f"solution of a {dim}D vpcontact run?")
+    if ("xi" in arrays) != ("contact_nodes" in arrays):
+        there, absent = ("xi", "contact_nodes") if "xi" in arrays else ("contact_nodes", "xi")
+        raise CaseError(f"{where}: '{path}' has the array '{there}' and not '{absent}': the file is damaged")
+    for name, array in arrays.items():
+        integers = _INTEGERS.get(name, True)
+        if not isinstance(array, np.ndarray):  # a member of the archive that is not a .npy file: its bytes
+            raise CaseError(f"{where}: '{path}' holds '{name}' that is not a NumPy array: the file is damaged")
+        if array.dtype.kind not in ("iu" if integers else "iuf"):
+            raise CaseError(f"{where}: '{path}' holds '{name}' of type {array.dtype}, expected "
+                            f"{'integers' if integers else 'real numbers'}: the file is damaged")
+    return arrays
+
+
+def _check_shapes(where: str, path, arrays: dict[str, np.ndarray], mesh: Mesh, cells: str) -> None:
+    """CaseError unless the field arrays of a run on ``mesh`` (whose points and elements are the case's) have
+    the shapes write_solution gives them: one row per step written, then nodes, elements, contact nodes."""
+    d, nodes, elements = mesh.dim, mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
+    steps = arrays["steps"]
+    s = steps.shape[0] if steps.ndim == 1 else None
+    expected = {"steps": ((s,), "(steps,)"), "times": ((s,), "(steps,)"),
+                "displacement": ((s, nodes, d), "(steps, nodes, d)"),
+                "stress": ((s, elements, d, d), "(steps, elements, d, d)")}
+    if "xi" in arrays:
+        m = arrays["contact_nodes"].shape[0] if arrays["contact_nodes"].ndim == 1 else None
+        expected["contact_nodes"] = ((m,), "(contact nodes,)")
+        expected["xi"] = ((s, m), "(steps, contact nodes)")
+    for name, (shape, meaning) in expected.items():
+        if arrays[name].shape != shape:
+            wanted = ", ".join("?" if n is None else str(n) for n in shape)
+            raise CaseError(f"{where}: '{path}' holds '{name}' of shape {arrays[name].shape}, and a run on the case's "
+                            f"mesh writes ({wanted}{',' * (len(shape) == 1)}) {meaning}: the file is damaged or of "
+                            f"another run")
 
 
 def _check_same_mesh(where: str, points: np.ndarray, elements: np.ndarray, mesh: Mesh, cells: str) -> None:

@@ -33,6 +33,7 @@ from vpcontact import ball, msh22
 from vpcontact.errors import CaseError, shown
 from vpcontact.inputs import check_regular_file
 from vpcontact.mesh_checks import check_finite, check_triangles
+from vpcontact.mesh_checks_arrays import check_mesh
 from vpcontact.mesh_checks_3d import check_tetrahedra
 from vpcontact.memory import available_memory
 
@@ -70,6 +71,13 @@ class Mesh:
     curved_interfaces: dict[tuple[str, str], Projection] = field(default_factory=dict)
     """(region, region) -> the projection onto the exact curve or surface between the two regions (a coated
     shape's interface), like ``curved_parts``."""
+
+    def __post_init__(self):
+        """Refuse arrays that cannot be a mesh (`vpcontact.mesh_checks_arrays`: a Mesh made in Python may hold
+        anything) and keep the parts and regions as sorted int64 indices."""
+        parts, regions = check_mesh(self)
+        object.__setattr__(self, "parts", parts)
+        object.__setattr__(self, "regions", regions)
 
     def facets(self, part: str | int) -> np.ndarray:
         """Facet indices of `part` (an int n means the part named str(n))."""
@@ -117,7 +125,10 @@ class Mesh:
 
 
 def _positive(name: str, value: float) -> float:
-    """`value` as a float, or CaseError unless it is finite and > 0."""
+    """`value` as a float, or CaseError unless it is a number (a NumPy one too; not a string or a bool), finite
+    and > 0."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise CaseError(f"{name} = {shown(repr(value))}: expected a number > 0")
     value = float(value)
     if not (np.isfinite(value) and value > 0):
         raise CaseError(f"{name} must be a positive number, got {value}")
@@ -621,6 +632,8 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     elements of none are in no region, and a file without them has no regions. No exact normals. The
     orientation of the cells in the file is not used. Any problem raises CaseError naming the file.
     """
+    if not isinstance(path, (str, os.PathLike)) or not isinstance(os.fspath(path), str):
+        raise CaseError(f"mesh file = {shown(repr(path))}: expected a file's name (a string or a path)")
     label = os.fspath(path)
     check_regular_file(path, "mesh file")
     data = msh22.read(path)  # a plain gmsh 2.2 text file, read with NumPy

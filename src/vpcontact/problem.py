@@ -23,7 +23,7 @@ from skfem import Basis
 from . import mesh as meshes
 from .assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
-from .case import Case, MeshSection, Model, _brief, _material_keys
+from .case import Case, MeshSection, Model, OutputSection, _brief, _material_keys, section
 from .contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
                       PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
 from .errors import CaseError, quoted
@@ -95,9 +95,11 @@ class Problem:
 
     def solve(self, *, output=None, progress: bool | Progress = False):
         """The :class:`~vpcontact.results.Result` of the time loop (:func:`~vpcontact.stepping.solve_problem`);
-        ``progress``: True for lines on stderr (:mod:`vpcontact.progress`), or a reporter."""
+        ``output``: the ``[output]`` table (a dict, or an :class:`~vpcontact.case.OutputSection`); ``progress``:
+        True for lines on stderr (:mod:`vpcontact.progress`), or a reporter."""
         from .stepping import solve_problem
 
+        output = section(OutputSection, output, "output")
         return solve_problem(self, output=output, progress=progress)
 
     def __repr__(self) -> str:
@@ -105,6 +107,14 @@ class Problem:
         return (f"Problem(dofs={self.basis.N}, free_dofs={self.free.size}, elements={self.mesh.mesh.t.shape[1]}, "
                 f"nodes={self.mesh.mesh.p.shape[1]}, contact_nodes={self.surface.size}, steps={len(self.times)}, "
                 f"k={self.k:g})")
+
+
+def checked_problem(problem) -> Problem:
+    """``problem`` if it is a :class:`Problem`, else CaseError (a time loop or an adaptation given something else)."""
+    if not isinstance(problem, Problem):
+        raise CaseError(f"problem = {_brief(problem)}: expected a vpcontact.Problem (vpcontact.compose or "
+                        f"vpcontact.build_problem)")
+    return problem
 
 
 #: The keyword arguments of build_problem that are arrays on the mesh.
@@ -205,6 +215,7 @@ def _assembled(model: Model, mesh: meshes.Mesh, p, stiffness_law, tractions, bod
     body_terms = [(f"boundary.body_force[{i}].value", _density(f.value, f"boundary.body_force[{i}].value"))
                   for i, f in enumerate(model.boundary.body_force)]
     if body_force is not None:
+        _check_density_arguments("body_force", body_force, mesh.dim)
         body_terms = [("body_force", body_force)]
     loads = LoadVector(basis, mesh, _traction_terms(model, mesh, tractions), body_terms)
 
@@ -260,9 +271,8 @@ def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:
         raise CaseError(f"viscoplastic = {_brief(G)}: expected a function G(sigma, strain) of arrays of shape "
                         f"(d, d, elements), or G(sigma, strain, x) with x the element centroids (d, elements)")
     required = _required_arguments(G)
-    if len(required) > 3:
-        raise CaseError(f"viscoplastic takes {len(required)} arguments ({', '.join(required)}): expected "
-                        f"G(sigma, strain) or G(sigma, strain, x)")
+    if len(required) > 3 or not (len(required) == 3 or _accepts(G, 2)):
+        raise CaseError(f"viscoplastic takes {_parameters(G)}: expected G(sigma, strain) or G(sigma, strain, x)")
     if len(required) == 3:
         return AtCentroids(G, mesh.centroids)
     return G
@@ -342,6 +352,7 @@ def _traction_terms(model: Model, mesh: meshes.Mesh, tractions: Mapping | None) 
     for part, density in tractions.items():
         if not (isinstance(part, (str, int)) and str(part) in mesh.parts):
             raise CaseError(f"tractions: unknown part {_brief(part)}; the mesh has parts: {', '.join(mesh.part_names)}")
+        _check_density_arguments(f"tractions[{_brief(part)}]", density, mesh.dim)
         facets = mesh.facets(part)
         terms = [term for term in terms if not np.array_equal(mesh.facets(term[1]), facets)]
         terms.append((f"tractions[{_brief(part)}]", part, density))
@@ -369,21 +380,51 @@ def _api_law(law, name: str):
         return LawOfNodes(law, derivative, name)
     for what, f in ((name, law), (f"{name}.derivative", derivative)) if derivative else ((name, law),):
         sample = np.array(_LAW_SAMPLE)
-        with np.errstate(all="ignore"):  # a non-finite value is reported below
-            values = f(sample.copy())
-        _check_returned(what, f"{what}({', '.join(map(str, _LAW_SAMPLE))})", values, sample.shape)
+        call = f"{what}({', '.join(map(str, _LAW_SAMPLE))})"
+        _check_returned(what, call, _tried(what, call, f, sample.copy()), sample.shape)
     return law if derivative else CallableLaw(law)
 
 
 def _arguments(law: Callable, name: str) -> int:
-    """The arguments ``law`` takes, from its signature: 1 (r), or 2 (r, x); CaseError for more."""
+    """The arguments ``law`` takes, from its signature: 2 when it requires two (r, x), else 1 (r); CaseError when
+    it requires more, or cannot take one (lambda: 1)."""
     required = _required_arguments(law)
-    if len(required) <= 1:
-        return 1
-    if len(required) > 2:
-        raise CaseError(f"{name} takes {len(required)} arguments ({', '.join(required)}): expected f(r), or f(r, x) "
-                        f"with x the coordinates of the contact nodes")
-    return 2
+    if len(required) > 2 or not (len(required) == 2 or _accepts(law, 1)):
+        raise CaseError(f"{name} takes {_parameters(law)}: expected f(r), or f(r, x) with x the coordinates of the "
+                        f"contact nodes")
+    return 2 if len(required) == 2 else 1
+
+
+def _check_density_arguments(name: str, density, dim: int) -> None:
+    """CaseError unless a load density of the API takes the coordinates and the time, f(x, y, t) (f(x, y, z, t) in
+    3D), as far as its signature tells (a NumPy ufunc or a builtin does not; a value that is not a function is
+    refused where the load is made)."""
+    if callable(density) and not _accepts(density, dim + 1):
+        names = coordinates(dim)
+        raise CaseError(f"{name} = {_brief(density)} takes {_parameters(density)}: expected "
+                        f"f({', '.join(names)}, t) -> ({', '.join('f' + c for c in names)})")
+
+
+def _accepts(function: Callable, count: int) -> bool:
+    """May ``function`` be called with ``count`` positional arguments, as far as its signature tells (True when
+    Python cannot tell, for a NumPy ufunc or some builtins)?"""
+    try:
+        inspect.signature(function).bind(*range(count))
+    except TypeError:
+        return False
+    except ValueError:  # no signature
+        return True
+    return True
+
+
+def _parameters(function: Callable) -> str:
+    """The parameters of ``function`` in words: "2 arguments (x, y)", "1 argument (r)", "no argument"."""
+    try:
+        names = list(inspect.signature(function).parameters)
+    except (TypeError, ValueError):
+        return "other arguments"
+    count = f"{len(names)} argument{'s' * (len(names) != 1)}"
+    return f"{count} ({', '.join(names)})" if names else "no argument"
 
 
 def _required_arguments(function: Callable) -> list[str]:
@@ -413,19 +454,34 @@ class LawOfNodes:
             if f is None:
                 continue
             for r in _LAW_SAMPLE:
-                with np.errstate(all="ignore"):  # a non-finite value is reported below
-                    values = f(np.full(m, r), points.copy())
-                _check_returned(what, f"{what}({r}, x) at the {m} contact nodes", values, (m,))
+                call = f"{what}({r}, x) at the {m} contact nodes"
+                _check_returned(what, call, _tried(what, call, f, np.full(m, r), points.copy()), (m,))
         derivative = None if self.derivative is None else AtNodes(self.derivative, points)
         return CallableLaw(AtNodes(self.function, points), derivative)
+
+
+def _tried(name: str, call: str, function: Callable, *arguments):
+    """``function(*arguments)``, the trial ``call`` of the API's law ``name`` (values that are not finite are
+    reported by the caller); CaseError, caused by the function's own exception, when it raises one."""
+    try:
+        with np.errstate(all="ignore"):
+            return function(*arguments)
+    except CaseError:
+        raise
+    except Exception as error:  # noqa: BLE001 - a user's function may raise anything
+        raise CaseError(f"{name}: {call} raised {type(error).__name__}: {error}") from error
 
 
 def _check_returned(name: str, call: str, values, shape: tuple) -> None:
     """CaseError unless ``values`` (what ``call`` returned) are finite numbers broadcasting to ``shape``."""
     try:
-        array = np.asarray(values, dtype=float)
-    except (TypeError, ValueError):
-        raise CaseError(f"{name}: {call} returned a value of type {type(values).__name__}, not numbers") from None
+        array = np.asarray(values)
+    except (TypeError, ValueError):  # a ragged list
+        array = None
+    if array is None or array.dtype.kind not in "iuf":  # complex, boolean, strings, objects: not real numbers
+        what = f"ndarray of {array.dtype}" if isinstance(values, np.ndarray) else type(values).__name__
+        raise CaseError(f"{name}: {call} returned a value of type {what}, not numbers")
+    array = array.astype(float)
     try:
         broadcast = np.broadcast_shapes(array.shape, shape) == shape
     except ValueError:
@@ -448,8 +504,7 @@ def _check_first_history(basis: Basis, initial: InitialState, written, strain0: 
     rate = 0.0
     call = "G(initial.stress, 0)" if not initial.moves else "G(initial.stress, strain(initial.displacement))"
     if G is not None:
-        with np.errstate(all="ignore"):  # a value that is not finite is reported
-            rate = G(sigma.copy(), strain0.copy())
+        rate = _tried(law_name, call, G, sigma.copy(), strain0.copy())
         _check_returned(law_name, call, rate, sigma.shape)
     with np.errstate(all="ignore"):  # an overflow is reported below
         z = z0 + k * np.asarray(rate, dtype=float)

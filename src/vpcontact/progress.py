@@ -43,6 +43,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TextIO
 
+from .errors import flag
+
 #: A run's lines are held back for this long (see the module's docstring).
 HOLD_SECONDS = 5.0
 #: A phase that has lasted this long gets its start line.
@@ -176,7 +178,7 @@ def reporting(progress: bool | Progress | None, **options) -> Iterator[Progress]
     ``options``), closed at the end."""
     if isinstance(progress, Progress):
         yield progress
-    elif progress:
+    elif flag("progress", False if progress is None else progress):
         with Log(**options) as log:
             yield log
     else:

@@ -30,7 +30,7 @@ import numpy as np
 
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from .discretization import Discretization
-from .errors import CaseError, quoted, shown
+from .errors import CaseError, flag, quoted, shown
 from .memory import available_memory
 from .space import coordinates
 
@@ -345,9 +345,10 @@ class Result:
         """Write the files of a run directory (README, "Outputs") into ``out``, as ``vpcontact run`` does:
         created if missing; a directory that is not empty is refused (a CaseError, and a FileExistsError)
         unless ``overwrite``, which removes only the files a run writes there. Returns ``out`` as a Path."""
+        from .directory import folder_path
         from .writers import write_run
 
-        return write_run(self, out, overwrite=overwrite)
+        return write_run(self, folder_path(out, "output directory"), overwrite=flag("overwrite", overwrite))
 
     def __getstate__(self) -> dict:
         """A copy sent to another process (pickled) leaves the Problem behind (its operators, loads and the

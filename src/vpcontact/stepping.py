@@ -37,11 +37,11 @@ from typing import Callable
 import numpy as np
 
 from .assembly import NonFiniteLoad, element_strain, stress_force
-from .case import OutputSection
+from .case import OutputSection, section
 from .contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from .material import von_mises
 from .indicators import Level
-from .problem import Problem
+from .problem import Problem, checked_problem
 from .progress import SILENT, Progress, StepReport, reporting
 from .residual_estimate import ResidualEstimator
 from .results import Fields, Result, check_memory
@@ -137,8 +137,8 @@ class TimeLoop:
 
     def __init__(self, problem: Problem, output: OutputSection | None = None, progress: Progress = SILENT):
         started = clock.perf_counter()
-        self.problem, self.progress = problem, progress
-        output = OutputSection() if output is None else output
+        self.problem, self.progress = checked_problem(problem), progress
+        output = section(OutputSection, output, "output")  # a dict is the [output] table
         free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
         history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
