@@ -31,6 +31,7 @@ import hashlib
 import json
 import tomllib
 import zipfile
+from collections.abc import Collection
 from pathlib import Path
 
 import numpy as np
@@ -41,7 +42,7 @@ from .errors import CaseError
 from .results import CONTACT_ARRAYS, FIELD_NAMES, INTEGER_COLUMNS, Fields
 from .solvers import StepSolution
 from .stepping import COUNTERS, LoopState, TimeLoop, Trend
-from .writers import OUTPUTS, remove_files, replacing, versions
+from .writers import OUTPUTS, matching, remove_files, replacing, versions
 
 FOLDER = "checkpoint"
 STATE = "state.npz"
@@ -67,6 +68,24 @@ def exists(out: Path) -> bool:
 def remove(out: Path) -> None:
     """Delete the checkpoint's files (and checkpoint/, if that leaves it empty)."""
     remove_files(out, FILES)
+
+
+def saved_step(out: Path) -> int | None:
+    """The step the checkpoint in ``out`` continues after; None when there is none (or it is damaged)."""
+    try:
+        with np.load(folder(out) / STATE, allow_pickle=False) as data:
+            return int(data["step"])
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):
+        return None
+
+
+def remove_unrecorded(out: Path, recorded: Collection[int]) -> None:
+    """Delete the fields files of checkpoint/ whose step is not in ``recorded`` (the field steps of the
+    state restored; none for a run that starts): a session that stopped before it saved the state
+    listing them wrote them, and their steps are computed again (``save`` writes a fields file once)."""
+    pattern = f"{FOLDER}/fields_*.npz"
+    found = [path.relative_to(out) for path, whole in matching(out, (pattern,)) if whole is not None]
+    remove_files(out, tuple(str(path) for path in found if path.name[7:-4] not in {f"{n:05d}" for n in recorded}))
 
 
 def comparable(case_dict: dict) -> dict:
@@ -181,7 +200,7 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
     result.resumed_at = [*meta["resumed_at"], step]
     for n in meta["field_steps"]:
         data = _read(folder(out) / f"fields_{n:05d}.npz")
-        result.fields[n] = Fields(**{name: data[name] for name in FIELD_NAMES if name in data})
+        result.fields[n] = Fields(**{name: data.get(name) for name in FIELD_NAMES})  # absent: None
     if result.fields:
         result.final = result.fields[max(result.fields)]
     loop.earlier_time = float(meta["elapsed_s"])
