@@ -149,6 +149,8 @@ def save(loop: TimeLoop, out: Path) -> None:
             "elapsed_s": loop.elapsed(), **loop.counts(),
             "versions": versions()}
     arrays["meta"] = np.array(json.dumps(meta))
+    arrays["solver_method"] = np.array(loop.solver.name)
+    arrays.update({f"solver_{key}": value for key, value in loop.solver.kept().items()})
     with replacing(target / STATE) as temporary:
         np.savez(temporary, **arrays)
 
@@ -203,6 +205,9 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
         result.fields[n] = Fields(**{name: data.get(name) for name in FIELD_NAMES})  # absent: None
     if result.fields:
         result.final = result.fields[max(result.fields)]
+    if "solver_method" in arrays and str(arrays["solver_method"]) == loop.solver.name:
+        loop.solver.restore({key[7:]: value for key, value in arrays.items()
+                             if key.startswith("solver_") and key != "solver_method"})
     loop.earlier_time = float(meta["elapsed_s"])
     loop.earlier_counts = {name: int(meta.get(name, 0)) for name in COUNTERS}
     loop.stored_versions = meta.get("versions", {})
