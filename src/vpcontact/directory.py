@@ -56,8 +56,7 @@ class SymbolicLink(OSError):
 
     def __init__(self, path: Path, target: str):
         super().__init__(f"'{path}' is a symbolic link (to '{target}'), and vpcontact never writes or removes "
-                         f"through a link in its output directory: it stopped there; remove the link (what it leads "
-                         f"to is kept) and continue with --resume")
+                         f"through a link in its output directory")
         self.path = path
 
 
