@@ -312,16 +312,17 @@ class CondensedNewton(SemismoothNewton):
 
     def kept(self) -> dict[str, np.ndarray]:
         """What this solver carries from step to step beyond the StepSolution, for a checkpoint: the
-        solved span (``span_*``) and the kept inverse of the Newton systems (``systems_*``, m × m).
-        Restored (``restore``) into the solver of a resumed run, it makes that run's numbers the bits
-        of the uninterrupted one."""
-        return {**{f"span_{key}": value for key, value in self.span.kept().items()},
-                **{f"systems_{key}": value for key, value in self.systems.kept().items()}}
+        solved span (``span_*``), the kept inverse of the Newton systems (``systems_*``, m × m) and
+        which factor of A0 solves (``factorization_*``: PARDISO's Schur-mode one, or the plain one made
+        after PLAIN_AFTER solves). Restored (``restore``) into the solver of a resumed run, it makes
+        that run's numbers the bits of the uninterrupted one."""
+        parts = {"span": self.span, "systems": self.systems, "factorization": self.factorization}
+        return {f"{name}_{key}": value for name, part in parts.items() for key, value in part.kept().items()}
 
     def restore(self, arrays: dict[str, np.ndarray]) -> None:
         """Continue from ``kept()`` of the solver of the same problem in an earlier process."""
-        self.span.restore({key[5:]: value for key, value in arrays.items() if key.startswith("span_")})
-        self.systems.restore({key[8:]: value for key, value in arrays.items() if key.startswith("systems_")})
+        for name, part in {"span": self.span, "systems": self.systems, "factorization": self.factorization}.items():
+            part.restore({key[len(name) + 1:]: value for key, value in arrays.items() if key.startswith(f"{name}_")})
 
     def solve(self, step: StepData, previous: StepSolution | None) -> StepSolution:
         solution = super().solve(step, previous)
