@@ -1,8 +1,9 @@
 """Every killed run resumes to the bits of an uninterrupted one, whatever stopped it.
 
 The runs go through the command line in a subprocess, as a user's: 2D and 3D, elastic and
-viscoplastic (the history z), with the error estimate, each ``output.field_steps`` setting ("all",
-"final", "none", a list), stopped after a random checkpoint by SIGTERM (the run stops at the end of
+viscoplastic (the history z), with the error estimate, by the condensed method (the default here;
+also past the solve after which it changes its factor) and the iterative one (the full method:
+tests/test_robustness.py), each ``output.field_steps`` setting ("all", "final", "none", a list), stopped after a random checkpoint by SIGTERM (the run stops at the end of
 the step, exit 143), by SIGKILL (at any moment, a write included) or by a full disk (a real one: a
 small tmpfs filled while the run is paused; exit 4, one line), some twice in a row; then
 ``--resume`` (the last one in this process, through the same entry point). Every file of the resumed
@@ -72,8 +73,16 @@ def estimated_3d() -> dict:
     return case
 
 
+def iterative_3d() -> dict:
+    """The 3D block by the iterative method (AMG-preconditioned CG: the hierarchy is built on a Newton
+    matrix of some step, which a resumed run must build on the same matrix)."""
+    case = elastic_3d()
+    case["solver"] = {"method": "iterative"}
+    return case
+
+
 CASES = {"2d": elastic_2d, "3d": elastic_3d, "viscoplastic": viscoplastic_2d, "estimate": estimated_3d,
-         "long": long_2d}
+         "long": long_2d, "iterative": iterative_3d}
 #: The step after which a run of the case is stopped at the earliest (default: the first).
 EARLIEST = {"long": 52}
 
@@ -261,6 +270,7 @@ MATRIX = [
     ("estimate", "all", ("SIGTERM",)),
     ("estimate", [5, 12], ("SIGKILL",)),
     ("long", "all", ("SIGKILL",)),
+    ("iterative", [4, 15, 30], ("SIGKILL",)),
 ]
 
 
