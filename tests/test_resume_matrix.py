@@ -3,9 +3,10 @@
 The runs go through the command line in a subprocess, as a user's: 2D and 3D, elastic and
 viscoplastic (the history z), with the error estimate, by the condensed method (the default here;
 also past the solve after which it changes its factor) and the iterative one (the full method:
-tests/test_robustness.py), each ``output.field_steps`` setting ("all", "final", "none", a list), stopped after a random checkpoint by SIGTERM (the run stops at the end of
-the step, exit 143), by SIGKILL (at any moment, a write included) or by a full disk (a real one: a
-small tmpfs filled while the run is paused; exit 4, one line), some twice in a row; then
+tests/test_robustness.py), each ``output.field_steps`` setting ("all", "final", "none", a list),
+stopped after a random checkpoint by SIGTERM (the run stops at the end of the step, exit 143), by
+SIGKILL (at any moment, a write included) or by a full disk (a real one: a small tmpfs filled while
+the run is paused; exit 4, one line), some twice in a row; then
 ``--resume`` (the last one in this process, through the same entry point). Every file of the resumed
 run directory is compared with those of an uninterrupted run of the same case (its fields at every
 step, no checkpoints): history.csv and contact.csv (pandas, exactly, and byte for byte), the arrays
@@ -207,12 +208,17 @@ def read_pvd(path: Path) -> list[tuple[str, str]]:
     return [(d.get("timestep"), d.get("file")) for d in ET.parse(path).getroot().iter("DataSet")]
 
 
+#: The arrays of solution.npz with one entry per field step (the others are the mesh's).
+PER_FIELD_STEP = ("steps", "times", "displacement", "stress", "z", "xi")
+
+
 def assert_same_outputs(out: Path, reference: Path, steps: list[int], xdmf: bool, resumed_at: list[int]) -> None:
     """The run directory ``out`` holds exactly what an uninterrupted run with the field ``steps`` writes, and
     its numbers are those of ``reference`` (fields at every step) bit for bit."""
     fields = [f"fields/{part}_{n:05d}.vtu" for n in steps for part in ("body", "contact")]
     series = ["fields/body.pvd", "fields/contact.pvd", "solution.npz"] if steps else []
-    hdf = [f"fields/{part}.{suffix}" for part in ("body", "contact") for suffix in ("h5", "xdmf")] if xdmf and steps else []
+    hdf = [f"fields/{part}.{suffix}" for part in ("body", "contact") for suffix in ("h5", "xdmf")] \
+        if xdmf and steps else []
     written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
     assert written == sorted(["case.resolved.toml", "summary.json", "history.csv", "contact.csv", *fields, *series,
                               *hdf]), "a missing or left-over file (a checkpoint, a temporary, the lock)"
@@ -227,7 +233,7 @@ def assert_same_outputs(out: Path, reference: Path, steps: list[int], xdmf: bool
         with np.load(out / "solution.npz") as mine, np.load(reference / "solution.npz") as theirs:
             assert sorted(mine.files) == sorted(theirs.files)
             for key in theirs.files:
-                expected = theirs[key][at] if key in ("steps", "times", "displacement", "stress", "z", "xi") else theirs[key]
+                expected = theirs[key][at] if key in PER_FIELD_STEP else theirs[key]
                 np.testing.assert_array_equal(mine[key], expected, err_msg=key, strict=True)
         for part in ("body", "contact"):
             expected = [entry for entry in read_pvd(reference / f"fields/{part}.pvd")
@@ -279,7 +285,8 @@ def steps_of(field_steps, steps: int) -> list[int]:
 
 
 @pytest.mark.parametrize("name, field_steps, stops", MATRIX,
-                         ids=[f"{name}-{str(fields).replace(' ', '')}-{'+'.join(stops)}" for name, fields, stops in MATRIX])
+                         ids=[f"{name}-{str(fields).replace(' ', '')}-{'+'.join(stops)}"
+                              for name, fields, stops in MATRIX])
 def test_a_resumed_run_is_the_uninterrupted_one(tmp_path, references, request, name, field_steps, stops):
     seed = int.from_bytes(os.urandom(4), "little")
     rng = random.Random(seed)
