@@ -8,7 +8,11 @@ Layout, inside the run directory:
                                    that includes that step)
 
 Every file is written atomically (a temporary file renamed into place), so a run killed at any
-moment leaves the previous complete checkpoint. state.npz holds
+moment, or stopped by a write that fails (a full disk), leaves the previous complete checkpoint. A
+fields file is written once, before the state that lists its step; one that no state lists (its
+session was killed in between) is removed when a session starts (``remove_unrecorded``). A field
+that a run has not (σ33 in 3D, z without viscoplastic history, η_K without the error estimate) is
+not stored, and None again on restore. state.npz holds
 
 - ``case``: the resolved case (TOML) the run was started with, and ``mesh_digest``: a hash of the
   mesh, the free dofs and the contact nodes, both checked on resume;
@@ -18,11 +22,14 @@ moment leaves the previous complete checkpoint. state.npz holds
   iteration starts from the same prediction as in an uninterrupted run;
 - the history rows (one array per column) and the per-node contact arrays so far (rows × m);
 - ``meta`` (JSON): the field steps saved, step cuts, wall time and linear solves so far, the steps
-  where the run was resumed before, the versions.
+  where the run was resumed before, the versions;
+- ``solver_method`` and ``solver_*``: what the step solver carries from step to step (its ``kept()``:
+  the condensed method's solved span, kept inverse and choice of factor; the iterative method's
+  Newton matrix its AMG hierarchy was built on).
 
-The step solver itself is rebuilt on resume (the condensed solver refactors A0 and rebuilds S): the
-numbers then agree with an uninterrupted run to rounding (the factor-once solver reuses earlier
-solves in a different order), bitwise with the full solver.
+The step solver itself is rebuilt on resume (the condensed solver refactors A0 and rebuilds S) and
+given that state (``restore``): every method then continues exactly as an uninterrupted run, and
+the numbers are its bits (tests/test_resume_matrix.py).
 """
 
 from __future__ import annotations

@@ -1,7 +1,10 @@
 """The files of a run directory. Each is written atomically (a temporary file beside it, renamed into
-place: a reader never sees half a file), ``summary.json`` last: a directory whose summary.json says
-``"status": "complete"`` holds a complete run; without summary.json a run is in progress or was killed
-(``vpcontact run --resume`` continues it from its checkpoint, see :mod:`vpcontact.rundir`).
+place: a reader never sees half a file, and a write that fails, on a full disk say, leaves the file
+as it was), ``summary.json`` last: a directory whose summary.json says ``"status": "complete"`` holds
+a complete run; without summary.json a run is in progress or was killed (``vpcontact run --resume``
+continues it from its checkpoint, see :mod:`vpcontact.rundir`). Nothing is written, replaced or
+removed through a symbolic link: ``check_room`` refuses one where a run writes before it starts, and
+``replacing`` and ``remove_files`` act through :mod:`vpcontact.directory`, which never follows one.
 
 - ``summary.json``      status, sizes, wall time, the final values, versions;
 - ``history.csv``       one row per time step (``Result.columns``);
