@@ -52,12 +52,7 @@ class DirectoryReplaced(OSError):
 
 class SymbolicLink(OSError):
     """A symbolic link where vpcontact was to write or remove a file or folder inside a held directory:
-    nothing was written through it, nothing removed (one line naming the link and what to do)."""
-
-    def __init__(self, path: Path, target: str):
-        super().__init__(f"'{path}' is a symbolic link (to '{target}'), and vpcontact never writes or removes "
-                         f"through a link in its output directory")
-        self.path = path
+    nothing was written through it, nothing removed (one line naming the link, see ``refuse_link``)."""
 
 
 class Held:
@@ -227,7 +222,8 @@ def refuse_link(path: Path, name: str | Path, descriptor: int | None = None) -> 
     """SymbolicLink if ``name`` (in the folder ``descriptor``, or a path) is a symbolic link; ``path``
     is how it is named to the user."""
     if _is_link(name, descriptor):
-        raise SymbolicLink(Path(path), os.readlink(name, dir_fd=descriptor))
+        raise SymbolicLink(f"'{path}' is a symbolic link (to '{os.readlink(name, dir_fd=descriptor)}'), and vpcontact "
+                           f"never writes or removes through a link in its output directory")
 
 
 def create(path: Path, replaces: Path) -> tuple[int, int]:
