@@ -517,8 +517,8 @@ def user_file(tmp_path):
 
 
 #: What is made a link in the run directory, and to what (a folder or a file of the user).
-LINKS = {"fields": user_folder, "checkpoint": user_folder, "history.csv": user_file, "summary.json": user_file,
-         directory.LOCK: user_file, "cycles": user_folder}
+LINKS = {"fields": user_folder, "checkpoint": user_folder, "figures": user_folder, "cycles": user_folder,
+         "history.csv": user_file, "summary.json": user_file, directory.LOCK: user_file}
 
 
 def link_in(out, name, tmp_path):
