@@ -271,10 +271,8 @@ MATRIX = [
     ("3d", "final", ("ENOSPC",)),
     ("3d", [1, 8, 16], ("SIGTERM", "SIGKILL")),
     ("3d", "none", ("SIGTERM",)),
-    ("viscoplastic", [2, 9, 20, 30], ("SIGKILL",)),
-    ("viscoplastic", "all", ("ENOSPC",)),
+    ("viscoplastic", [2, 9, 20, 30], ("SIGKILL", "ENOSPC")),
     ("estimate", "all", ("SIGTERM",)),
-    ("estimate", [5, 12], ("SIGKILL",)),
     ("long", "all", ("SIGKILL",)),
     ("iterative", [4, 15, 30], ("SIGKILL",)),
 ]

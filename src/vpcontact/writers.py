@@ -140,7 +140,7 @@ def _matching(folder: Path, patterns: list[tuple[int, tuple[str, ...]]]) -> Iter
     try:
         with os.scandir(folder) as found:
             entries = sorted(found, key=lambda entry: entry.name)
-    except (FileNotFoundError, NotADirectoryError):
+    except OSError:  # not there, not a folder, not readable: nothing in it is matched (as by Path.glob)
         return
     for entry in entries:
         matched = [(index, parts) for index, parts in patterns if fnmatch.fnmatchcase(entry.name, parts[0])]
