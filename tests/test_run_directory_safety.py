@@ -590,6 +590,18 @@ def test_a_link_named_like_an_output_inside_the_folders_is_refused_too(tmp_path,
     assert everything(tmp_path) == before
 
 
+def test_result_write_refuses_a_link_in_its_directory(tmp_path):
+    """The Python API's Result.write (write_run) as the command line: CaseError, nothing changed."""
+    result = vpcontact.solve(rectangle_case())
+    out = tmp_path / "run"
+    result.write(out)
+    link = link_in(out, "fields", tmp_path)
+    before = everything(tmp_path)
+    with pytest.raises(vpcontact.CaseError, match=f"'{link}' is a symbolic link"):
+        result.write(out, overwrite=True)
+    assert everything(tmp_path) == before
+
+
 def test_out_itself_may_be_a_link_to_a_folder(tmp_path):
     """--out a link to a folder elsewhere (another disk): the run, --resume and --overwrite write there."""
     case, real = killed_run(tmp_path)
