@@ -10,7 +10,7 @@ the run is paused; exit 4, one line), some twice in a row; then
 ``--resume`` (the last one in this process, through the same entry point). Every file of the resumed
 run directory is compared with those of an uninterrupted run of the same case (its fields at every
 step, no checkpoints): history.csv and contact.csv (pandas, exactly, and byte for byte), the arrays
-of solution.npz, the VTU files byte for byte, the PVD collections, the XDMF/HDF5 series, the resolved
+of solution.npz, the VTU and PNG files byte for byte, the PVD collections, the XDMF/HDF5 series, the resolved
 case and summary.json. summary.json alone differs where it must: the wall times, the steps the run
 was resumed at, the memory figure of solver_reason (``SESSION_KEYS``).
 """
@@ -41,8 +41,10 @@ STEPS = 30
 
 
 def elastic_2d(steps: int = STEPS) -> dict:
+    """The 2D block, with the figures of a complete run (PNG files, the same bytes however it ran)."""
     case = rectangle_case()
     case["time"] = {"T": 1.1, "steps": steps}
+    case["output"]["figures"] = True
     return case
 
 
@@ -221,14 +223,17 @@ def assert_same_outputs(out: Path, reference: Path, steps: list[int], xdmf: bool
     series = ["fields/body.pvd", "fields/contact.pvd", "solution.npz"] if steps else []
     hdf = [f"fields/{part}.{suffix}" for part in ("body", "contact") for suffix in ("h5", "xdmf")] \
         if xdmf and steps else []
+    all_steps = len(steps) == len(read_pvd(reference / "fields/body.pvd"))
+    shown = reference if all_steps else out  # which figures there are depends on the fields written
+    figures = sorted(str(p.relative_to(shown)) for p in shown.glob("figures/*.png"))
     written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
     assert written == sorted(["case.resolved.toml", "summary.json", "history.csv", "contact.csv", *fields, *series,
-                              *hdf]), "a missing or left-over file (a checkpoint, a temporary, the lock)"
+                              *hdf, *figures]), "a missing or left-over file (a checkpoint, a temporary, the lock)"
     for name in ("history.csv", "contact.csv"):
         mine, theirs = (pd.read_csv(folder / name) for folder in (out, reference))
         pd.testing.assert_frame_equal(mine, theirs, check_exact=True, obj=name)
         assert (out / name).read_bytes() == (reference / name).read_bytes(), name
-    for name in fields:
+    for name in fields + figures:
         assert (out / name).read_bytes() == (reference / name).read_bytes(), name
     if steps:
         at = [n - 1 for n in steps]
@@ -251,8 +256,7 @@ def assert_same_outputs(out: Path, reference: Path, steps: list[int], xdmf: bool
                     np.testing.assert_array_equal(mine[name][()], theirs[name][()], err_msg=f"{part}.h5 {name}")
     mine, theirs = (json.loads((folder / "summary.json").read_text()) for folder in (out, reference))
     assert mine["status"] == "complete" and mine["resumed_at_steps"] == resumed_at
-    ignored = SESSION_KEYS if len(steps) == len(read_pvd(reference / "fields/body.pvd")) else \
-        SESSION_KEYS + WRITTEN_FIELDS_KEYS
+    ignored = SESSION_KEYS if all_steps else SESSION_KEYS + WRITTEN_FIELDS_KEYS
     assert {k: v for k, v in mine.items() if k not in ignored} == {k: v for k, v in theirs.items() if k not in ignored}
     mine, theirs = (checkpoint.comparable(tomllib.loads((folder / "case.resolved.toml").read_text()))
                     for folder in (out, reference))
