@@ -180,6 +180,16 @@ def test_an_unusable_out_is_refused_with_one_line(tmp_path, kind, flag):
     assert_refused(status, stderr, str(out), words, untouched=[(tmp_path, before)])
 
 
+@pytest.mark.parametrize("flag", ["", "--overwrite", "--resume"])
+@pytest.mark.parametrize("name, words", [("n" * 300, "is longer than the file system allows (255 characters)"),
+                                         ("n/" * 3000, "characters long, more than the system allows")])
+def test_an_out_longer_than_the_file_system_allows_is_refused(tmp_path, name, words, flag):
+    case = write_case(tmp_path)
+    before = snapshot_tree(tmp_path)
+    status, _, stderr = run_cli("run", case, "--out", tmp_path / name, "--quiet", *([flag] if flag else []))
+    assert_refused(status, stderr, "--out", words, "give a shorter one", untouched=[(tmp_path, before)])
+
+
 IN_THE_WAY = {
     "a folder named summary.json": (lambda out: (out / "summary.json").mkdir(), "summary.json' is a folder"),
     "a folder named case.resolved.toml": (lambda out: (out / "case.resolved.toml").mkdir(), "is a folder"),

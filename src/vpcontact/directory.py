@@ -41,7 +41,7 @@ try:
 except ImportError:  # not POSIX: no lock, and no operations relative to a directory
     fcntl = None
 
-from .errors import CaseError
+from .errors import CaseError, quoted
 
 LOCK = ".vpcontact.lock"
 
@@ -138,6 +138,11 @@ def usable(path: Path, label: str = "--out") -> None:
     """Refuse (CaseError) a path that cannot be a directory to write in, without writing anything: its
     nearest existing component must be a directory (after following symbolic links)."""
     path = Path(path)
+    try:
+        os.lstat(path)
+    except OSError as error:
+        if error.errno == errno.ENAMETOOLONG:
+            raise CaseError(f"{label} {quoted(str(path))}: {_too_long(path)}; give a shorter one") from None
     existing = next(p for p in (path, *path.parents) if os.path.lexists(p))
     subject = f"{label} '{path}'" if existing == path else f"{label} '{path}': '{existing}'"
     try:
@@ -413,6 +418,18 @@ def _undo(created: list[Path], changed: tuple[Path, os.stat_result]) -> None:
         os.utime(folder, ns=(before.st_atime_ns, before.st_mtime_ns))
     except OSError:
         pass  # a folder we cannot write in: it did not change
+
+
+def _too_long(path: Path) -> str:
+    """What is too long in ``path`` (the OS said ENAMETOOLONG): its longest name, or the whole path."""
+    longest = max(path.parts, key=len)
+    try:
+        allowed = os.pathconf(next(p for p in path.parents if os.path.isdir(p)), "PC_NAME_MAX")
+    except (OSError, ValueError, StopIteration):
+        allowed = 255
+    if len(longest) > allowed:
+        return f"its name {quoted(longest)} is longer than the file system allows ({allowed} characters)"
+    return f"the path is {len(str(path))} characters long, more than the system allows"
 
 
 def _reason(error: OSError) -> str:
