@@ -1,10 +1,12 @@
 """Run directories that never lose a user's file: --overwrite removes only vpcontact's outputs, an
-unusable --out or a damaged checkpoint is refused with one line (exit 2) before anything is computed
-or written, and a run whose directory is removed or replaced under it stops writing (exit 4)."""
+unusable --out, a damaged checkpoint or a symbolic link where a run writes is refused with one line
+(exit 2) before anything is computed or written, and a run whose directory is removed or replaced
+under it, or where a link appears, stops writing (exit 4); nothing is ever written through a link."""
 
 import errno
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -70,9 +72,6 @@ def test_overwrite_keeps_every_file_vpcontact_did_not_write(tmp_path):
     case = write_case(tmp_path)
     assert run_cli("run", case, "--out", out, "--quiet")[0] == 0
     mine = put_user_files(out)
-    (tmp_path / "elsewhere.csv").write_text("a user's table")
-    (out / "contact.csv").unlink()
-    (out / "contact.csv").symlink_to(tmp_path / "elsewhere.csv")  # an output name that is a link to a user's file
     vtu_before = sorted(p.name for p in (out / "fields").glob("*.vtu"))
     assert len(vtu_before) == 22
 
@@ -81,13 +80,11 @@ def test_overwrite_keeps_every_file_vpcontact_did_not_write(tmp_path):
                                      "--set", 'output.field_steps="none"', "--set", "contact.g=0.15")
     assert status == 0, stderr
     assert_user_files_intact(out, mine)
-    assert (tmp_path / "elsewhere.csv").read_text() == "a user's table"
     assert sorted(p.name for p in (out / "fields").iterdir()) == ["my_view.pvsm"]
     assert sorted(p.name for p in (out / "checkpoint").iterdir()) == ["README"]
     assert not (out / "solution.npz").exists() and not (out / directory.LOCK).exists()
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "complete" and vpcontact.load_case(out / "case.resolved.toml").contact.g == 0.15
-    assert not (out / "contact.csv").is_symlink()
 
 
 def test_overwrite_removes_fields_and_checkpoint_folders_it_empties(tmp_path):
@@ -181,6 +178,17 @@ def test_an_unusable_out_is_refused_with_one_line(tmp_path, kind, flag):
     before = snapshot_tree(tmp_path)
     status, _, stderr = run_cli("run", case, "--out", out, "--quiet", *([flag] if flag else []))
     assert_refused(status, stderr, str(out), words, untouched=[(tmp_path, before)])
+
+
+@pytest.mark.parametrize("flag", ["", "--overwrite", "--resume"])
+@pytest.mark.parametrize("name, words", [("n" * 300, "has 300 bytes, more than the 255 the file system allows: give a "
+                                                      "shorter name"),
+                                         ("n/" * 3000, "bytes of a path the file system allows: give a shorter path")])
+def test_an_out_longer_than_the_file_system_allows_is_refused(tmp_path, name, words, flag):
+    case = write_case(tmp_path)
+    before = snapshot_tree(tmp_path)
+    status, _, stderr = run_cli("run", case, "--out", tmp_path / name, "--quiet", *([flag] if flag else []))
+    assert_refused(status, stderr, "--out", words, untouched=[(tmp_path, before)])
 
 
 IN_THE_WAY = {
@@ -470,8 +478,8 @@ def test_a_swap_between_the_check_and_the_write_still_misses_the_new_directory(t
     monkeypatch.setattr(directory.Held, "check", lambda self: None)
     directory.unlink(out / "summary.json")
     directory.mkdir(out / "fields")
-    with pytest.raises(FileNotFoundError):  # the temporary went to the new directory, the rename to the old one
-        writers.write_text(out / "history.csv", "step\n")
+    with pytest.raises(directory.DirectoryReplaced, match="is not the file vpcontact created"):
+        writers.write_text(out / "history.csv", "step\n")  # the temporary was written in the new directory
     held.release()
     assert contents(out) == {"summary.json": b"the user's"} and [p.name for p in out.iterdir()] == ["summary.json"]
     assert sorted(p.name for p in (tmp_path / "moved").iterdir()) == ["fields"]
@@ -486,7 +494,8 @@ def test_a_write_that_fails_ends_the_run_with_one_line(tmp_path, monkeypatch, ca
     out = tmp_path / "run"
     assert main(["run", str(write_case(tmp_path)), "--out", str(out), "--quiet"]) == 4
     stderr = capsys.readouterr().err
-    assert stderr == f"vpcontact: stopped: No space left on device: '{out / 'solution.npz'}'\n"
+    assert stderr == (f"vpcontact: stopped: No space left on device: '{out / 'solution.npz'}'; no checkpoint was "
+                      f"written yet: make room, then run it again with --resume (it starts over)\n")
     assert not (out / "summary.json").exists() and not (out / directory.LOCK).exists()
 
 
@@ -499,3 +508,221 @@ def test_two_processes_never_hold_one_directory(tmp_path):
     finally:
         held.release()
     assert list(out.iterdir()) == []
+
+
+# --- 5. a symbolic link inside a run directory is the user's: never written through, never removed ---
+def user_folder(tmp_path):
+    """A user's folder with files named like a run's (fields, checkpoint files): the target of links."""
+    folder = tmp_path / "users_folder"
+    folder.mkdir()
+    for name in ("body.h5", "body.pvd", "body_00001.vtu", "contact_00002.vtu", "state.npz", "fields_00002.npz",
+                 "notes.txt"):
+        (folder / name).write_bytes(os.urandom(64))
+    return folder
+
+
+def user_file(tmp_path):
+    path = tmp_path / "users_table.csv"
+    path.write_text("the user's own table\n")
+    return path
+
+
+#: What is made a link in the run directory, and to what (a folder or a file of the user).
+LINKS = {"fields": user_folder, "checkpoint": user_folder, "figures": user_folder, "cycles": user_folder,
+         "history.csv": user_file, "summary.json": user_file, directory.LOCK: user_file}
+
+
+def link_in(out, name, tmp_path):
+    """Replace ``out/name`` (if there) by a symbolic link to a user's folder or file; returns the link."""
+    target = LINKS[name](tmp_path)
+    link = out / name
+    if link.is_dir() and not link.is_symlink():
+        link.rename(tmp_path / f"{name}.moved")
+    elif os.path.lexists(link):
+        link.unlink()
+    link.symlink_to(target, target_is_directory=target.is_dir())
+    return link
+
+
+def everything(folder):
+    """{relative path: bytes, or the target of a link} of every entry under ``folder``, links not followed."""
+    found = {}
+    for root, folders, files in os.walk(folder):
+        for name in folders + files:
+            path = Path(root) / name
+            found[str(path.relative_to(folder))] = (os.readlink(path) if path.is_symlink() else
+                                                     path.read_bytes() if path.is_file() else "folder")
+    return found
+
+
+@pytest.mark.parametrize("flag", ["", "--overwrite", "--resume"])
+@pytest.mark.parametrize("name", sorted(LINKS))
+def test_a_link_in_the_run_directory_is_refused_before_anything_is_written(tmp_path, name, flag, capsys):
+    """A plain run (into a directory that holds only the link), --overwrite (over a complete run) and
+    --resume (of a killed run with its checkpoint): one line naming the link and what to do, exit 2,
+    and nothing changed, neither in the run directory nor where the link leads."""
+    case, out = killed_run(tmp_path)
+    if flag == "--overwrite":
+        assert main(["run", str(case), "--out", str(out), "--quiet", "--resume"]) == 0
+    elif flag == "":
+        shutil.rmtree(out)
+        out.mkdir()
+    link = link_in(out, name, tmp_path)
+    capsys.readouterr()
+    before = everything(tmp_path)
+    status = main(["run", str(case), "--out", str(out), "--quiet", *([flag] if flag else [])])
+    assert_refused(status, capsys.readouterr().err, f"'{link}' is a symbolic link", "remove the link")
+    assert everything(tmp_path) == before
+
+
+def test_the_refusal_of_a_link_through_the_command_line(tmp_path):
+    """The same through the command line (a process): a user's body.h5 behind a linked fields/ stays."""
+    case, out = killed_run(tmp_path)
+    link = link_in(out, "fields", tmp_path)
+    before = everything(tmp_path)
+    for flag in ("--overwrite", "--resume"):
+        status, _, stderr = run_cli("run", case, "--out", out, "--quiet", flag)
+        assert_refused(status, stderr, f"'{link}' is a symbolic link (to '{tmp_path / 'users_folder'}')")
+    assert everything(tmp_path) == before
+
+
+@pytest.mark.parametrize("name", ["fields/body_00003.vtu", "checkpoint/state.npz", "checkpoint/fields_00004.npz",
+                                  ".history.tmp-12345.csv", "fields/.body.tmp-12345.pvd"])
+def test_a_link_named_like_an_output_inside_the_folders_is_refused_too(tmp_path, name, capsys):
+    case, out = killed_run(tmp_path)
+    (out / "fields").mkdir(exist_ok=True)
+    target = user_file(tmp_path)
+    link = out / name
+    link.unlink(missing_ok=True)
+    link.symlink_to(target)
+    before = everything(tmp_path)
+    status = main(["run", str(case), "--out", str(out), "--quiet", "--overwrite"])
+    assert_refused(status, capsys.readouterr().err, f"'{link}' is a symbolic link")
+    assert everything(tmp_path) == before
+
+
+def test_result_write_refuses_a_link_in_its_directory(tmp_path):
+    """The Python API's Result.write (write_run) as the command line: CaseError, nothing changed."""
+    result = vpcontact.solve(rectangle_case())
+    out = tmp_path / "run"
+    result.write(out)
+    link = link_in(out, "fields", tmp_path)
+    before = everything(tmp_path)
+    with pytest.raises(vpcontact.CaseError, match=f"'{link}' is a symbolic link"):
+        result.write(out, overwrite=True)
+    assert everything(tmp_path) == before
+
+
+def test_out_itself_may_be_a_link_to_a_folder(tmp_path):
+    """--out a link to a folder elsewhere (another disk): the run, --resume and --overwrite write there."""
+    case, real = killed_run(tmp_path)
+    out = tmp_path / "shortcut"
+    out.symlink_to(real, target_is_directory=True)
+    assert main(["run", str(case), "--out", str(out), "--quiet", "--resume"]) == 0
+    assert json.loads((real / "summary.json").read_text())["resumed_at_steps"] == [5]
+    assert main(["run", str(case), "--out", str(out), "--quiet", "--overwrite"]) == 0
+    assert json.loads((real / "summary.json").read_text())["resumed_at_steps"] == []
+    assert out.is_symlink() and not (real / directory.LOCK).exists()
+
+
+def test_no_single_write_goes_through_a_link_made_after_the_start(tmp_path):
+    """In-process, a held directory where links appear after the run's check: every write, folder and
+    removal refuses them (SymbolicLink naming the link) and the user's files stay as they were."""
+    out = tmp_path / "run"
+    held = directory.acquire(out)
+    try:
+        writers.write_text(out / "history.csv", "mine\n")
+        folder, table = user_folder(tmp_path), user_file(tmp_path)
+        (out / "fields").symlink_to(folder, target_is_directory=True)
+        (out / "summary.json").symlink_to(table)
+        before = everything(tmp_path)
+        for attempt, link in [
+            (lambda: writers.write_text(out / "fields" / "body.pvd", "<VTKFile/>"), out / "fields"),
+            (lambda: writers.write_text(out / "fields" / "body.h5", "data"), out / "fields"),
+            (lambda: directory.mkdir(out / "fields"), out / "fields"),
+            (lambda: directory.mkdir(out / "fields" / "deeper"), out / "fields"),
+            (lambda: directory.unlink(out / "fields" / "body.h5"), out / "fields"),
+            (lambda: directory.rmdir(out / "fields"), out / "fields"),
+            (lambda: writers.write_text(out / "summary.json", "{}"), out / "summary.json"),
+            (lambda: directory.unlink(out / "summary.json"), out / "summary.json"),
+            (lambda: directory.create(out / "summary.json", out / "x.npz"), out / "summary.json"),  # as a temporary
+        ]:
+            with pytest.raises(directory.SymbolicLink, match=f"'{link}' is a symbolic link"):
+                attempt()
+            assert everything(tmp_path) == before
+        writers.remove_outputs(out)  # removes the run's files, passes the links by
+        assert sorted(p.name for p in out.iterdir()) == [directory.LOCK, "fields", "summary.json"]
+        assert everything(folder) == {k[len("users_folder/"):]: v for k, v in before.items()
+                                      if k.startswith("users_folder/")}
+        assert table.read_text() == "the user's own table\n"
+    finally:
+        held.release()
+
+
+def test_a_link_made_during_a_run_stops_it_and_the_run_resumes_once_it_is_gone(tmp_path):
+    """A link put in place of history.csv while the run goes: exit 4, one line naming the link, the
+    checkpoint and the user's file intact; --resume once the link is removed completes the run."""
+    out = tmp_path / "run"
+    case = slow_case(tmp_path)
+    table = user_file(tmp_path)
+    process = start_run(case, out)
+    try:
+        wait_for(lambda: (out / "checkpoint" / "state.npz").exists(), process)
+        os.kill(process.pid, signal.SIGSTOP)
+        (out / "history.csv").unlink(missing_ok=True)
+        (out / "history.csv").symlink_to(table)
+        os.kill(process.pid, signal.SIGCONT)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+    step = checkpoint.saved_step(out)
+    assert process.returncode == 4, stderr
+    assert stderr == (f"vpcontact: stopped: '{out / 'history.csv'}' is a symbolic link (to '{table}'), and vpcontact "
+                      f"never writes or removes through a link in its output directory; the "
+                      f"checkpoint of step {step} is intact: remove the link (what it leads to is kept), then continue "
+                      f"with --resume\n")
+    assert table.read_text() == "the user's own table\n" and (out / "history.csv").is_symlink()
+    (out / "history.csv").unlink()
+    status, _, stderr = run_cli("run", case, "--out", out, "--quiet", "--resume", "--set",
+                                "output.checkpoint_every_steps=0", timeout=300)
+    assert status == 0, stderr
+    assert json.loads((out / "summary.json").read_text())["resumed_at_steps"] == [step]
+
+
+def test_a_study_refuses_links_in_its_directory(tmp_path, capsys):
+    """study.csv, a run's fields/ inside runs/<id>/, or the lock file a link: refused before any run."""
+    base = rectangle_case()
+    (tmp_path / "base.toml").write_text(tomli_w.dumps(base))
+    study = tmp_path / "study.toml"
+    study.write_text('base = "base.toml"\n[[vary]]\n"contact.g" = [0.1, 0.2]\n')
+    out = tmp_path / "study"
+    status, _, stderr = run_cli("study", study, "--out", out, "--quiet", "--workers", "1")
+    assert status == 0, stderr
+    runs = sorted((out / "runs").iterdir())
+    for link, target in [(out / "study.csv", user_file(tmp_path)), (runs[0] / "history.csv", user_file(tmp_path)),
+                         (runs[1] / "fields", user_folder(tmp_path))]:
+        if link.is_file():
+            link.unlink()
+        link.symlink_to(target)
+        (runs[0] / "summary.json").unlink(missing_ok=True)  # a run to do again
+        before = everything(tmp_path)
+        capsys.readouterr()
+        status = main(["study", str(study), "--out", str(out), "--quiet", "--workers", "1"])
+        assert_refused(status, capsys.readouterr().err, f"'{link}' is a symbolic link")
+        assert everything(tmp_path) == before
+        link.unlink()
+
+
+def test_an_adaptive_run_refuses_a_linked_cycle_folder(tmp_path):
+    case = half_disc_case(h=0.25)
+    case["adapt"] = {"cycles": 2, "theta": 0.5}
+    path = tmp_path / "adaptive.toml"
+    path.write_text(tomli_w.dumps(case))
+    out = tmp_path / "run"
+    (out / "cycles").mkdir(parents=True)
+    (out / "cycles" / "1").symlink_to(user_folder(tmp_path), target_is_directory=True)
+    before = everything(tmp_path)
+    status, _, stderr = run_cli("run", path, "--out", out, "--quiet", "--overwrite")
+    assert_refused(status, stderr, f"'{out / 'cycles' / '1'}' is a symbolic link")
+    assert everything(tmp_path) == before

@@ -353,7 +353,7 @@ def test_a_worker_killed_by_the_system_stops_the_study_cleanly(tmp_path):
 
 
 def test_a_second_study_into_a_directory_in_use_is_refused(tmp_path):
-    path = write_study(tmp_path, steps=600, h=0.1)
+    path = write_study(tmp_path, steps=6000, h=0.1)  # still running when the second study starts, on a busy machine
     out = tmp_path / "out"
     process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "study", str(path), "--out", str(out),
                                 "--workers", "1", "--quiet"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,

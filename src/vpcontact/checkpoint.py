@@ -8,7 +8,11 @@ Layout, inside the run directory:
                                    that includes that step)
 
 Every file is written atomically (a temporary file renamed into place), so a run killed at any
-moment leaves the previous complete checkpoint. state.npz holds
+moment, or stopped by a write that fails (a full disk), leaves the previous complete checkpoint. A
+fields file is written once, before the state that lists its step; one that no state lists (its
+session was killed in between) is removed when a session starts (``remove_unrecorded``). A field
+that a run has not (σ33 in 3D, z without viscoplastic history, η_K without the error estimate) is
+not stored, and None again on restore. state.npz holds
 
 - ``case``: the resolved case (TOML) the run was started with, and ``mesh_digest``: a hash of the
   mesh, the free dofs and the contact nodes, both checked on resume;
@@ -20,11 +24,14 @@ moment leaves the previous complete checkpoint. state.npz holds
   :mod:`vpcontact.resting`);
 - the history rows (one array per column) and the per-node contact arrays so far (rows × m);
 - ``meta`` (JSON): the field steps saved, step cuts, wall time and linear solves so far, the steps
-  where the run was resumed before, the versions.
+  where the run was resumed before, the versions;
+- ``solver_method`` and ``solver_*``: what the step solver carries from step to step (its ``kept()``:
+  the condensed method's solved span, kept inverse and choice of factor; the iterative method's
+  Newton matrix its AMG hierarchy was built on).
 
-The step solver itself is rebuilt on resume (the condensed solver refactors A0 and rebuilds S): the
-numbers then agree with an uninterrupted run to rounding (the factor-once solver reuses earlier
-solves in a different order), bitwise with the full solver.
+The step solver itself is rebuilt on resume (the condensed solver refactors A0 and rebuilds S) and
+given that state (``restore``): every method then continues exactly as an uninterrupted run, and
+the numbers are its bits (tests/test_resume_matrix.py).
 """
 
 from __future__ import annotations
@@ -33,6 +40,7 @@ import hashlib
 import json
 import tomllib
 import zipfile
+from collections.abc import Collection
 from pathlib import Path
 
 import numpy as np
@@ -43,7 +51,7 @@ from .errors import CaseError
 from .results import CONTACT_ARRAYS, FIELD_NAMES, INTEGER_COLUMNS, Fields
 from .solvers import StepSolution
 from .stepping import COUNTERS, LoopState, TimeLoop, Trend
-from .writers import OUTPUTS, remove_files, replacing, versions
+from .writers import OUTPUTS, matching, remove_files, replacing, versions
 
 FOLDER = "checkpoint"
 STATE = "state.npz"
@@ -69,6 +77,24 @@ def exists(out: Path) -> bool:
 def remove(out: Path) -> None:
     """Delete the checkpoint's files (and checkpoint/, if that leaves it empty)."""
     remove_files(out, FILES)
+
+
+def saved_step(out: Path) -> int | None:
+    """The step the checkpoint in ``out`` continues after; None when there is none (or it is damaged)."""
+    try:
+        with np.load(folder(out) / STATE, allow_pickle=False) as data:
+            return int(data["step"])
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):
+        return None
+
+
+def remove_unrecorded(out: Path, recorded: Collection[int]) -> None:
+    """Delete the fields files of checkpoint/ whose step is not in ``recorded`` (the field steps of the
+    state restored; none for a run that starts): a session that stopped before it saved the state
+    listing them wrote them, and their steps are computed again (``save`` writes a fields file once)."""
+    pattern = f"{FOLDER}/fields_*.npz"
+    found = [path.relative_to(out) for path, whole in matching(out, (pattern,)) if whole is not None]
+    remove_files(out, tuple(str(path) for path in found if path.name[7:-4] not in {f"{n:05d}" for n in recorded}))
 
 
 def comparable(case_dict: dict) -> dict:
@@ -133,6 +159,8 @@ def save(loop: TimeLoop, out: Path) -> None:
             "elapsed_s": loop.elapsed(), **loop.counts(),
             "versions": versions()}
     arrays["meta"] = np.array(json.dumps(meta))
+    arrays["solver_method"] = np.array(loop.solver.name)
+    arrays.update({f"solver_{key}": value for key, value in loop.solver.kept().items()})
     with replacing(target / STATE) as temporary:
         np.savez(temporary, **arrays)
 
@@ -185,9 +213,12 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
     result.resumed_at = [*meta["resumed_at"], step]
     for n in meta["field_steps"]:
         data = _read(folder(out) / f"fields_{n:05d}.npz")
-        result.fields[n] = Fields(**{name: data[name] for name in FIELD_NAMES if name in data})
+        result.fields[n] = Fields(**{name: data.get(name) for name in FIELD_NAMES})  # absent: None
     if result.fields:
         result.final = result.fields[max(result.fields)]
+    if "solver_method" in arrays and str(arrays["solver_method"]) == loop.solver.name:
+        loop.solver.restore({key[7:]: value for key, value in arrays.items()
+                             if key.startswith("solver_") and key != "solver_method"})
     loop.earlier_time = float(meta["elapsed_s"])
     loop.earlier_counts = {name: int(meta.get(name, 0)) for name in COUNTERS}
     loop.stored_versions = meta.get("versions", {})

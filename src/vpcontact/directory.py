@@ -8,14 +8,22 @@ missing parents), takes an exclusive lock on it (``.vpcontact.lock``, ``flock``:
 write into one directory; the kernel releases it when a process dies), and opens it: its identity
 (device and inode) is remembered. All of this happens before any computation.
 
-The writers create, rename and remove files and folders in a held directory through ``replace``,
-``unlink``, ``mkdir`` and ``rmdir`` below: each first checks that the path still leads to the
-directory that was locked (else :class:`DirectoryReplaced`: the run stops) and then acts relative to
-the open directory itself, so that even a directory swapped between the check and the act is never
-written into: a process writes only into the directory it locked. (A temporary file is written by
-path before its rename; in that instant's window it can land in the new directory, where the failed
-rename leaves it to be removed again.) A worker process of a study ``watch``-es the study directory
-its parent holds: its writes below it are checked the same way.
+The writers create, rename and remove files and folders in a held directory through ``create``,
+``replace``, ``unlink``, ``mkdir`` and ``rmdir`` below: each first checks that the path still leads
+to the directory that was locked (else :class:`DirectoryReplaced`: the run stops) and then acts
+relative to the open directory itself, so that even a directory swapped between the check and the
+act is never written into: a process writes only into the directory it locked. (A temporary file is
+written by path before its rename; in that instant's window it can land in the new directory, where
+the failed rename leaves it to be removed again.) A worker process of a study ``watch``-es the study
+directory its parent holds: its writes below it are checked the same way.
+
+Symbolic links inside a held directory are never followed for writing or removing: the folders on
+the way from the held directory to a file (``fields/``, ``checkpoint/``, ``cycles/<n>/``, ...) are
+opened one by one without following a link (``O_NOFOLLOW``), and a file or folder that is a link is
+neither replaced, nor removed, nor created through: :class:`SymbolicLink` names it (vpcontact never
+makes links, so a link there is the user's, and so is what it leads to). The runs refuse such a link
+before they start (``writers.check_room``); this is the guard of every single write. The held
+directory itself may be reached through a link (``--out`` a link to a folder on another disk).
 """
 
 from __future__ import annotations
@@ -25,6 +33,8 @@ import itertools
 import math
 import os
 import stat
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 try:
@@ -39,6 +49,11 @@ LOCK = ".vpcontact.lock"
 
 class DirectoryReplaced(OSError):
     """A held directory was removed or replaced while this process was writing into it."""
+
+
+class SymbolicLink(OSError):
+    """A symbolic link where vpcontact was to write or remove a file or folder inside a held directory:
+    nothing was written through it, nothing removed (one line naming the link, see ``refuse_link``)."""
 
 
 class Held:
@@ -70,6 +85,31 @@ class Held:
         if self.descriptor is None:
             return path, None
         return os.path.relpath(os.path.abspath(path), self.key), self.descriptor
+
+    @contextmanager
+    def folder_of(self, path: Path) -> Iterator[tuple[str | Path, int | None]]:
+        """(the name of ``path`` in its folder, that folder's descriptor) for an os function, the folders
+        from the held directory down opened one by one without following a symbolic link
+        (SymbolicLink: one is a link); (the path as it is, None) where the system has no operations
+        relative to a directory."""
+        if self.descriptor is None:
+            yield path, None
+            return
+        *folders, name = Path(os.path.relpath(os.path.abspath(path), self.key)).parts
+        opened = []
+        try:
+            descriptor = self.descriptor
+            for depth, folder in enumerate(folders, start=1):
+                try:
+                    descriptor = os.open(folder, os.O_RDONLY | os.O_DIRECTORY | NOFOLLOW, dir_fd=descriptor)
+                except OSError:
+                    refuse_link(self.path.joinpath(*folders[:depth]), folder, descriptor)
+                    raise
+                opened.append(descriptor)
+            yield name, descriptor
+        finally:
+            for descriptor in reversed(opened):
+                os.close(descriptor)
 
     def release(self, *, undo: bool = False) -> None:
         """Unlock and remove the lock file (in the directory locked, wherever it is now). ``undo``
@@ -186,12 +226,15 @@ def acquire(path: Path, label: str = "--out") -> Held:
     descriptor = None
     try:
         descriptor = os.open(path, os.O_RDONLY | os.O_DIRECTORY) if fcntl is not None else None
-        lock = os.open(LOCK if descriptor is not None else path / LOCK, os.O_RDWR | os.O_CREAT, 0o644,
+        lock = os.open(LOCK if descriptor is not None else path / LOCK, os.O_RDWR | os.O_CREAT | NOFOLLOW, 0o644,
                        dir_fd=descriptor)
     except OSError as error:
         if descriptor is not None:
             os.close(descriptor)
         _undo(missing, changed)
+        if os.path.islink(path / LOCK):
+            raise CaseError(f"{label} '{path}': '{path / LOCK}' is a symbolic link, and vpcontact writes its lock "
+                            f"file there and never through a link: remove the link") from None
         raise CaseError(f"{label} '{path}': cannot write in the directory ({_reason(error)})") from None
     if fcntl is not None:
         try:
@@ -215,64 +258,110 @@ def check(path: Path) -> None:
         held.check()
 
 
+#: Open flags that refuse a symbolic link as the last component (none where the system has no such flag).
+NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)
+
+
+def refuse_link(path: Path, name: str | Path, descriptor: int | None = None) -> None:
+    """SymbolicLink if ``name`` (in the folder ``descriptor``, or a path) is a symbolic link; ``path``
+    is how it is named to the user."""
+    if _is_link(name, descriptor):
+        raise SymbolicLink(f"'{path}' is a symbolic link (to '{os.readlink(name, dir_fd=descriptor)}'), and vpcontact "
+                           f"never writes or removes through a link in its output directory")
+
+
+def create(path: Path, replaces: Path) -> tuple[int, int]:
+    """Create the empty file ``path`` exclusively (a writer's temporary, to be renamed to ``replaces``
+    beside it once written), never through a symbolic link, in its held directory, and return its
+    identity (see ``written``); SymbolicLink if ``replaces`` or a folder on the way is a link (and
+    nothing is created). A file of that name left by a killed process (whose id this one now has) is
+    replaced."""
+    held = _checked(path)
+    made = []
+    with _folder_of(held, path) as (name, descriptor):
+        refuse_link(replaces, Path(name).with_name(Path(replaces).name), descriptor)
+
+        def make():
+            flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | NOFOLLOW
+            try:
+                handle = os.open(name, flags, 0o644, dir_fd=descriptor)
+            except FileExistsError:
+                refuse_link(path, name, descriptor)
+                os.unlink(name, dir_fd=descriptor)
+                handle = os.open(name, flags, 0o644, dir_fd=descriptor)
+            made.append(_identity(os.fstat(handle)))
+            os.close(handle)
+
+        _act(held, make)
+    return made[0]
+
+
+def written(handle: int, path: Path, identity: tuple[int, int]) -> None:
+    """After a writer wrote the temporary ``path`` by its path: DirectoryReplaced unless the file open as
+    ``handle`` (opened at that path) is the one ``create`` made (``identity``), i.e. the write went
+    into the held directory and not into what replaced it (or where a link led) meanwhile."""
+    if _identity(os.fstat(handle)) != identity:
+        raise DirectoryReplaced(f"'{path}' is not the file vpcontact created there: what holds it was replaced "
+                                f"while vpcontact was writing it, and vpcontact stopped")
+
+
 def replace(source: Path, target: Path) -> None:
-    """``os.replace(source, target)``, both in one held directory (see the module's docstring)."""
+    """``os.replace(source, target)``, both in one folder of a held directory (see the module's
+    docstring); SymbolicLink if ``target`` is a link (it is not replaced)."""
     held = _checked(target)
-    if held is None:
-        os.replace(source, target)
-        return
-    (source, descriptor), (target, _) = held.at(Path(source)), held.at(Path(target))
-    _act(held, lambda: os.replace(source, target, src_dir_fd=descriptor, dst_dir_fd=descriptor))
+    with _folder_of(held, target) as (name, descriptor):
+        refuse_link(target, name, descriptor)
+        source = Path(name).with_name(Path(source).name)
+        _act(held, lambda: os.replace(source, name, src_dir_fd=descriptor, dst_dir_fd=descriptor))
 
 
 def unlink(path: Path) -> None:
-    """Remove the file ``path`` (if it is there) in its held directory."""
+    """Remove the file ``path`` (if it is there) in its held directory; SymbolicLink if it is a link
+    (it is not removed)."""
     held = _checked(path)
-    if held is None:
-        Path(path).unlink(missing_ok=True)
-        return
-    name, descriptor = held.at(Path(path))
-    _act(held, lambda: _quietly(os.unlink, name, dir_fd=descriptor))
+    with _folder_of(held, path) as (name, descriptor):
+        refuse_link(path, name, descriptor)
+        _act(held, lambda: _quietly(os.unlink, name, dir_fd=descriptor))
 
 
 def mkdir(path: Path) -> None:
-    """Create the folder ``path`` (if it is not there) in its held directory."""
+    """Create the folder ``path`` (if it is not there) in its held directory; SymbolicLink if it is a
+    link, even to a folder (what is written in ``path`` would land where it leads)."""
     held = _checked(path)
-    if held is None:
-        Path(path).mkdir(exist_ok=True)
-        return
+    with _folder_of(held, path) as (name, descriptor):
 
-    name, descriptor = held.at(Path(path))
+        def make():
+            try:
+                os.mkdir(name, dir_fd=descriptor)
+            except FileExistsError:
+                refuse_link(path, name, descriptor)
+                if not stat.S_ISDIR(os.stat(name, dir_fd=descriptor).st_mode):
+                    raise
 
-    def make():
-        try:
-            os.mkdir(name, dir_fd=descriptor)
-        except FileExistsError:
-            if not stat.S_ISDIR(os.stat(name, dir_fd=descriptor).st_mode):
-                raise
-
-    _act(held, make)
+        _act(held, make)
 
 
 def rmdir(path: Path) -> None:
-    """Remove the empty folder ``path`` in its held directory."""
+    """Remove the empty folder ``path`` in its held directory; SymbolicLink if it is a link."""
     held = _checked(path)
-    if held is None:
-        Path(path).rmdir()
-        return
-    name, descriptor = held.at(Path(path))
-    _act(held, lambda: os.rmdir(name, dir_fd=descriptor))
+    with _folder_of(held, path) as (name, descriptor):
+        refuse_link(path, name, descriptor)
+        _act(held, lambda: os.rmdir(name, dir_fd=descriptor))
 
 
 def discard(path: Path) -> None:
-    """Remove this process's own temporary file ``path`` wherever it is, never raising: in its held
-    directory (which may have been moved) and at the path (where a write racing a swap of the
-    directory may have put it)."""
+    """Remove this process's own temporary file ``path`` wherever it is, never raising and never
+    through a symbolic link: in its held directory (which may have been moved) and at the path (where
+    a write racing a swap of the directory may have put it)."""
     holders = _holders(path)
-    if holders:
-        name, descriptor = holders[-1].at(Path(path))
-        _quietly(os.unlink, name, dir_fd=descriptor)
-    _quietly(os.unlink, path)
+    try:
+        with _folder_of(holders[-1] if holders else None, path) as (name, descriptor):
+            if not _is_link(name, descriptor):
+                _quietly(os.unlink, name, dir_fd=descriptor)
+    except OSError:
+        pass
+    if holders and not any(map(_is_link, _below(holders[-1].path, Path(path)))):
+        _quietly(os.unlink, path)
 
 
 def forget_inherited() -> None:
@@ -300,6 +389,30 @@ def _holders(path: Path) -> list[Held]:
     return sorted(found, key=lambda held: len(held.key))
 
 
+@contextmanager
+def _folder_of(held: Held | None, path: Path) -> Iterator[tuple[str | Path, int | None]]:
+    """``held.folder_of(path)``; (the path as it is, None) outside a held directory."""
+    if held is None:
+        yield path, None
+    else:
+        with held.folder_of(path) as found:
+            yield found
+
+
+def _below(top: Path, path: Path) -> list[Path]:
+    """The paths from the entry of ``top`` down to ``path`` (a path inside the folder ``top``)."""
+    parts = Path(os.path.relpath(os.path.abspath(path), os.path.abspath(top))).parts
+    return [Path(top).joinpath(*parts[:depth]) for depth in range(1, len(parts) + 1)]
+
+
+def _is_link(name: str | Path, descriptor: int | None = None) -> bool:
+    """Is ``name`` (in the folder ``descriptor``, or a path) a symbolic link?"""
+    try:
+        return stat.S_ISLNK(os.lstat(name, dir_fd=descriptor).st_mode)
+    except OSError:
+        return False
+
+
 def _checked(path: Path) -> Held | None:
     """Check the held directories that contain ``path``; the innermost (None: not in one)."""
     holders = _holders(path)
@@ -308,13 +421,14 @@ def _checked(path: Path) -> Held | None:
     return holders[-1] if holders else None
 
 
-def _act(held: Held, action) -> None:
-    """Do ``action``; an OSError it raises because the directory was removed or replaced meanwhile
+def _act(held: Held | None, action) -> None:
+    """Do ``action``; an OSError it raises because the held directory was removed or replaced meanwhile
     becomes DirectoryReplaced."""
     try:
         action()
     except OSError:
-        held.check()
+        if held is not None:
+            held.check()
         raise
 
 

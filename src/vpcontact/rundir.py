@@ -16,10 +16,18 @@ Status (summary.json) and exit status of the command line:
     (bad input)   2    one line on stderr; nothing computed, nothing written (an unusable ``--out`` too)
     (no summary)  4    the run directory was removed or replaced during the run (the run stopped
                        and wrote nothing into what is now at that path), or a write failed
-                       (disk full, ...): one line on stderr
+                       (disk full, ...; :class:`RunStopped`): one line on stderr naming the file,
+                       the step of the checkpoint left and what to do (make room, then --resume)
+
+A write that fails leaves the file it replaces as it was (every file is written atomically), so a
+full disk leaves the previous complete checkpoint: ``--resume`` continues from it once there is
+room, to the same numbers as an uninterrupted run.
 
 The directory is held while the run writes (see :mod:`vpcontact.directory`); ``--overwrite`` removes
-the outputs of an earlier run (``writers.OUTPUTS``) and nothing else.
+the outputs of an earlier run (``writers.OUTPUTS``) and nothing else. A symbolic link where a run writes
+(``fields/``, ``checkpoint/``, ``history.csv``, ...) is the user's: the run refuses to start (exit 2,
+one line naming the link), with or without ``--overwrite`` and ``--resume``, and no write ever goes
+through one (see :mod:`vpcontact.directory`). ``--out`` itself may be a link to a folder.
 
 A case with ``[adapt]`` runs its adaptive cycles (:mod:`vpcontact.adapt`): ``case.resolved.toml`` first,
 each cycle's run in ``cycles/<n>/`` (its outputs as above, summary.json last) with ``adapt.csv``
@@ -31,6 +39,7 @@ status and exit status are those of the last cycle's run ("failed" too when a re
 from __future__ import annotations
 
 import csv
+import errno
 import json
 import signal
 import sys
@@ -59,6 +68,11 @@ SIGNAL_NAMES = {signal.SIGINT: "SIGINT", signal.SIGTERM: "SIGTERM"}
 EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
 
+class RunStopped(OSError):
+    """A run stopped because a write into its directory failed (a full disk, a symbolic link put there
+    during the run, ...): one line, what failed and how to continue; ``errno`` is the failed write's."""
+
+
 @dataclass
 class Outcome:
     """What ``run`` did: the result (None when a resumed run had nothing left to do), the status, a
@@ -74,9 +88,9 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
         progress: bool | Progress = False) -> Outcome:
     """Solve ``case`` into the run directory ``out`` (see the module's docstring). Bad input, an
     unusable ``out`` or a checkpoint of another case raise CaseError before anything is written; a
-    run directory removed or replaced during the run raises DirectoryReplaced (an OSError, as does a
-    write that fails) and nothing more is written. ``progress``: True for the set-up phases, the steps and
-    the outputs reported on stderr (:mod:`vpcontact.progress`), or a reporter."""
+    run directory removed or replaced during the run raises DirectoryReplaced (an OSError) and a
+    write that fails raises RunStopped (an OSError), and nothing more is written. ``progress``: True for the
+    set-up phases, the steps and the outputs reported on stderr (:mod:`vpcontact.progress`), or a reporter."""
     out = Path(out)
     if resume and overwrite:
         raise CaseError("--resume and --overwrite exclude each other")
@@ -125,9 +139,33 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
                 _check_same_case(case, out)
             started = True  # from here on the directory is written to: nothing above wrote to it
             result = _run_locked(loop, case, held, clear=overwrite and used, stopper=stopper, progress=progress)
+    except OSError as error:
+        if not started or isinstance(error, directory.DirectoryReplaced):
+            raise
+        raise _stopped(error, case, out) from None
     finally:
         held.release(undo=not started)
     return Outcome(result, result.status, result.message, stopper.signal)
+
+
+def _stopped(error: OSError, case: Case, out: Path) -> RunStopped:
+    """RunStopped for a write into ``out`` that failed with ``error``: what failed, what is left to
+    continue from, and what to do."""
+    if isinstance(error, directory.SymbolicLink):
+        what, fix = f"stopped: {error}", "remove the link (what it leads to is kept), then"
+    else:
+        where = f": '{error.filename}'" if error.filename else ""
+        what = f"stopped: {error.strerror or error}{where}"
+        fix = "make room, then" if error.errno == errno.ENOSPC else "once that is fixed,"
+    if case.adapt is not None:
+        left = f"{fix} run it again with --overwrite (an adaptive run keeps no checkpoint)"
+    else:
+        step = checkpoint.saved_step(out)
+        left = (f"the checkpoint of step {step} is intact: {fix} continue with --resume" if step is not None else
+                f"no checkpoint was written yet: {fix} run it again with --resume (it starts over)")
+    stopped = RunStopped(f"{what}; {left}")
+    stopped.errno = error.errno
+    return stopped
 
 
 def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool, stopper,
@@ -138,6 +176,7 @@ def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool
     if clear:
         remove_outputs(out)
     remove_temporaries(out)
+    checkpoint.remove_unrecorded(out, loop.result.fields)
     remove_files(out, ("summary.json",))
     write_resolved_case(case.to_toml(), out)
     cadence = _Cadence(case.output.checkpoint_every_steps, case.output.checkpoint_every_seconds, loop.state.step)

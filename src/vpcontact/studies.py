@@ -54,7 +54,7 @@ from .norms import Snapshot, differences
 from .progress import Progress, duration, reporting
 from .run_reader import read_case, read_summary, snapshots_at
 from .space import COORDINATES
-from .writers import check_room, replacing
+from .writers import check_room, refuse_links, replacing
 
 STUDY_KEYS = {"base", "set", "vary", "runs", "compare"}
 COMPARED = ("V", "Q", "U", "energy")
@@ -400,8 +400,9 @@ def _stop_workers(executor: ProcessPoolExecutor) -> None:
 
 def _check_run_directories(study: Study, out: Path) -> None:
     """Every run writes into DIR/runs/<id> and nowhere else: refuse a run directory elsewhere (a study
-    loaded for another DIR), a runs/ or runs/<id> that is a symbolic link or not a directory, and
-    anything standing where a run or the table is written (see ``writers.check_room``)."""
+    loaded for another DIR), a runs/ or runs/<id> that is a symbolic link or not a directory, a
+    study.csv that is a link, and anything standing where a run or the table is written (see
+    ``writers.check_room``: a symbolic link too)."""
     runs = out / "runs"
     for spec in study.runs:
         if spec.out != runs / spec.id:
@@ -413,6 +414,7 @@ def _check_run_directories(study: Study, out: Path) -> None:
             raise CaseError(f"--out '{out}': '{path}' is {what}; runs write only into directories inside '{runs}'")
         if path != runs and path.is_dir():
             check_room(path)
+    refuse_links(out, ("study.csv", ".study.tmp-[0-9]*.csv", directory.LOCK))
     if (out / "study.csv").is_dir():
         raise CaseError(f"--out '{out}': '{out / 'study.csv'}' is a folder, and the study writes its table there: "
                         f"move it away")

@@ -1,7 +1,10 @@
 """The files of a run directory. Each is written atomically (a temporary file beside it, renamed into
-place: a reader never sees half a file), ``summary.json`` last: a directory whose summary.json says
-``"status": "complete"`` holds a complete run; without summary.json a run is in progress or was killed
-(``vpcontact run --resume`` continues it from its checkpoint, see :mod:`vpcontact.rundir`).
+place: a reader never sees half a file, and a write that fails, on a full disk say, leaves the file
+as it was), ``summary.json`` last: a directory whose summary.json says ``"status": "complete"`` holds
+a complete run; without summary.json a run is in progress or was killed (``vpcontact run --resume``
+continues it from its checkpoint, see :mod:`vpcontact.rundir`). Nothing is written, replaced or
+removed through a symbolic link: ``check_room`` refuses one where a run writes before it starts, and
+``replacing`` and ``remove_files`` act through :mod:`vpcontact.directory`, which never follows one.
 
 - ``summary.json``      status, sizes, wall time, the final values, versions;
 - ``history.csv``       one row per time step (``Result.columns``);
@@ -23,6 +26,7 @@ place: a reader never sees half a file), ``summary.json`` last: a directory whos
 from __future__ import annotations
 
 import csv
+import fnmatch
 import functools
 import io
 import itertools
@@ -30,7 +34,7 @@ import json
 import math
 import os
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from importlib import metadata
@@ -87,23 +91,35 @@ TEMPORARIES = tuple(str(_temporary(Path(pattern), "[0-9]*")) for pattern in OUTP
 
 @contextmanager
 def replacing(path: Path):
-    """Yield a temporary path beside ``path`` (same suffix); once the caller has written it, flush it to
-    disk and rename it to ``path`` (atomic: ``path`` is the old file or the new one, never a part).
-    In a held directory nothing is written once it was removed or replaced (DirectoryReplaced, see
-    :mod:`vpcontact.directory`; an error of the write caused by that is reported so too)."""
+    """Yield a temporary path beside ``path`` (same suffix), created empty; once the caller has written
+    it, flush it to disk and rename it to ``path`` (atomic: ``path`` is the old file or the new one,
+    never a part). In a held directory nothing is written once it was removed or replaced
+    (DirectoryReplaced, see :mod:`vpcontact.directory`; an error of the write caused by that is
+    reported so too), nor through a symbolic link (SymbolicLink: ``path`` or a folder on its way is
+    one). A write that fails (a full disk: ENOSPC) leaves ``path`` as it was, removes the temporary
+    and raises the OSError naming ``path``."""
     path = Path(path)
     temporary = _temporary(path, str(os.getpid()))
     try:
-        directory.check(path)
+        created = directory.create(temporary, path)
         yield temporary
         with open(temporary, "rb+") as handle:
+            directory.written(handle.fileno(), temporary, created)
             os.fsync(handle.fileno())
         directory.replace(temporary, path)
-    except OSError:
+    except OSError as error:
         directory.check(path)
-        raise
+        raise _naming(error, path, temporary) from None
     finally:
         directory.discard(temporary)
+
+
+def _naming(error: OSError, path: Path, temporary: Path) -> OSError:
+    """The OSError of a write into ``temporary`` (or of no file: a write, a flush) as one about ``path``,
+    the file the user knows: "No space left on device: 'out/solution.npz'"."""
+    if error.errno is None or error.filename not in (None, str(temporary)):
+        return error
+    return OSError(error.errno, error.strerror, str(path))
 
 
 def write_text(path: Path, text: str) -> None:
@@ -112,30 +128,55 @@ def write_text(path: Path, text: str) -> None:
         temporary.write_text(text, encoding="utf-8")
 
 
+def matching(out: Path, patterns: Iterable[str]) -> Iterator[tuple[Path, int | None]]:
+    """The entries below ``out`` that match a leading part of one of the glob ``patterns`` (relative
+    paths, matched part by part), with the index of the first pattern each matches whole (None: a
+    folder on the way only), in name order, never entering a symbolic link (one that matches is
+    given, not followed)."""
+    yield from _matching(Path(out), [(index, Path(pattern).parts) for index, pattern in enumerate(patterns)])
+
+
+def _matching(folder: Path, patterns: list[tuple[int, tuple[str, ...]]]) -> Iterator[tuple[Path, int | None]]:
+    try:
+        with os.scandir(folder) as found:
+            entries = sorted(found, key=lambda entry: entry.name)
+    except OSError:  # not there, not a folder, not readable: nothing in it is matched (as by Path.glob)
+        return
+    for entry in entries:
+        matched = [(index, parts) for index, parts in patterns if fnmatch.fnmatchcase(entry.name, parts[0])]
+        if not matched:
+            continue
+        path = folder / entry.name
+        yield path, min((index for index, parts in matched if len(parts) == 1), default=None)
+        deeper = [(index, parts[1:]) for index, parts in matched if len(parts) > 1]
+        if deeper and entry.is_dir(follow_symlinks=False):
+            yield from _matching(path, deeper)
+
+
 def remove_files(out: Path, patterns: tuple[str, ...]) -> None:
     """Delete the files in ``out`` that match ``patterns`` (glob patterns, in their order), then the
     folders of the patterns (and their parents below ``out``) that this leaves empty, deepest first.
-    Nothing else is touched: no other file, no folder that holds anything."""
+    Nothing else is touched: no other file, no folder that holds anything, no symbolic link (neither
+    removed nor followed: see ``check_room``)."""
     out = Path(out)
     directory.check(out)
-    for pattern in patterns:
-        for path in sorted(out.glob(pattern)):
-            if path.is_file() or path.is_symlink():
-                directory.unlink(path)
-    folders = set()
-    for pattern in dict.fromkeys(str(Path(p).parent) for p in patterns if "/" in p):
-        for found in out.glob(pattern):
-            relative = found.relative_to(out)
-            folders.update(out / part for part in (relative, *relative.parents) if part != Path("."))
+    found = [(index, path) for path, index in matching(out, patterns) if not path.is_symlink()]
+    for _, path in sorted((index, path) for index, path in found if index is not None and path.is_file()):
+        directory.unlink(path)
+    folders = [path for index, path in found if index is None and path.is_dir()]
     for folder in sorted(folders, key=lambda f: len(f.parts), reverse=True):
-        if folder.is_dir() and not folder.is_symlink() and not any(folder.iterdir()):
+        if not any(folder.iterdir()):
             directory.rmdir(folder)
 
 
 def check_room(out: Path, label: str = "--out") -> None:
-    """CaseError naming what stands where a run writes in ``out`` (a folder named like an output file,
-    a file named fields or checkpoint), before anything is computed."""
+    """CaseError naming what stands where a run writes in ``out`` (a symbolic link, a folder named like
+    an output file, a file named fields or checkpoint), before anything is computed. A symbolic link
+    where a run writes or removes (``fields/``, ``checkpoint/``, ``history.csv``, the lock file, ...)
+    is the user's, and so is what it leads to: a run neither follows nor removes it, and refuses to
+    start (the link itself is reported, not where it leads)."""
     out = Path(out)
+    refuse_links(out, (*OUTPUTS, *TEMPORARIES, directory.LOCK), label)
     for name in OUTPUTS:
         path = out / name
         if path.parent != out and os.path.lexists(path.parent) and not path.parent.is_dir():
@@ -143,6 +184,16 @@ def check_room(out: Path, label: str = "--out") -> None:
                             f"{path.parent.name}/ there: move it away")
         if "*" not in name and path.is_dir():
             raise CaseError(f"{label} '{out}': '{path}' is a folder, and a run writes a file there: move it away")
+
+
+def refuse_links(out: Path, patterns: Iterable[str], label: str = "--out") -> None:
+    """CaseError naming the first symbolic link in ``out`` that matches ``patterns`` or a leading part of
+    one (a folder on the way), if there is one."""
+    for path, _ in matching(out, patterns):
+        if path.is_symlink():
+            raise CaseError(f"{label} '{out}': '{path}' is a symbolic link (to '{os.readlink(path)}'), and a run "
+                            f"writes there but never through a link: remove the link (what it leads to is kept) "
+                            f"or give another {label}")
 
 
 def remove_outputs(out: Path) -> None:

@@ -69,7 +69,7 @@ class AMGConjugateGradient:
         self.setup_time = 0.0
         self.levels = 0
         self.operator_complexity = 0.0
-        self._stale = False
+        self.stale = False  # the last solve needed more than REBUILD_AFTER iterations: build again on the next matrix
 
     def analyse(self, A: sp.spmatrix) -> None:
         """The smoothed-aggregation hierarchy of A (free dofs), in nodal blocks."""
@@ -97,13 +97,13 @@ class AMGConjugateGradient:
         self.operator_complexity = float(self.hierarchy.operator_complexity())
         self._cycle = self.hierarchy.aspreconditioner(cycle="V")
         self.setups += 1
-        self._stale = False
+        self.stale = False
         self.setup_time += time.perf_counter() - started
 
     def factor(self, A: sp.spmatrix) -> None:
         """Record the matrix (and rebuild the hierarchy on it if the last solve found it stale); find
         its unknowns reduced to their diagonal entry."""
-        if self._stale:
+        if self.stale:
             self.analyse(A)
         self._A = sp.csr_matrix(A)
         stored = np.diff(self._A.indptr)
@@ -131,7 +131,7 @@ class AMGConjugateGradient:
         x, info = spla.cg(self._A, b, rtol=rtol, atol=0.0, M=preconditioner, maxiter=MAX_ITERATIONS, callback=counted)
         self.iterations += count[0]
         self.most_iterations = max(self.most_iterations, count[0])
-        self._stale = count[0] > REBUILD_AFTER
+        self.stale = count[0] > REBUILD_AFTER
         if info != 0 or not np.all(np.isfinite(x)):
             reached = np.linalg.norm(self._A @ x - b) / (np.linalg.norm(b) or 1.0)
             raise NotConvergedError(f"AMG-preconditioned CG reached a relative residual of {reached:.1e} (asked "

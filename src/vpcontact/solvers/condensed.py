@@ -65,12 +65,30 @@ class SolvedSpan:
         self._images = np.empty((capacity, shape[0]))  # N A0⁻¹ of each
         self.size = 0
         self._support = None  # the support every right-hand side in the basis had (None: not one)
+        self._restored_support = None  # that support as a checkpoint kept it (see ``restore``)
         self.solves = 0
+
+    def kept(self) -> dict[str, np.ndarray]:
+        """What the span carries from step to step: the basis, its images and the support they share."""
+        arrays = {"basis": self._basis[: self.size], "images": self._images[: self.size]}
+        return arrays if self._support is None else {**arrays, "support": self._support}
+
+    def restore(self, arrays: dict[str, np.ndarray]) -> None:
+        """Continue from ``kept()`` of an earlier span of the same operator (a resumed run): right-hand
+        sides then cost what they did and give the same bits. The shared support is adopted at the
+        next call whose support has the same positions (a new array of the resumed loop)."""
+        self.size = arrays["basis"].shape[0]
+        self._basis[: self.size], self._images[: self.size] = arrays["basis"], arrays["images"]
+        self._restored_support = arrays.get("support")
 
     def __call__(self, b: np.ndarray, support: np.ndarray | None = None) -> np.ndarray:
         """N A0⁻¹ b; ``support``: the positions where b may be nonzero (None: anywhere). While every
         right-hand side solved had the same support, the basis vanishes off it, and the products
         with Q only run over it."""
+        if self._restored_support is not None:
+            if support is not None and np.array_equal(support, self._restored_support):
+                self._support = support
+            self._restored_support = None
         on = support if support is not None and support is self._support else slice(None)
         b_on = b[on]
         size = norm(b_on)
@@ -160,6 +178,18 @@ class NewtonSystems:
         self.updates = 0  # low-rank updates of the kept inverse for changes of state
         self.iterations = 0  # GMRES iterations, in total
         self.factorizations = 0  # LU factorizations of Newton matrices (dense solves included)
+
+    def kept(self) -> dict[str, np.ndarray]:
+        """What the systems carry from step to step: the kept inverse and the (1_ℐ, w) it follows."""
+        if self._inverse is None:
+            return {}
+        return {"inverse": self._inverse, "inactive": self._kept[0], "w": self._kept[1]}
+
+    def restore(self, arrays: dict[str, np.ndarray]) -> None:
+        """Continue from ``kept()`` of earlier systems of the same S (a resumed run)."""
+        if "inverse" in arrays:
+            self._inverse = np.array(arrays["inverse"], order="F")
+            self._kept = (arrays["inactive"].copy(), arrays["w"].copy())
 
     def matrix(self, inactive: np.ndarray, w: np.ndarray) -> np.ndarray:
         """K = diag(1_ℐ) + S diag(w) (Fortran order: LAPACK factors it in place)."""
@@ -292,6 +322,11 @@ class CondensedNewton(SemismoothNewton):
         with progress.phase("condensation", f"S = N A0⁻¹ Nᵀ for {m:,} contact nodes "
                             f"{self.factorization.condensation_words()}"):
             self.S = self.factorization.condensed_operator()
+            Y = self.factorization.solve(rigid) if rigid.shape[1] else np.zeros_like(rigid)
+        #: (Y, N Y), Y = A0⁻¹ Z: the rigid motions held only by contact solved once, with the factor every run of
+        #: the problem has at this point (a resumed one too: its numbers are the uninterrupted run's), for
+        #: ``rigid_coordinates``; k columns, none when the Dirichlet conditions hold the body
+        self._rigid_solved = (Y, self.N @ Y)
         self._S_row_sums = np.abs(self.S).sum(axis=1)  # bounds |S| |q| by its rows' sums times max |q|
         self.timings = {"factorization": factored - started, "condensation": time.perf_counter() - factored}
         self.systems, self.krylov_from = NewtonSystems(self.S, self._S_row_sums), krylov_from
@@ -299,7 +334,20 @@ class CondensedNewton(SemismoothNewton):
         self.recoveries = self.refinements = 0
         self._step, self._load_vector, self._d_free, self._b_norm = None, None, None, 0.0
         self._pending = None  # the split solve of this step's load, when N A0⁻¹ b came from one
-        self._rigid_solved = None  # (Y, N Y), Y = A0⁻¹ Z: see rigid_coordinates
+
+    def kept(self) -> dict[str, np.ndarray]:
+        """What this solver carries from step to step beyond the StepSolution, for a checkpoint: the
+        solved span (``span_*``), the kept inverse of the Newton systems (``systems_*``, m × m) and
+        which factor of A0 solves (``factorization_*``: PARDISO's Schur-mode one, or the plain one made
+        after PLAIN_AFTER solves). Restored (``restore``) into the solver of a resumed run, it makes
+        that run's numbers the bits of the uninterrupted one."""
+        parts = {"span": self.span, "systems": self.systems, "factorization": self.factorization}
+        return {f"{name}_{key}": value for name, part in parts.items() for key, value in part.kept().items()}
+
+    def restore(self, arrays: dict[str, np.ndarray]) -> None:
+        """Continue from ``kept()`` of the solver of the same problem in an earlier process."""
+        for name, part in {"span": self.span, "systems": self.systems, "factorization": self.factorization}.items():
+            part.restore({key[len(name) + 1:]: value for key, value in arrays.items() if key.startswith(f"{name}_")})
 
     def solve(self, step: StepData, previous: StepSolution | None) -> StepSolution:
         solution = super().solve(step, previous)
@@ -430,14 +478,9 @@ class CondensedNewton(SemismoothNewton):
 
     def rigid_coordinates(self, step: StepData, solution: StepSolution) -> np.ndarray:
         """Zᵀu, the coordinates of the solution's displacement on the rigid motions held only by contact,
-        without recovering u: Zᵀ A0⁻¹ (b − Nᵀq) = Yᵀ b − (N Y)ᵀ q with Y = A0⁻¹ Z, solved once (k columns)
-        when first asked for (only a body that the contact alone holds, at a level where nothing presses it,
-        and its checkpoints ask)."""
+        without recovering u: Zᵀ A0⁻¹ (b − Nᵀq) = Yᵀ b − (N Y)ᵀ q with Y = A0⁻¹ Z (solved in the set-up)."""
         if solution.u is not None:
             return self.Z.T @ solution.u
-        if self._rigid_solved is None:
-            Y = self.factorization.solve(self.Z)
-            self._rigid_solved = (Y, self.N @ Y)
         Y, NY = self._rigid_solved
         state = ContactState.evaluate(step, self.weights, solution.d, solution.lam, self.r)
         b = self._load_vector if step is self._step else step.b

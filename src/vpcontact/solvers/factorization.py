@@ -88,12 +88,31 @@ class PardisoFactorization:
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         if self._schur_mode and self.solves >= self.PLAIN_AFTER and self.solves > self.splits:
-            from .pardiso import Pardiso
-
-            self._pardiso = None  # release the Schur-mode factor before the plain one is made
-            self._pardiso, self._schur_mode = Pardiso(self._A), False
+            self._factor_plainly()
         self.solves += 1
         return self._pardiso.solve(b)
+
+    def _factor_plainly(self) -> None:
+        """Replace the Schur-mode factor by a plain one (for the rest of the run)."""
+        from .pardiso import Pardiso
+
+        self._pardiso = None  # release the Schur-mode factor before the plain one is made
+        self._pardiso, self._schur_mode = Pardiso(self._A), False
+
+    def kept(self) -> dict[str, np.ndarray]:
+        """What decides the factor used from here on: the solves and split solves so far, the mode."""
+        return {"solves": np.array(self.solves), "splits": np.array(self.splits),
+                "schur_mode": np.array(self._schur_mode)}
+
+    def restore(self, arrays: dict[str, np.ndarray]) -> None:
+        """Continue from ``kept()`` of the factorization of the same A0 in an earlier process: with the
+        factor that one had (the plain one made now if it had made it), so that the solves give the
+        same bits."""
+        if not arrays:
+            return
+        self.solves, self.splits = int(arrays["solves"]), int(arrays["splits"])
+        if self._schur_mode and not bool(arrays["schur_mode"]):
+            self._factor_plainly()
 
     def split(self, b: np.ndarray) -> SplitSolve:
         """In Schur mode, one solve's work (pardiso.py's docstring has the factorization): the forward
@@ -137,6 +156,13 @@ class SuperLUFactorization:
 
     name = "superlu"
     label = "SciPy's SuperLU"
+
+    def kept(self) -> dict[str, np.ndarray]:
+        """Nothing changes from step to step (one factor for the run)."""
+        return {}
+
+    def restore(self, arrays: dict[str, np.ndarray]) -> None:
+        """Nothing to continue from."""
 
     @staticmethod
     def available() -> bool:

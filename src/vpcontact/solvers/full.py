@@ -114,6 +114,7 @@ class FullNewton(SemismoothNewton):
         held = np.zeros(u.size)
         held[frame.normal_dof[active]] = (step.law.limit(active) - ev.d[active]) / frame.scale[active]
         K = frame.constrained(diagonal, fixed)
+        self._system = (diagonal, fixed)  # what K is made of (the iterative method keeps it, see IterativeNewton)
         held_force = self.rotated @ held + diagonal * held
         system_rhs = np.where(fixed, K.diagonal() * held, rhs - held_force)
         if not self._analysed:
@@ -159,6 +160,35 @@ class IterativeNewton(FullNewton):
                  progress: Progress = SILENT, expected_seconds: float | None = None):
         self._layout = (free, dim, nodes, near_nullspace)
         super().__init__(*args, progress=progress, expected_seconds=expected_seconds)
+        self._hierarchy_system = None  # (diagonal, fixed) of the Newton matrix the AMG hierarchy was built on
+
+    def direction(self, step: StepData, x: tuple, ev: Evaluation) -> tuple:
+        """FullNewton's, remembering what the Newton matrix was made of when the hierarchy was built on it."""
+        setups = self.linear.setups
+        found = super().direction(step, x, ev)
+        if self.linear.setups != setups:
+            self._hierarchy_system = self._system
+        return found
+
+    def kept(self) -> dict[str, np.ndarray]:
+        """What the iteration carries from step to step: the Newton matrix the AMG hierarchy was built on
+        (its tangent diagonal and fixed dofs in the normal frame: two vectors, not the matrix) and whether
+        it is to be built again. Restored (``restore``), the resumed run's preconditioner is the
+        uninterrupted run's, and so are its numbers, bit for bit."""
+        if self._hierarchy_system is None:
+            return {}
+        diagonal, fixed = self._hierarchy_system
+        return {"hierarchy_diagonal": diagonal, "hierarchy_fixed": fixed,
+                "hierarchy_stale": np.array(self.linear.stale)}
+
+    def restore(self, arrays: dict[str, np.ndarray]) -> None:
+        """Build the hierarchy on the Newton matrix ``kept()`` names, as the earlier process had it."""
+        if "hierarchy_diagonal" not in arrays:
+            return
+        self._hierarchy_system = (arrays["hierarchy_diagonal"], arrays["hierarchy_fixed"].astype(bool))
+        self.linear.analyse(self.frame.constrained(*self._hierarchy_system))
+        self.linear.stale = bool(arrays["hierarchy_stale"])
+        self._analysed = True
 
     @property
     def timings(self) -> dict[str, float]:

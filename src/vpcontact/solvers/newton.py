@@ -75,6 +75,14 @@ class SemismoothNewton:
         self.tolerance, self.max_iterations, self.length_scale = tolerance, max_iterations, length_scale
         self.progress = progress  # hears of each iterate (vpcontact.progress: what a long step is doing)
 
+    def kept(self) -> dict[str, np.ndarray]:
+        """What this solver carries from one step to the next beyond the StepSolution (a checkpoint keeps
+        it, see :mod:`vpcontact.checkpoint`): nothing, unless a solver keeps something."""
+        return {}
+
+    def restore(self, arrays: dict[str, np.ndarray]) -> None:
+        """Continue from ``kept()`` of the solver of the same problem in an earlier process."""
+
     def jacobian_tangent(self, state: ContactState) -> np.ndarray:
         """The compliance tangent T_i used in the Newton matrix (regularized where it vanishes)."""
         return np.where(~state.active & (state.tangent <= 0.0), JACOBIAN_REGULARIZATION * self.r, state.tangent)
