@@ -9,8 +9,8 @@ is the paper's 472k-dof reference). For every uniform level and adaptive cycle i
 estimate of the chosen estimator ((Σ_K F_K)^½ with the time functional of [adapt]) and the errors against
 the reference at t = 0.5 and 1.1, on the reference mesh (the solution interpolated at its nodes):
 
-    E = ‖I_ref u_h − u_ref‖_E   the energy norm (∫ ℰε:ε, vpcontact.norms.element_energies),
-    V = ‖ε(I_ref u_h − u_ref)‖   and Q = ‖Π_ref σ_h − σ_ref‖, the paper's norms (vpcontact.norms.differences).
+    E = ‖I_ref u_h − u_ref‖_E   the energy norm (∫ ℰε:ε, vpcontact.results.norms.element_energies),
+    V = ‖ε(I_ref u_h − u_ref)‖   and Q = ‖Π_ref σ_h − σ_ref‖, the paper's norms (vpcontact.results.norms.differences).
 
 The adaptive cycles go on until the next mesh would have more than twice the dofs of the uniform 1/256 mesh
 (or --cycles), so that the adaptive curve passes that mesh's dofs. The target is that mesh's error: for
@@ -38,10 +38,10 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
-from vpcontact.adapt import adapt, solve_and_estimate
-from vpcontact.norms import differences, element_energies, transfer
-from vpcontact.problem import build_problem
-from vpcontact.refinement import signed_measures
+from vpcontact.estimate.adapt import adapt, solve_and_estimate
+from vpcontact.results.norms import differences, element_energies, transfer
+from vpcontact.problem.build import build_problem
+from vpcontact.mesh.refinement import signed_measures
 from vpcontact.reproduction.plan import level_overrides
 from vpcontact.reproduction.records import dofs_reaching
 

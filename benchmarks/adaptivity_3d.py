@@ -6,10 +6,10 @@ are spatial) is solved on a fine uniform reference mesh (mesh.h = 0.05, 176k dof
 functional "max") from the coarsest uniform mesh, up to half the reference's dofs. For each run, at
 t = 0.5 and t = 1.1:
 
-    error         ‖I_ref u_h − u_ref‖_E, the energy norm on the reference mesh (vpcontact.norms.differences;
+    error         ‖I_ref u_h − u_ref‖_E, the energy norm on the reference mesh (vpcontact.results.norms.differences;
                   u_h interpolated at the reference's nodes, extrapolated from the nearest element for the
                   nodes outside the run's inscribed polyhedron), and V = ‖ε(I_ref u_h − u_ref)‖;
-    η(t)          the residual estimator of the run's solution (vpcontact.residual_estimate);
+    η(t)          the residual estimator of the run's solution (vpcontact.estimate.residual);
     effectivity   η(t) / error;
 
 and for the adaptive cycles their estimate (the time functional's, adapt.csv's column). Then: the dofs
@@ -35,12 +35,12 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
-from vpcontact.adapt import adapt
-from vpcontact.indicators import Level
-from vpcontact.norms import differences
-from vpcontact.problem import build_problem
+from vpcontact.estimate.adapt import adapt
+from vpcontact.estimate.indicators import Level
+from vpcontact.results.norms import differences
+from vpcontact.problem.build import build_problem
 from vpcontact.reproduction.records import dofs_reaching
-from vpcontact.residual_estimate import ResidualEstimator
+from vpcontact.estimate.residual import ResidualEstimator
 
 CASE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
 STEPS = {0.5: 5, 1.1: 11}

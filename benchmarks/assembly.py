@@ -2,7 +2,7 @@
 
 The quarter ball (mesh.quarter_ball, 12 n³ tetrahedra with n = ceil(1.5 / h)) at several sizes;
 for each size and implementation ("skfem": the forms vpcontact assembled with before, kept below as
-the reference; "numpy": vpcontact.assembly) one fresh process times
+the reference; "numpy": vpcontact.fem.assembly) one fresh process times
 
 - the stiffness A (E = 1000, ν = 0.3; the new one includes computing the element gradients),
 - the load vector of a traction on the top: its setup, then F(t) at each of --steps times,
@@ -38,7 +38,7 @@ IMPLEMENTATIONS = ("skfem", "numpy")
 E, NU = 1000.0, 0.3
 
 
-# --- the reference: scikit-fem's forms, as vpcontact.assembly used them --------------------------
+# --- the reference: scikit-fem's forms, as vpcontact.fem.assembly used them --------------------------
 def skfem_stiffness(basis, lam, mu):
     """A by scikit-fem: linear_elasticity for numbers, a P0-coefficient form for per-element arrays."""
     from skfem import BilinearForm, asm
@@ -107,8 +107,8 @@ def timed(function, *args):
 def run_size(h: float, implementation: str, steps: int) -> dict:
     from skfem import FacetBasis
 
-    from vpcontact.assembly import LoadVector, displacement_basis, element_strain, stiffness, stress_force
-    from vpcontact.material import Elasticity
+    from vpcontact.fem.assembly import LoadVector, displacement_basis, element_strain, stiffness, stress_force
+    from vpcontact.laws.elasticity import Elasticity
     from vpcontact.mesh import quarter_ball
 
     mesh = quarter_ball(h)
@@ -143,8 +143,8 @@ def differences(h: float) -> dict:
     """The largest relative difference (max |new − old| / max |old|) of A, F(t), ε(u) and Bᵀz."""
     from skfem import FacetBasis
 
-    from vpcontact.assembly import LoadVector, displacement_basis, element_strain, stiffness, stress_force
-    from vpcontact.material import Elasticity
+    from vpcontact.fem.assembly import LoadVector, displacement_basis, element_strain, stiffness, stress_force
+    from vpcontact.laws.elasticity import Elasticity
     from vpcontact.mesh import quarter_ball
 
     def relative(new, old):

@@ -4,11 +4,11 @@ stages (build = mesh + assembly + checks, solver setup, time loop, total) and es
 build measured is the check's: the first in its process, as a fresh ``vpcontact run``'s is (the run's own
 build, a second one in the same process, is faster: "second build").
 
-The same records are the data :mod:`vpcontact.time_estimate`'s constants were fitted to (its docstring).
+The same records are the data :mod:`vpcontact.solvers.time_estimate`'s constants were fitted to (its docstring).
 
     python benchmarks/check_estimate.py                 # every configuration (minutes)
     python benchmarks/check_estimate.py --only quarter_ball
-    python benchmarks/check_estimate.py --fit records.jsonl ...   # the constants of vpcontact.time_estimate
+    python benchmarks/check_estimate.py --fit records.jsonl ...   # the constants of vpcontact.solvers.time_estimate
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ STAGES = ("build", "solver setup", "time loop", "total")
 def measure(example: str, overrides: dict) -> dict:
     """Check, then solve, the example with ``overrides`` (no fields or figures written) in this process."""
     import vpcontact
-    from vpcontact.check import check_case
+    from vpcontact.drivers.check import check_case
 
     case = vpcontact.load_case(EXAMPLES / example, {**overrides, "output.figures": False})
     checked = check_case(case)

@@ -2,7 +2,7 @@
 
 examples/quarter_ball.toml (T = 1.1, the same time steps on every mesh, fields at t = 1.1 only, no
 figures) is run as a vpcontact study on a ladder of mesh sizes and a finer reference, and compared
-at t = 1.1 by the study's own difference norms (`vpcontact.norms.differences`: the coarser solution
+at t = 1.1 by the study's own difference norms (`vpcontact.results.norms.differences`: the coarser solution
 interpolated at the reference's nodes): ‖ε(u − u_ref)‖ (the strain, equivalent to the energy norm),
 ‖u − u_ref‖ and ‖σ − σ_ref‖ in L², and the contact values at the probe (the bottom point): K, the
 penetration and the normal stress. The observed rates are log(e_i / e_{i+1}) / log(h_i / h_{i+1})
@@ -31,9 +31,9 @@ import numpy as np
 import tomli_w
 from scipy.optimize import curve_fit
 
-from vpcontact.ball import CELLS_PER_RADIUS
-from vpcontact.run_reader import read_table
-from vpcontact.studies import load_study, norm_column, run_study
+from vpcontact.mesh.ball import CELLS_PER_RADIUS
+from vpcontact.io.run_reader import read_table
+from vpcontact.drivers.studies import load_study, norm_column, run_study
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
 SETTINGS = {
@@ -41,7 +41,7 @@ SETTINGS = {
     "quick": {"levels": (0.5, 0.35), "reference": 0.25, "steps": 3},
 }
 T = 1.1
-#: The errors reported, by the difference norm of study.csv they come from (`vpcontact.studies.norm_column`).
+#: The errors reported, by the difference norm of study.csv they come from (`vpcontact.drivers.studies.norm_column`).
 ERRORS = {"error_strain": "V", "error_L2": "U", "error_stress": "Q"}
 PROBE = ("K_probe", "penetration_probe", "normal_stress_probe")
 

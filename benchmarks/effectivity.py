@@ -5,9 +5,9 @@ mesh two or more levels finer, all on the SAME time grid (the case's time.steps)
 difference measured is the spatial error the estimator estimates, not the time discretization's.
 At each time t (a step time of the grid) and level:
 
-    η(t)          the residual estimator (vpcontact.residual_estimate) of the level's solution,
-    ‖e‖_E         = ‖I_ref u_h − u_ref‖_E, the energy norm (∫ ℰε:ε, vpcontact.norms.energy_norm) on the
-                    reference mesh, u_h interpolated at its nodes (vpcontact.norms.transfer),
+    η(t)          the residual estimator (vpcontact.estimate.residual) of the level's solution,
+    ‖e‖_E         = ‖I_ref u_h − u_ref‖_E, the energy norm (∫ ℰε:ε, vpcontact.results.norms.energy_norm) on the
+                    reference mesh, u_h interpolated at its nodes (vpcontact.results.norms.transfer),
     effectivity   η / ‖e‖_E,
 
 and the local picture: the energy of the error on each reference element, summed over the level's
@@ -37,9 +37,9 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
-from vpcontact.indicators import Level
-from vpcontact.norms import containing_elements, element_energies, transfer
-from vpcontact.residual_estimate import ResidualEstimator, TERMS
+from vpcontact.estimate.indicators import Level
+from vpcontact.results.norms import containing_elements, element_energies, transfer
+from vpcontact.estimate.residual import ResidualEstimator, TERMS
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 SETTINGS = {

@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vpcontact.run_reader import read_contact, read_solution, read_summary
+from vpcontact.io.run_reader import read_contact, read_solution, read_summary
 
 HERE = Path(__file__).resolve().parent
 EXAMPLE = HERE.parent / "examples" / "paper_ball.toml"
@@ -64,7 +64,7 @@ def make_mesh(level: int, folder: Path, mesher: str) -> tuple[Path, str]:
     import meshio
 
     from vpcontact.mesh import half_disc
-    from vpcontact.mesh_file import write_mesh
+    from vpcontact.mesh.msh import write_mesh
 
     write_mesh(half_disc(h), path)
     data = meshio.read(path)
@@ -93,7 +93,7 @@ def write_case(mesh: Path, steps: int, folder: Path) -> tuple[Path, dict, list[i
 def getfem_arguments(case: dict) -> list[str]:
     """The law, loads, time grid and Newton tolerance of `case` as options of getfem_half_disc.py (K = c_v:
     β = 0); refused (SystemExit) where the case is not what that model solves."""
-    from vpcontact.expressions import parse_expression
+    from vpcontact.case.expressions import parse_expression
 
     (traction,) = case["boundary"]["traction"]
     horizontal, vertical = (parse_expression(value, where="traction") for value in traction["value"])
@@ -160,7 +160,7 @@ def _plain_env() -> dict:
 def vpcontact_command(case: Path, out: Path) -> list[str]:
     """`vpcontact run CASE --out DIR`: the console script beside this Python when there is one."""
     script = Path(sys.executable).with_name("vpcontact")
-    program = [str(script)] if script.exists() else [sys.executable, "-m", "vpcontact.cli"]
+    program = [str(script)] if script.exists() else [sys.executable, "-m", "vpcontact.drivers.cli"]
     return [*program, "run", str(case), "--out", str(out)]
 
 

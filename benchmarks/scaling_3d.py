@@ -49,9 +49,9 @@ def run_level(h: float, method: str, steps: int | None = None, beta: float = 1.0
     """Solve the example on the mesh of edge h with ``method`` (``steps`` steps over its time span, the
     layer's β) in this process and return its record."""
     import vpcontact
-    from vpcontact.problem import build_problem
+    from vpcontact.problem.build import build_problem
     from vpcontact.solvers.condensed import condensed_memory
-    from vpcontact.stepping import TimeLoop
+    from vpcontact.timeloop.loop import TimeLoop
 
     overrides = {"mesh.h": h, "solver.method": method, "output.field_steps": "none", "output.figures": False,
                  "contact.stiffness.beta": beta}

@@ -4,7 +4,7 @@
   11 steps), whole processes: the median wall time of ``--repeat`` runs (and of ``python -c pass``, the
   interpreter alone);
 - the paper's example at about 30,000 DOFs (mesh.h = 0.011, 141 steps, β = 0, the example's four field
-  steps), built in and read from a gmsh 2.2 file (written once by ``vpcontact.mesh_file.write_mesh``):
+  steps), built in and read from a gmsh 2.2 file (written once by ``vpcontact.mesh.msh.write_mesh``):
   the median wall time of whole ``vpcontact run`` processes, and of each phase of such a run in a
   child process: importing what ``run`` imports, the case, the mesh, the assembly, the factorization
   and condensation, the time loop, then each output (case.resolved.toml, history.csv, contact.csv, the
@@ -70,18 +70,18 @@ def wall(command: list[str], repeat: int) -> dict:
 def run_command(case: Path, overrides: dict, out: Path) -> list[str]:
     """``vpcontact run case --set ... --out out --overwrite --quiet``."""
     sets = [item for key, value in overrides.items() for item in ("--set", f"{key}={value}")]
-    return [sys.executable, "-m", "vpcontact.cli", "run", str(case), *sets, "--out", str(out), "--overwrite", "--quiet"]
+    return [sys.executable, "-m", "vpcontact.drivers.cli", "run", str(case), *sets, "--out", str(out), "--overwrite", "--quiet"]
 
 
 def phases(case_path: str, overrides: dict, out: Path) -> dict:
     """The phases of one run of the case, in this process (seconds)."""
     started = time.perf_counter()
-    import vpcontact.cli  # noqa: F401  (what `vpcontact run` imports)
-    from vpcontact import checkpoint, writers
-    from vpcontact.case import load_case
-    from vpcontact.problem import build_problem
-    from vpcontact.rundir import run  # noqa: F401
-    from vpcontact.stepping import TimeLoop
+    import vpcontact.drivers.cli  # noqa: F401  (what `vpcontact run` imports)
+    from vpcontact.io import checkpoint, writers
+    from vpcontact.case.schema import load_case
+    from vpcontact.problem.build import build_problem
+    from vpcontact.drivers.rundir import run  # noqa: F401
+    from vpcontact.timeloop.loop import TimeLoop
 
     seconds = {"import": time.perf_counter() - started}
 
@@ -135,7 +135,7 @@ def gmsh_case(folder: Path, overrides: dict) -> tuple[Path, dict]:
     import tomli_w
 
     from vpcontact.mesh import half_disc
-    from vpcontact.mesh_file import write_mesh
+    from vpcontact.mesh.msh import write_mesh
 
     write_mesh(half_disc(overrides["mesh.h"]), folder / "half_disc.msh")
     case = tomllib.loads(EXAMPLE.read_text())
@@ -160,7 +160,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as scratch:
         folder = Path(scratch)
         record["python_pass_s"] = wall([sys.executable, "-c", "pass"], repeat)
-        record["help_s"] = wall([sys.executable, "-m", "vpcontact.cli", "--help"], repeat)
+        record["help_s"] = wall([sys.executable, "-m", "vpcontact.drivers.cli", "--help"], repeat)
         record["tiny_run"] = {"case": str(EXAMPLE.name), "overrides": TINY,
                               **wall(run_command(EXAMPLE, TINY, folder / "tiny"), repeat)}
         from_file, file_overrides = gmsh_case(folder, large)

@@ -45,7 +45,7 @@ sphinx_gallery_conf = {
     "gallery_dirs": "gallery",
     "filename_pattern": r"/plot_",  # run every example
     "within_subsection_order": "FileNameSortKey",
-    "image_scrapers": ("figure_scraper.scrape",),  # vpcontact.plots returns Figures without pyplot
+    "image_scrapers": ("figure_scraper.scrape",),  # vpcontact.results.plots returns Figures without pyplot
     "ignore_repr_types": r"matplotlib\.figure\.Figure",  # a block's last Figure is an image, not its repr
     "download_all_examples": False,
     "remove_config_comments": True,

@@ -1,6 +1,6 @@
 """The sphinx-gallery image scraper of the vpcontact gallery.
 
-:mod:`vpcontact.plots` makes its figures as ``matplotlib.figure.Figure`` objects without pyplot, which
+:mod:`vpcontact.results.plots` makes its figures as ``matplotlib.figure.Figure`` objects without pyplot, which
 sphinx-gallery's matplotlib scraper (it asks pyplot for its open figures) does not see. This scraper
 shows, after each code block of an example, every Figure the block left in the example's global
 names that no earlier block showed: a name bound to a Figure, a Figure in a list, tuple or dict bound

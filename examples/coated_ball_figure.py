@@ -4,7 +4,7 @@ Runs the example and the three cases that remove one heterogeneity or both (the 
 and times): the paper's ball (one material, c_v = 100 everywhere), the paper's ball on the layer with
 the hard strip, the coated ball on the uniform layer, the coated ball on the hard strip (the example);
 draws the pressure and K along the contact arc at the last step, the strip shaded
-(`vpcontact.plots.along_contact`), and prints per run the vertical contact force, the largest
+(`vpcontact.results.plots.along_contact`), and prints per run the vertical contact force, the largest
 pressure, the mean pressure and K on the strip and beside it, as JSON.
 
     python examples/coated_ball_figure.py --out coated_ball.png [--set mesh.h=0.025]
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
-from vpcontact.plots import DPI, along_contact, arc_length
+from vpcontact.results.plots import DPI, along_contact, arc_length
 
 EXAMPLE = Path(__file__).with_name("coated_ball.toml")
 STRIP = (0.1, 0.2)  # the x range of the hard strip in examples/coated_ball.toml

@@ -63,13 +63,13 @@ def deep_copy():
 
 # --- the exit-code contract (README "Exit status"), shared by the adversarial tests ------------------
 def run_cli(*args, cwd=None, timeout=120, env=None):
-    """``python -m vpcontact.cli ARGS`` in a subprocess (a hang fails the test): (status, stdout, stderr)."""
+    """``python -m vpcontact.drivers.cli ARGS`` in a subprocess (a hang fails the test): (status, stdout, stderr)."""
     import os
     import subprocess
     import sys
 
     environment = {**os.environ, **(env or {})}
-    process = subprocess.run([sys.executable, "-m", "vpcontact.cli", *map(str, args)], cwd=cwd, env=environment,
+    process = subprocess.run([sys.executable, "-m", "vpcontact.drivers.cli", *map(str, args)], cwd=cwd, env=environment,
                              capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
     return process.returncode, process.stdout, process.stderr
 
@@ -103,9 +103,9 @@ def assert_refused(status, stderr, *words, untouched=()):
 def resumed_after(case, step: int, folder):
     """A time loop of ``case`` (a Case) stopped after ``step``, checkpointed into ``folder`` and restored into a
     new loop of the same case, not run yet: where a test of resuming starts."""
-    from vpcontact import checkpoint
-    from vpcontact.problem import build_problem
-    from vpcontact.stepping import TimeLoop
+    from vpcontact.io import checkpoint
+    from vpcontact.problem.build import build_problem
+    from vpcontact.timeloop.loop import TimeLoop
 
     first = TimeLoop(build_problem(case), case.output)
     assert first.run(stop=lambda: "stopped" if first.state.step == step else None).status == "interrupted"

@@ -1,4 +1,4 @@
-"""The adaptive loop ([adapt], vpcontact.adapt): Dörfler marking, the time functional of the indicators,
+"""The adaptive loop ([adapt], vpcontact.estimate.adapt): Dörfler marking, the time functional of the indicators,
 the cycles and their run directory."""
 
 import csv
@@ -10,14 +10,14 @@ import pytest
 
 import vpcontact
 from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree
-from vpcontact.adapt import ESTIMATORS, adapt, dorfler, solve_and_estimate
-from vpcontact.case import AdaptSection
-from vpcontact.indicators import Level
+from vpcontact.estimate.adapt import ESTIMATORS, adapt, dorfler, solve_and_estimate
+from vpcontact.case.schema import AdaptSection
+from vpcontact.estimate.indicators import Level
 from vpcontact.mesh import read_mesh
-from vpcontact.norms import differences
-from vpcontact.problem import build_problem
-from vpcontact.recovery_estimate import estimate as recovery_estimate
-from vpcontact.residual_estimate import estimate as residual_estimate
+from vpcontact.results.norms import differences
+from vpcontact.problem.build import build_problem
+from vpcontact.estimate.recovery import estimate as recovery_estimate
+from vpcontact.estimate.residual import estimate as residual_estimate
 
 
 def test_dorfler_marks_the_fewest_largest_entries_holding_theta_of_the_sum():
@@ -128,7 +128,7 @@ def test_an_adaptive_run_writes_its_cycles_and_a_mesh_that_runs_again(tmp_path):
     for n in (1, 2, 3):
         saved = np.load(out / "cycles" / str(n) / "solution.npz")
         elements = saved["triangles"]
-        snapshot = vpcontact.norms.Snapshot(saved["points"], elements, saved["displacement"][-1], saved["stress"][-1])
+        snapshot = vpcontact.results.norms.Snapshot(saved["points"], elements, saved["displacement"][-1], saved["stress"][-1])
         errors.append(differences(snapshot, reference)["V"])
     assert errors[2] < errors[1] < errors[0]
 

@@ -12,7 +12,7 @@ import pytest
 import tomli_w
 
 import vpcontact
-from vpcontact.contact import CallableLaw
+from vpcontact.laws.contact import CallableLaw
 from vpcontact.mesh import rectangle
 from conftest import half_disc_case, rectangle_case, run_cli
 
@@ -179,11 +179,11 @@ def test_laws_for_a_case_without_contact_are_refused():
 
 
 def test_the_documented_submodules_come_with_import_vpcontact():
-    """After ``import vpcontact`` alone: ``vpcontact.norms.differences`` and the others, loaded on first use
+    """After ``import vpcontact`` alone: ``vpcontact.results.norms.differences`` and the others, loaded on first use
     (``import vpcontact`` does not load norms, so the command line starts as fast as before)."""
-    code = ("import sys, vpcontact; assert 'vpcontact.norms' not in sys.modules; "
-            "print(vpcontact.norms.differences.__name__, vpcontact.contact.CallableLaw.__name__, "
-            "vpcontact.studies.run_study.__name__, vpcontact.writers.write_run.__name__); vpcontact.nothing")
+    code = ("import sys, vpcontact; assert 'vpcontact.results.norms' not in sys.modules; "
+            "print(vpcontact.results.norms.differences.__name__, vpcontact.laws.contact.CallableLaw.__name__, "
+            "vpcontact.drivers.studies.run_study.__name__, vpcontact.io.writers.write_run.__name__); vpcontact.nothing")
     process = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert process.stdout.split() == ["differences", "CallableLaw", "run_study", "write_run"], process.stderr
     assert "AttributeError: module 'vpcontact' has no attribute 'nothing'" in process.stderr

@@ -17,9 +17,9 @@ import pytest
 import scipy.sparse as sp
 from skfem import Basis, FacetBasis
 
-from vpcontact import simplex
-from vpcontact.assembly import LoadVector, displacement_basis, element_strain, stiffness, stress_force
-from vpcontact.material import Elasticity
+from vpcontact.mesh import simplex
+from vpcontact.fem.assembly import LoadVector, displacement_basis, element_strain, stiffness, stress_force
+from vpcontact.laws.elasticity import Elasticity
 from vpcontact.mesh import block, half_disc, quarter_ball
 
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"

@@ -7,7 +7,7 @@ The families: a case's keys and values (unknown, of the wrong type, out of range
 values the run would not use), expressions, ``--set`` syntax, mesh files, ``--out`` paths, the files of
 ``initial.from_run``, and the Python API (``compose``'s arguments, ``Mesh`` arrays, NumPy values, Python laws
 and loads, the tables of ``Problem.solve``, ``TimeLoop`` and ``adapt``, ``Result.write``). The command line is
-called in this process (``vpcontact.cli.main``): a subprocess costs a second each, and the exit status, the
+called in this process (``vpcontact.drivers.cli.main``): a subprocess costs a second each, and the exit status, the
 one line on stderr and the files are the same (tests/test_bad_input.py, test_robustness.py run the CLI in
 subprocesses)."""
 
@@ -24,9 +24,9 @@ import tomli_w
 
 import vpcontact
 from vpcontact import mesh as meshes
-from vpcontact.cli import main
+from vpcontact.drivers.cli import main
 from vpcontact.errors import CaseError
-from vpcontact.stepping import TimeLoop, solve_problem
+from vpcontact.timeloop.loop import TimeLoop, solve_problem
 
 from conftest import block_3d_case, half_disc_case, rectangle_case, snapshot_tree
 
@@ -714,11 +714,11 @@ def test_a_bad_output_table_is_refused_naming_its_key(problem, output, words):
     (lambda problem: TimeLoop("problem"), ["problem = 'problem': expected a vpcontact.Problem"]),
     (lambda problem: solve_problem(None), ["problem = None: expected a vpcontact.Problem"]),
     (lambda problem: vpcontact.solve(half_disc_case(h=0.25), progress="no"), ["progress = 'no'"]),
-    (lambda problem: vpcontact.adapt.adapt(problem, {"cycles": 0}), ["adapt.cycles = 0", ">= 1"]),
-    (lambda problem: vpcontact.adapt.adapt(problem, {"cycles": 1, "theta": 2}), ["adapt.theta = 2"]),
-    (lambda problem: vpcontact.adapt.adapt(problem, None), ["missing required value 'adapt.cycles'"]),
-    (lambda problem: vpcontact.adapt.adapt(problem, {"cycles": 1}, {"xdmf": "yes"}), ["output.xdmf = \"yes\""]),
-    (lambda problem: vpcontact.adapt.adapt("problem", {"cycles": 1}), ["problem = 'problem'"]),
+    (lambda problem: vpcontact.estimate.adapt.adapt(problem, {"cycles": 0}), ["adapt.cycles = 0", ">= 1"]),
+    (lambda problem: vpcontact.estimate.adapt.adapt(problem, {"cycles": 1, "theta": 2}), ["adapt.theta = 2"]),
+    (lambda problem: vpcontact.estimate.adapt.adapt(problem, None), ["missing required value 'adapt.cycles'"]),
+    (lambda problem: vpcontact.estimate.adapt.adapt(problem, {"cycles": 1}, {"xdmf": "yes"}), ["output.xdmf = \"yes\""]),
+    (lambda problem: vpcontact.estimate.adapt.adapt("problem", {"cycles": 1}), ["problem = 'problem'"]),
     (lambda problem: problem.solve(output={("a",): 1}), ["in output: keys must be strings"]),
 ])
 def test_a_bad_argument_of_solving_is_refused(problem, call, words):
@@ -726,7 +726,7 @@ def test_a_bad_argument_of_solving_is_refused(problem, call, words):
 
 
 def test_adapt_takes_its_settings_and_outputs_as_dicts(problem):
-    adaptation = vpcontact.adapt.adapt(problem, {"cycles": np.int64(2), "theta": 0.5}, {"field_steps": "none"})
+    adaptation = vpcontact.estimate.adapt.adapt(problem, {"cycles": np.int64(2), "theta": 0.5}, {"field_steps": "none"})
     assert adaptation.status == "complete" and len(adaptation.rows) == 2
 
 

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
-from vpcontact.plots import along_contact
+from vpcontact.results.plots import along_contact
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 sys.path.insert(0, str(EXAMPLES))
@@ -65,7 +65,7 @@ def test_the_example_runs_and_writes_the_layer_per_node(tmp_path):
 
     import meshio
 
-    from vpcontact.cli import main
+    from vpcontact.drivers.cli import main
 
     out = tmp_path / "run"
     assert main(["run", str(EXAMPLES / "coated_ball.toml"), "--out", str(out), "--quiet",
@@ -80,7 +80,7 @@ def test_the_example_runs_and_writes_the_layer_per_node(tmp_path):
 
 def test_the_paper_figures_refuse_a_thickness_that_varies():
     """The paper's figures draw one foundation thickness: a run whose g varies is refused in one line (the
-    run's own figures, vpcontact.plots, draw it)."""
+    run's own figures, vpcontact.results.plots, draw it)."""
     import pytest
 
     from vpcontact.errors import CaseError

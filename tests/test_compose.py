@@ -10,16 +10,16 @@ import pytest
 
 import vpcontact
 from vpcontact import mesh as meshes
-from vpcontact.indicators import Level
-from vpcontact.refinement import refine
+from vpcontact.estimate.indicators import Level
+from vpcontact.mesh.refinement import refine
 
 from conftest import half_disc_case
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 SOURCE = REPO / "src" / "vpcontact"
 #: The modules after the problem in the flow case -> problem -> time loop -> result -> writers.
-DOWNSTREAM = ("stepping", "results", "writers", "checkpoint", "adapt", "indicators", "residual_estimate",
-              "recovery_estimate", "plots", "norms")
+DOWNSTREAM = ("timeloop/loop", "results/result", "io/writers", "io/checkpoint", "estimate/adapt", "estimate/indicators",
+              "estimate/residual", "estimate/recovery", "results/plots", "results/norms")
 
 
 def composed(h=0.1, **changes):

@@ -13,7 +13,7 @@ from vpcontact.solvers import condensed
 from vpcontact.solvers.condensed import KRYLOV_TOLERANCE, NewtonSystems
 from vpcontact.solvers.errors import NotConvergedError, SingularMatrixError, SolverError
 from vpcontact.solvers.gmres import gmres
-from vpcontact.stepping import TimeLoop
+from vpcontact.timeloop.loop import TimeLoop
 from conftest import half_disc_case
 from test_3d import ball_case, block_case, states
 

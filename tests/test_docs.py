@@ -89,9 +89,11 @@ def test_the_docs_build_without_warnings_and_run_the_gallery(tmp_path):
     reference = "".join((html / f"{page}.html").read_text() for page in api)
     public = [f"vpcontact.{vpcontact.API[name]}.{name}" if name in vpcontact.API else f"vpcontact.{name}"
               for name in vpcontact.__all__]
-    modules = [f"module-vpcontact.{name}" for name in ("plots", "norms", "studies", "contact", "mesh", "materials",
-                                                        "indicators", "residual_estimate", "adapt", "writers")]
-    for name in (*public, *modules, "vpcontact.plots.contact_pressure", "vpcontact.norms.differences"):
+    modules = [f"module-vpcontact.{name}" for name in ("results.plots", "results.norms", "drivers.studies",
+                                                        "laws.contact", "mesh.core", "laws.materials",
+                                                        "estimate.indicators", "estimate.residual", "estimate.adapt",
+                                                        "io.writers")]
+    for name in (*public, *modules, "vpcontact.results.plots.contact_pressure", "vpcontact.results.norms.differences"):
         assert f'id="{name}"' in reference, f"{name} is not in the API reference (docs/api/)"
     # every example has its page, and the figures it made (our scraper) are on it
     examples = sorted(path.stem for path in (DOCS / "examples").glob("plot_*.py"))

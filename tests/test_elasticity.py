@@ -5,7 +5,7 @@ import pytest
 from skfem import Basis
 
 import vpcontact
-from vpcontact.material import Elasticity
+from vpcontact.laws.elasticity import Elasticity
 
 E, NU, S = 1000.0, 0.3, 5.0
 
@@ -81,7 +81,7 @@ def test_manufactured_solution_converges_at_first_order_in_energy(hypothesis):
 def test_von_mises_is_that_of_the_deviator_of_the_3d_tensor(dim):
     """sqrt(3/2 dev τ : dev τ) of the 3 × 3 tensor formed explicitly (in 2D: σ, σ33 and zero σ13, σ23), for
     random tensors, symmetric or not (a user's 𝒢 may add a history that is not)."""
-    from vpcontact.material import von_mises
+    from vpcontact.laws.elasticity import von_mises
 
     rng = np.random.default_rng(dim)
     sigma = rng.standard_normal((dim, dim, 50))

@@ -1,4 +1,4 @@
-"""Tests of vpcontact.expressions: values, broadcasting, dependencies, pickling, rejections."""
+"""Tests of vpcontact.case.expressions: values, broadcasting, dependencies, pickling, rejections."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from vpcontact.errors import CaseError
-from vpcontact.expressions import (
+from vpcontact.case.expressions import (
     CONSTANT_NAMES,
     FUNCTION_NAMES,
     MAX_DEPTH,

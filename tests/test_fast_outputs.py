@@ -13,10 +13,10 @@ import pytest
 import vpcontact
 from conftest import half_disc_case
 from test_contact_parts import LAYERS, split_case, two_parts_form
-from vpcontact.contact import STATUS_NAMES
-from vpcontact.results import CONTACT_ARRAYS
-from vpcontact.vtu import Grid, write_vtu
-from vpcontact.writers import write_run
+from vpcontact.laws.contact import STATUS_NAMES
+from vpcontact.results.result import CONTACT_ARRAYS
+from vpcontact.io.vtu import Grid, write_vtu
+from vpcontact.io.writers import write_run
 
 
 def test_a_vtu_file_reads_back_as_the_arrays_written(tmp_path):

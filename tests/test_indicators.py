@@ -1,11 +1,11 @@
-"""The time level an error estimator reads (vpcontact.indicators)."""
+"""The time level an error estimator reads (vpcontact.estimate.indicators)."""
 
 import numpy as np
 import pytest
 
 import vpcontact
 from vpcontact.errors import CaseError
-from vpcontact.indicators import Indicators, Level
+from vpcontact.estimate.indicators import Indicators, Level
 
 
 @pytest.fixture(scope="module")

@@ -12,11 +12,11 @@ import vpcontact
 from conftest import assert_refused, half_disc_case, rectangle_case, resumed_after, run_cli, snapshot_tree
 from test_3d_runs import ball_case
 from test_robustness import write
-from vpcontact.assembly import element_strain
-from vpcontact.case import load_case
-from vpcontact.problem import build_problem
-from vpcontact.rundir import run
-from vpcontact.stepping import TimeLoop, solve_problem
+from vpcontact.fem.assembly import element_strain
+from vpcontact.case.schema import load_case
+from vpcontact.problem.build import build_problem
+from vpcontact.drivers.rundir import run
+from vpcontact.timeloop.loop import TimeLoop, solve_problem
 
 #: History columns of the solution (not the solver's reports: iterations, residuals, sub-steps).
 PHYSICAL = ("t", "max_penetration", "mean_penetration", "K_min", "K_max", "K_probe", "penetration_probe",

@@ -10,8 +10,8 @@ import pytest
 import tomli_w
 
 import vpcontact
-from vpcontact.time_grid import TimeGrid
-from vpcontact.results import memory_needed
+from vpcontact.problem.time_grid import TimeGrid
+from vpcontact.results.result import memory_needed
 from vpcontact.memory import available_memory
 from conftest import assert_refused, rectangle_case, run_cli, snapshot_tree
 
@@ -295,13 +295,13 @@ def test_the_estimate_covers_what_a_run_holds_and_writes(tmp_path):
     case["time"]["steps"] = steps = 400
     case["output"] = {"field_steps": "all"}
     loaded = vpcontact.load_case(case)
-    loop = vpcontact.stepping.TimeLoop(vpcontact.build_problem(loaded), loaded.output)
+    loop = vpcontact.timeloop.loop.TimeLoop(vpcontact.build_problem(loaded), loaded.output)
     tracemalloc.start()
     try:
         result = loop.run()
         held, _ = tracemalloc.get_traced_memory()
         peaks = []
-        for write in (lambda: vpcontact.checkpoint.save(loop, tmp_path), lambda: result.write(tmp_path / "out")):
+        for write in (lambda: vpcontact.io.checkpoint.save(loop, tmp_path), lambda: result.write(tmp_path / "out")):
             tracemalloc.reset_peak()
             write()
             peaks.append(tracemalloc.get_traced_memory()[1])
@@ -327,7 +327,7 @@ def test_a_million_steps_of_a_small_case_are_accepted_and_start_at_once():
     started = time.perf_counter()
     loaded = vpcontact.load_case(case)
     problem = vpcontact.build_problem(loaded)
-    loop = vpcontact.stepping.TimeLoop(problem, loaded.output)
+    loop = vpcontact.timeloop.loop.TimeLoop(problem, loaded.output)
     assert time.perf_counter() - started < 20
     result = loop.run(stop=lambda: "enough" if loop.state.step >= 3 else None)
     assert result.status == "interrupted" and result.steps == 3

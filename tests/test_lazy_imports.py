@@ -27,7 +27,7 @@ def modules_loaded(script: str) -> set[str]:
 def modules_after_run(tmp_path, case) -> set[str]:
     """The modules loaded by a whole ``vpcontact run`` of ``case``."""
     (tmp_path / "case.toml").write_text(tomli_w.dumps(case))
-    return modules_loaded(f"import vpcontact.cli\nassert vpcontact.cli.main(['run', {str(tmp_path / 'case.toml')!r}, "
+    return modules_loaded(f"import vpcontact.drivers.cli\nassert vpcontact.drivers.cli.main(['run', {str(tmp_path / 'case.toml')!r}, "
                           f"'--out', {str(tmp_path / 'out')!r}, '--quiet']) == 0")
 
 
@@ -37,13 +37,13 @@ def test_a_run_of_a_built_in_shape_imports_no_mesh_io_and_no_plotting(tmp_path):
     loaded = modules_after_run(tmp_path, case)
     assert {"numpy", "scipy", "skfem", "pydantic"} <= loaded
     assert not set(HEAVY) & loaded
-    assert not {"vpcontact.adapt", "vpcontact.refinement", "vpcontact.norms"} & loaded  # an adaptive run's
+    assert not {"vpcontact.estimate.adapt", "vpcontact.mesh.refinement", "vpcontact.results.norms"} & loaded  # an adaptive run's
     assert len(list((tmp_path / "out" / "fields").glob("*.vtu"))) == 22
 
 
 def test_a_run_of_a_gmsh_2_2_text_file_does_without_meshio(tmp_path):
     from vpcontact.mesh import half_disc
-    from vpcontact.mesh_file import write_mesh
+    from vpcontact.mesh.msh import write_mesh
 
     write_mesh(half_disc(0.25), tmp_path / "disc.msh")
     case = half_disc_case(h=0.25)

@@ -7,8 +7,8 @@ import pytest
 import scipy.sparse as sp
 
 import vpcontact
-from vpcontact.problem import build_problem
-from vpcontact.rigid_modes import RigidModes
+from vpcontact.problem.build import build_problem
+from vpcontact.fem.rigid_modes import RigidModes
 from vpcontact.solvers import amg
 from vpcontact.solvers.errors import NotConvergedError
 from vpcontact.solvers.factorization import installed_backends

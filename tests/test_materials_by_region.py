@@ -16,9 +16,9 @@ from conftest import assert_refused, run_cli
 
 from vpcontact import build_problem, load_case, solve_problem
 from vpcontact.errors import CaseError
-from vpcontact.material import Perzyna
-from vpcontact.materials import RegionalViscoplastic
-from vpcontact.stepping import TimeLoop
+from vpcontact.laws.elasticity import Perzyna
+from vpcontact.laws.materials import RegionalViscoplastic
+from vpcontact.timeloop.loop import TimeLoop
 
 E1, E2, F, A = 1000.0, 250.0, 10.0, 0.5  # moduli left and right of x = A, traction on the right
 
@@ -93,7 +93,7 @@ def test_regional_viscoplastic_law_acts_on_its_elements_only():
 
 def test_outputs_carry_the_material_of_each_element(tmp_path):
     """The body VTU has each element's material index, E and ν: E the expression at the centroid."""
-    from vpcontact.cli import main
+    from vpcontact.drivers.cli import main
 
     case = bar_case(2, {"E": "500 + 100*x*y", "nu": 0.25})
     case["output"]["field_steps"] = "final"

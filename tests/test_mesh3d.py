@@ -16,10 +16,10 @@ import pytest
 import skfem
 
 import vpcontact.mesh
-from vpcontact import ball
+from vpcontact.mesh import ball
 from vpcontact.errors import CaseError
 from vpcontact.mesh import Mesh, block, quarter_ball, read_mesh
-from vpcontact.mesh_checks_3d import check_tetrahedra
+from vpcontact.mesh.checks_3d import check_tetrahedra
 
 MESHES = Path(__file__).parent / "meshes" / "3d"
 BALLS = [(0.25, 1.0), (0.3, 2.5), (0.37 / 9, 0.37)]
@@ -514,10 +514,10 @@ def test_a_3d_file_is_no_longer_refused_as_3d():
 
 
 def test_memory_estimate_counts_tetrahedra(monkeypatch):
-    monkeypatch.setattr(vpcontact.mesh, "available_memory", lambda: 10**9)
-    vpcontact.mesh.check_memory(1.8e5, "x", "y", dim=3)
-    vpcontact.mesh.check_memory(2.4e5, "x", "y")  # triangles
+    monkeypatch.setattr(vpcontact.mesh.core, "available_memory", lambda: 10**9)
+    vpcontact.mesh.core.check_memory(1.8e5, "x", "y", dim=3)
+    vpcontact.mesh.core.check_memory(2.4e5, "x", "y")  # triangles
     with pytest.raises(CaseError) as info:
-        vpcontact.mesh.check_memory(1.9e5, "x", "y", dim=3)
+        vpcontact.mesh.core.check_memory(1.9e5, "x", "y", dim=3)
     assert str(info.value) == ("x: about 1.9e+05 tetrahedra, whose mesh, stiffness matrix and solver need about "
                                "0.973 GiB, more than the 0.931 GiB of memory available here: y")

@@ -17,8 +17,8 @@ from test_3d_runs import ball_case
 from test_robustness import read_csv, write
 from vpcontact.errors import CaseError
 from vpcontact.mesh import block, half_disc, quarter_ball, read_mesh, rectangle
-from vpcontact.mesh_checks import check_triangles
-from vpcontact.mesh_checks_3d import check_tetrahedra
+from vpcontact.mesh.checks_2d import check_triangles
+from vpcontact.mesh.checks_3d import check_tetrahedra
 
 MESHES = Path(__file__).parent / "meshes"
 #: The physical body groups of meshes/regions*.msh (2D) and meshes/3d/regions*.msh: name -> tag.

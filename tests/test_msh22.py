@@ -1,4 +1,4 @@
-"""gmsh 2.2 text files read with NumPy (vpcontact.msh22): what meshio reads from them, array for array,
+"""gmsh 2.2 text files read with NumPy (vpcontact.mesh.msh22): what meshio reads from them, array for array,
 for every 2.2 file of the tests (gmsh's own and meshio's); the files it leaves to meshio; and a mesh file
 read either way gives the same Mesh."""
 
@@ -8,9 +8,9 @@ import meshio
 import numpy as np
 import pytest
 
-from vpcontact import msh22
+from vpcontact.mesh import msh22
 from vpcontact.mesh import half_disc, read_mesh
-from vpcontact.mesh_file import write_mesh
+from vpcontact.mesh.msh import write_mesh
 
 MESHES = Path(__file__).parent / "meshes"
 TEXT_22 = sorted(path for path in [*MESHES.glob("*.msh"), *MESHES.glob("3d/*.msh")]

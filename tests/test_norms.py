@@ -1,4 +1,4 @@
-"""Tests of vpcontact.norms: transfer between meshes, the L² norms and `differences`."""
+"""Tests of vpcontact.results.norms: transfer between meshes, the L² norms and `differences`."""
 
 import math
 import time
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from vpcontact.mesh import half_disc, rectangle
-from vpcontact.norms import Snapshot, differences, strain_norm, stress_norm, transfer
+from vpcontact.results.norms import Snapshot, differences, strain_norm, stress_norm, transfer
 
 GRADIENT = np.array([[0.7, -1.3], [2.1, 0.4]])  # ∂u_i/∂x_j of the linear test field
 STRESS = np.array([[3.0, -1.5], [-1.5, 2.0]])
@@ -217,7 +217,7 @@ def test_points_outside_a_graded_mesh_take_the_nearest_element():
     finer mesh outside its inscribed polyhedron take the element nearest to them, as a search over every
     element finds it (the candidates are bounded per element size, not by the largest element)."""
     from vpcontact.mesh import quarter_ball
-    from vpcontact.norms import Locator
+    from vpcontact.results.norms import Locator
 
     coarse, fine = quarter_ball(0.6, h_bottom=0.1).mesh, quarter_ball(0.3).mesh
     locator = Locator(coarse.p, coarse.t)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import vpcontact
-from vpcontact.contact import AT_LIMIT
+from vpcontact.laws.contact import AT_LIMIT
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 VARIANTS = {"beta=1": {}, "alpha=0": {"contact.stiffness.alpha": 0.0}, "beta=-1": {"contact.stiffness.beta": -1.0}}

@@ -1,4 +1,4 @@
-"""The figures of a run (vpcontact.plots) in 2D and 3D, and output.figures in a run directory."""
+"""The figures of a run (vpcontact.results.plots) in 2D and 3D, and output.figures in a run directory."""
 
 import io
 import json
@@ -14,11 +14,12 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 import vpcontact
-from vpcontact import checkpoint, plots
-from vpcontact.cli import main
-from vpcontact.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
+from vpcontact.io import checkpoint
+from vpcontact.results import plots
+from vpcontact.drivers.cli import main
+from vpcontact.laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from vpcontact.errors import CaseError
-from vpcontact.writers import write_outputs
+from vpcontact.io.writers import write_outputs
 from conftest import assert_refused, block_3d_case, half_disc_case, run_cli, snapshot_tree
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -268,7 +269,7 @@ def test_along_contact_refuses_what_it_cannot_draw(run_2d, run_3d):
 
 
 def test_importing_vpcontact_does_not_load_matplotlib():
-    code = ("import sys, vpcontact, vpcontact.plots, vpcontact.writers, vpcontact.rundir; "
+    code = ("import sys, vpcontact, vpcontact.results.plots, vpcontact.io.writers, vpcontact.drivers.rundir; "
             "assert 'matplotlib' not in sys.modules, 'matplotlib loaded'")
     subprocess.run([sys.executable, "-c", code], check=True)
 

@@ -1,5 +1,5 @@
 """The recovery (stress-averaging) estimator: σ* of nodal volume-weighted means of σ_h, η_K² the energy
-norm of σ* − σ_h on K (vpcontact.recovery_estimate)."""
+norm of σ* − σ_h on K (vpcontact.estimate.recovery)."""
 
 import numpy as np
 import pytest
@@ -9,9 +9,9 @@ from skfem.refdom import RefTet, RefTri
 
 import vpcontact
 from conftest import rectangle_case
-from vpcontact.indicators import Level
-from vpcontact.material import Elasticity
-from vpcontact.recovery_estimate import energy_indicators, estimate, recovered_stress
+from vpcontact.estimate.indicators import Level
+from vpcontact.laws.elasticity import Elasticity
+from vpcontact.estimate.recovery import energy_indicators, estimate, recovered_stress
 
 E, NU = 1000.0, 0.3
 
@@ -123,8 +123,8 @@ def test_the_estimate_converges_at_the_rate_of_the_error_and_tracks_it():
 def test_the_estimate_follows_the_error_of_the_paper_example():
     """η(t = 1.1) against ‖σ_h − σ_ref‖_{ℰ⁻¹} (the reference h = 1/64, on its mesh): measured 0.92 (h = 1/8) and
     0.93 (h = 1/16) against this reference; 0.86 to 1.01 for h = 1/8 ... 1/64 against h = 1/256 (β = ±1)."""
-    from vpcontact.norms import transfer
-    from vpcontact.refinement import signed_measures
+    from vpcontact.results.norms import transfer
+    from vpcontact.mesh.refinement import signed_measures
 
     lam, mu = Elasticity(E, NU).lame
     case = {"output.field_steps": [11]}

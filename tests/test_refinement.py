@@ -1,5 +1,5 @@
-"""Conforming refinement that keeps the model's data (vpcontact.refinement) and the gmsh file of a mesh
-(vpcontact.mesh_file)."""
+"""Conforming refinement that keeps the model's data (vpcontact.mesh.refinement) and the gmsh file of a mesh
+(vpcontact.mesh.msh)."""
 
 import math
 
@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from vpcontact import mesh as meshes
-from vpcontact.mesh_file import write_mesh
-from vpcontact.refinement import refine, signed_measures
+from vpcontact.mesh.msh import write_mesh
+from vpcontact.mesh.refinement import refine, signed_measures
 
 
 def facet_measures(mesh, part):

@@ -11,9 +11,9 @@ from matplotlib.colors import to_hex
 from matplotlib.quiver import Quiver
 
 from vpcontact import build_problem, load_case
-from vpcontact.cli import main
-from vpcontact.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
-from vpcontact.plots import STATE_COLORS, along_curve
+from vpcontact.drivers.cli import main
+from vpcontact.laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
+from vpcontact.results.plots import STATE_COLORS, along_curve
 from vpcontact.reproduction.figures import MESH_DRAWN_UP_TO, deformed_panels
 from vpcontact.reproduction.frames import ARROWS, Frame
 from vpcontact.reproduction.paper import PAPER_CASE

@@ -10,8 +10,8 @@ import pytest
 
 import vpcontact
 from conftest import half_disc_case
-from vpcontact.results import CONTACT_ARRAYS, step_ends
-from vpcontact.run_reader import read_contact, read_summary, snapshots_at
+from vpcontact.results.result import CONTACT_ARRAYS, step_ends
+from vpcontact.io.run_reader import read_contact, read_summary, snapshots_at
 
 PACKAGE = Path(vpcontact.__file__).parent
 SUBPACKAGE = "vpcontact.reproduction"
@@ -54,7 +54,7 @@ def test_nothing_in_the_package_imports_the_reproduction_but_the_reproduce_comma
             for name, lazy in imports(path):
                 if is_reproduction(name):
                     importers.setdefault(module_name(path), set()).add(lazy)
-    assert importers == {"vpcontact.cli": {True}}  # only the command line, inside the reproduce command
+    assert importers == {"vpcontact.drivers.cli": {True}}  # only the command line, inside the reproduce command
 
 
 def test_the_reproduction_modules_import_each_other_without_a_cycle():

@@ -1,4 +1,4 @@
-"""The residual a posteriori error estimator (vpcontact.residual_estimate): exact on patch tests, each
+"""The residual a posteriori error estimator (vpcontact.estimate.residual): exact on patch tests, each
 term's value and scaling on fields where it is known by hand, the effectivity index against a finer
 reference in 2D and 3D, and its outputs (output.error_estimate)."""
 
@@ -12,10 +12,10 @@ import pytest
 
 import vpcontact
 from conftest import assert_refused, half_disc_case, rectangle_case, resumed_after, run_cli, snapshot_tree
-from vpcontact.indicators import Level
-from vpcontact.norms import element_energies, energy_norm, transfer
-from vpcontact.residual_estimate import TERMS, ResidualEstimator, estimate
-from vpcontact.results import ESTIMATE_COLUMNS, history_columns, memory_needed
+from vpcontact.estimate.indicators import Level
+from vpcontact.results.norms import element_energies, energy_norm, transfer
+from vpcontact.estimate.residual import TERMS, ResidualEstimator, estimate
+from vpcontact.results.result import ESTIMATE_COLUMNS, history_columns, memory_needed
 
 E, NU = 1000.0, 0.3
 MU = E / (2 * (1 + NU))
@@ -169,7 +169,7 @@ def test_the_effectivity_on_the_paper_example_stays_in_the_measured_band(beta):
 def test_the_local_indicators_follow_the_local_error():
     """log η_K against log e_K (the reference's error energy in K) on the paper's example at h = 1/8 against
     1/32: correlated (measured 0.93–0.98 over h = 1/8 … 1/64 against 1/256)."""
-    from vpcontact.norms import containing_elements
+    from vpcontact.results.norms import containing_elements
 
     def run(n):
         return vpcontact.solve(vpcontact.load_case("examples/paper_ball.toml", {"mesh.h": 1 / n,

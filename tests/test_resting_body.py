@@ -1,6 +1,6 @@
 """A body that only the foundation holds, at a level where nothing presses it (the load passes through zero):
 the step problem fixes its deformation but not its rigid position, and vpcontact places it where it changes
-least from the last level (vpcontact.resting). Checked against what such a level must be: zero contact force,
+least from the last level (vpcontact.timeloop.resting). Checked against what such a level must be: zero contact force,
 equilibrium of the body alone, every contact node off the layer, the least change (an independent QP solver),
 the same answer from the three step methods and from a resumed run; and a load that pulls the body off the
 foundation fails at once with one line."""
@@ -11,7 +11,7 @@ import scipy.optimize
 
 import vpcontact
 from conftest import block_3d_case, half_disc_case, rectangle_case, resumed_after, run_cli
-from vpcontact.resting import least_shift, unbalanced
+from vpcontact.timeloop.resting import least_shift, unbalanced
 
 METHODS = ["condensed", "full", "iterative"]
 #: the block on rollers at its sides (its vertical motion free), pressed by a load that falls to zero at
@@ -131,7 +131,7 @@ def test_a_viscoplastic_block_keeps_its_permanent_strain_and_rests_on_the_layer(
     permanent = np.abs(last.displacement[:, 1]).max()
     assert permanent > 1e-3 * np.abs(result.fields[5].displacement[:, 1]).max()  # not back at u = 0
     # equilibrium without contact: the internal forces of σ balance the (zero) load at every free dof
-    from vpcontact.assembly import stress_force
+    from vpcontact.fem.assembly import stress_force
 
     residual = stress_force(problem.basis, np.moveaxis(last.stress, 0, -1))[problem.free]
     assert np.linalg.norm(residual) <= 1e-9 * np.linalg.norm(stress_force(problem.basis, np.moveaxis(

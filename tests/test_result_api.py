@@ -15,9 +15,9 @@ from matplotlib.colors import Normalize, to_hex
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 import vpcontact
-from vpcontact import plots
-from vpcontact.contact import STATUS_NAMES
-from vpcontact.results import INTEGER_COLUMNS, REPR_MESSAGE
+from vpcontact.results import plots
+from vpcontact.laws.contact import STATUS_NAMES
+from vpcontact.results.result import INTEGER_COLUMNS, REPR_MESSAGE
 from conftest import block_3d_case, half_disc_case, snapshot_tree
 
 
@@ -376,7 +376,7 @@ def test_write_refuses_what_stands_in_the_way_before_writing(run_2d, tmp_path, m
 
 # --- imports ---------------------------------------------------------------------------------------
 def test_the_modules_of_the_tables_figures_and_grids_load_pandas_matplotlib_pyvista_only_when_used():
-    code = ("import sys, vpcontact.tables, vpcontact.result_plots, vpcontact.pyvista_grid\n"
+    code = ("import sys, vpcontact.results.tables, vpcontact.results.result_plots, vpcontact.io.pyvista_grid\n"
             "print(sorted({'pandas', 'pyvista', 'matplotlib'} & set(sys.modules)))")
     process = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert process.returncode == 0, process.stderr
@@ -394,7 +394,7 @@ def test_a_complete_run_that_kept_no_fields_draws_its_last_step():
     np.testing.assert_array_equal(cells.get_array(), result.final.stress[:, 0, 1])
     assert "t = 1.1" in figure.get_suptitle()
     loaded = vpcontact.load_case(case)
-    loop = vpcontact.stepping.TimeLoop(vpcontact.build_problem(loaded), loaded.output)
+    loop = vpcontact.timeloop.loop.TimeLoop(vpcontact.build_problem(loaded), loaded.output)
     stopped = loop.run(stop=lambda: "stopped" if loop.state.step == 3 else None)
     with pytest.raises(vpcontact.CaseError, match="the run kept no fields"):
         stopped.plot.deformed()

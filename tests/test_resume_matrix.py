@@ -33,8 +33,8 @@ import pandas as pd
 import pytest
 import tomli_w
 
-from vpcontact import checkpoint, directory
-from vpcontact.cli import main
+from vpcontact.io import checkpoint, directory
+from vpcontact.drivers.cli import main
 from conftest import block_3d_case, half_disc_case, rectangle_case
 
 STEPS = 30
@@ -154,16 +154,26 @@ def fill(disk: Path) -> Path:
 
 
 def start(path: Path, out: Path, *flags: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "run", str(path), "--out", str(out), "--quiet",
+    return subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "run", str(path), "--out", str(out), "--quiet",
                              *flags], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             stdin=subprocess.DEVNULL, start_new_session=True)
 
 
 def wait_for_checkpoint(process: subprocess.Popen, out: Path, step: int, timeout: float = 120.0) -> None:
-    """Until the run's checkpoint is of ``step`` or later (the run must still go on)."""
+    """Until the run's checkpoint is of ``step`` or later (the run must still go on). The run is paused (SIGSTOP)
+    while its checkpoint is looked at: a run of short steps on a busy machine could otherwise pass from the
+    step before to its end between two looks."""
     deadline = time.monotonic() + timeout
-    while (checkpoint.saved_step(out) or 0) < step:
-        assert process.poll() is None, f"the run ended before its checkpoint of step {step}: {process.communicate()}"
+    while True:
+        os.killpg(process.pid, signal.SIGSTOP)
+        try:
+            reached = (checkpoint.saved_step(out) or 0) >= step
+            ended = process.poll() is not None
+        finally:
+            os.killpg(process.pid, signal.SIGCONT)
+        if reached:
+            return
+        assert not ended, f"the run ended before its checkpoint of step {step}: {process.communicate()}"
         assert time.monotonic() < deadline, f"no checkpoint of step {step} in {timeout} s"
         time.sleep(0.002)
 

@@ -6,8 +6,8 @@ import pytest
 from skfem import MeshTri
 
 import vpcontact
-from vpcontact.problem import build_problem
-from vpcontact.rigid_modes import RigidModes, bodies
+from vpcontact.problem.build import build_problem
+from vpcontact.fem.rigid_modes import RigidModes, bodies
 from conftest import half_disc_case
 
 

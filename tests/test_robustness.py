@@ -15,10 +15,11 @@ import pytest
 import tomli_w
 
 import vpcontact
-import vpcontact.stepping
-from vpcontact import directory, rundir
-from vpcontact.cli import main
-from vpcontact.results import INTEGER_COLUMNS
+import vpcontact.timeloop.loop
+from vpcontact.io import directory
+from vpcontact.drivers import rundir
+from vpcontact.drivers.cli import main
+from vpcontact.results.result import INTEGER_COLUMNS
 from vpcontact.solvers import StepSolution
 from conftest import half_disc_case
 
@@ -88,7 +89,7 @@ def assert_same_run(out, reference, *, bitwise, rtol=1e-12):
 
 
 def start(path, out, *args):
-    return subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "run", str(path), "--out", str(out), "--quiet",
+    return subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "run", str(path), "--out", str(out), "--quiet",
                              *args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
 
 
@@ -197,17 +198,17 @@ def test_a_signal_stops_the_run_at_the_end_of_a_step(tmp_path, reference, number
 def test_outputs_are_atomic_and_summary_json_comes_last(tmp_path, monkeypatch):
     case = creeping_case(steps=20, h=0.1)
     out = tmp_path / "run"
-    real = vpcontact.writers.write_solution
+    real = vpcontact.io.writers.write_solution
 
     def disk_full(*args):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(vpcontact.writers, "write_solution", disk_full)
+    monkeypatch.setattr(vpcontact.io.writers, "write_solution", disk_full)
     with pytest.raises(OSError):
         rundir.run(vpcontact.load_case(case), out)
     assert not (out / "summary.json").exists() and not list(out.rglob(".*tmp-*"))
     assert len(read_csv(out / "history.csv")[1]) == 20 and checkpoint_step(out) == 20
-    monkeypatch.setattr(vpcontact.writers, "write_solution", real)
+    monkeypatch.setattr(vpcontact.io.writers, "write_solution", real)
     outcome = rundir.run(vpcontact.load_case(case), out, resume=True)  # the loop has nothing left to do
     assert outcome.status == "complete" and outcome.result.resumed_at == [20]
     assert json.loads((out / "summary.json").read_text())["status"] == "complete"
@@ -216,7 +217,7 @@ def test_outputs_are_atomic_and_summary_json_comes_last(tmp_path, monkeypatch):
     def crash(self, **hooks):
         raise RuntimeError("killed")
 
-    monkeypatch.setattr(vpcontact.rundir.TimeLoop, "run", crash)
+    monkeypatch.setattr(vpcontact.drivers.rundir.TimeLoop, "run", crash)
     with pytest.raises(RuntimeError):
         rundir.run(vpcontact.load_case(case), out, overwrite=True)
     assert not (out / "summary.json").exists() and not (out / "solution.npz").exists()
@@ -228,7 +229,7 @@ def test_resume_without_a_checkpoint(tmp_path):
     case = vpcontact.load_case(creeping_case(steps=10, h=0.2))
     out = tmp_path / "run"
     out.mkdir()
-    vpcontact.writers.write_resolved_case(case.to_toml(), out)
+    vpcontact.io.writers.write_resolved_case(case.to_toml(), out)
     (out / ".history.tmp-99999.csv").write_text("half a file")  # a writer killed midway
     with pytest.raises(vpcontact.CaseError, match=r"different case \(material.E = 1000.0 in the run, 900.0 now\)"):
         rundir.run(vpcontact.load_case(creeping_case(steps=10, h=0.2), {"material.E": 900.0}), out, resume=True)
@@ -269,8 +270,8 @@ def test_a_cut_step_is_the_same_scheme_on_a_finer_grid(monkeypatch):
     for case in (coarse, fine):
         case["output"] = {"field_steps": "final"}
     uniform = vpcontact.solve(fine)
-    make_solver = vpcontact.stepping.make_solver
-    monkeypatch.setattr(vpcontact.stepping, "make_solver",
+    make_solver = vpcontact.timeloop.loop.make_solver
+    monkeypatch.setattr(vpcontact.timeloop.loop, "make_solver",
                         lambda *args, **kw: RefusesWholeSteps(make_solver(*args, **kw), 2.0 / 20))
     cut = vpcontact.solve(coarse)
     assert cut.status == "complete" and cut.steps == 20 and cut.step_cuts == 20 and len(cut.rows) == 40

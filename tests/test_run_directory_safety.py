@@ -18,10 +18,10 @@ import pytest
 import tomli_w
 
 import vpcontact
-from vpcontact import checkpoint, directory, writers
-from vpcontact.cli import main
-from vpcontact.problem import build_problem
-from vpcontact.stepping import TimeLoop
+from vpcontact.io import checkpoint, directory, writers
+from vpcontact.drivers.cli import main
+from vpcontact.problem.build import build_problem
+from vpcontact.timeloop.loop import TimeLoop
 from conftest import assert_refused, half_disc_case, rectangle_case, run_cli, snapshot_tree
 
 
@@ -382,7 +382,7 @@ def slow_case(folder):
 
 
 def start_run(case, out):
-    return subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "run", str(case), "--out", str(out), "--quiet"],
+    return subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "run", str(case), "--out", str(out), "--quiet"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
 
 

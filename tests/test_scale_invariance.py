@@ -6,7 +6,7 @@
 - Stiffness ratio: from a body a thousand times softer than the layer (E / (c_v R) = 1e-3) to a steel
   part in Pa on the paper's layer (1e9), both methods complete without a step cut and agree to the
   accuracy double precision allows: a body held only by a soft layer carries a rigid motion that the
-  stiffness matrix annihilates only to rounding, ε E per row (see vpcontact.rigid_modes).
+  stiffness matrix annihilates only to rounding, ε E per row (see vpcontact.fem.rigid_modes).
 """
 
 import numpy as np

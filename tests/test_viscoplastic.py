@@ -15,8 +15,8 @@ import pytest
 import tomli_w
 
 import vpcontact
-from vpcontact.cli import main
-from vpcontact.material import Perzyna, deviator, tensor_norm, von_mises_projection
+from vpcontact.drivers.cli import main
+from vpcontact.laws.elasticity import Perzyna, deviator, tensor_norm, von_mises_projection
 from conftest import half_disc_case
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "viscoplastic_ball.toml"
@@ -281,7 +281,7 @@ def test_the_fields_kept_are_those_of_every_step(field_steps):
     """The loop computes σ at every level but builds the fields at the field steps only: those kept, and
     the last level's of a run interrupted after step 4 (``result.final``), are the ones a run keeping every
     step's has there."""
-    from vpcontact.stepping import TimeLoop
+    from vpcontact.timeloop.loop import TimeLoop
 
     case = ball(h=0.2, viscoplastic={"law": "perzyna", "eta": 0.5, "yield_stress": 1.0})
     case["output"]["field_steps"] = "all"

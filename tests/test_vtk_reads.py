@@ -42,9 +42,9 @@ import vpcontact
 from conftest import block_3d_case, half_disc_case, run_cli
 from test_3d_runs import ball_case
 from test_contact_parts import LAYERS, split_case, two_parts_form
-from vpcontact.contact import STATUS_NAMES
-from vpcontact.results import CONTACT_ARRAYS
-from vpcontact.vtu import Grid as VtuGrid, write_vtu
+from vpcontact.laws.contact import STATUS_NAMES
+from vpcontact.results.result import CONTACT_ARRAYS
+from vpcontact.io.vtu import Grid as VtuGrid, write_vtu
 
 #: VTK's cell types of the body and of the contact part, by dimension.
 BODY_CELLS = {2: VTK_TRIANGLE, 3: VTK_TETRA}

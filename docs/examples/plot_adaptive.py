@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 from matplotlib.tri import Triangulation
 
 import vpcontact
-from vpcontact.adapt import adapt
+from vpcontact.estimate.adapt import adapt
 
 EDGE = np.array([0.5, 0.0])  # the punch's edge
 

@@ -25,7 +25,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import vpcontact
-from vpcontact import plots
+from vpcontact.results import plots
 
 HOLD = 0.5  # the load is ramped up to this time, then held
 

@@ -28,7 +28,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import vpcontact
-from vpcontact import plots
+from vpcontact.results import plots
 
 PERIODS, STEPS_PER_PERIOD = 3, 20
 C_V, ALPHA = 100.0, 20.0

@@ -24,7 +24,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import vpcontact
-from vpcontact import plots
+from vpcontact.results import plots
 
 CASE = "../../examples/paper_ball.toml"
 coarse = {"mesh.h": 0.05, "output.progress": False}
@@ -54,7 +54,7 @@ figure
 # %%
 # Contact pressure along Γ3
 # -------------------------
-# :func:`vpcontact.plots.contact_pressure` draws the pressure (the layer's part plus the rigid base's)
+# :func:`vpcontact.results.plots.contact_pressure` draws the pressure (the layer's part plus the rigid base's)
 # and the state of each contact node at four times; with β = −1 the nodes near the bottom are at the
 # limit g.
 softening = plots.contact_pressure(results[-1.0], steps=[2, 5, 8, 11])

@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
-from vpcontact import mesh, plots
-from vpcontact.case import OutputSection
+from vpcontact import mesh
+from vpcontact.results import plots
+from vpcontact.case.schema import OutputSection
 
 C = 11.4443  # the traction's rate, per unit area of the upper half
 

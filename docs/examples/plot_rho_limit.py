@@ -8,7 +8,7 @@ moves freely until it reaches the rigid base). The paper shows the convergence i
 is measured on the paper's example (``examples/paper_ball.toml``, β = 1, on a coarser mesh h = 0.05)
 for ρ = 1, 10⁻¹, …, 10⁻⁵, against the run with K ≡ 0, at the final time t = 1.1, in the norms of the
 paper's convergence study: ‖u_ρ − u_*‖_V = ‖ε(u_ρ − u_*)‖ and ‖σ_ρ − σ_*‖_Q (L² over the body,
-:func:`vpcontact.norms.differences`).
+:func:`vpcontact.results.norms.differences`).
 """
 
 # %%
@@ -19,7 +19,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import vpcontact
-from vpcontact import norms
+from vpcontact.results import norms
 
 CASE = "../../examples/paper_ball.toml"  # relative to this example's folder, docs/examples
 coarse = {"mesh.h": 0.05, "output.field_steps": "final", "output.progress": False}

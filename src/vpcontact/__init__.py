@@ -7,7 +7,7 @@ hardens or softens with the history of penetration (Barboteu, Han, Sofonea).
     >>> result.series("K_probe")[-1]
 
 The names of the API (``vpcontact.solve``, ``vpcontact.Case``, ...) and the submodules
-(``vpcontact.norms``, ``vpcontact.contact``, ...) are loaded on first use: ``import vpcontact`` (and
+(``vpcontact.results.norms``, ``vpcontact.laws.contact``, ...) are loaded on first use: ``import vpcontact`` (and
 ``vpcontact --help``) imports no numerics.
 """
 
@@ -18,7 +18,7 @@ from importlib import metadata
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from .results import Result
+    from .results.result import Result
 
 try:
     __version__ = metadata.version("vpcontact")
@@ -26,13 +26,25 @@ except metadata.PackageNotFoundError:  # running from a source tree
     __version__ = "0+unknown"
 
 #: The names of the API, by the module that defines them.
-API = {"Case": "case", "Model": "case", "load_case": "case", "CaseError": "errors", "compose": "compose",
-       "Problem": "problem", "build_problem": "problem", "Result": "results", "solve_problem": "stepping"}
+API = {"Case": "case.schema", "Model": "case.schema", "load_case": "case.schema", "CaseError": "errors",
+       "compose": "case.compose", "Problem": "problem.build", "build_problem": "problem.build",
+       "Result": "results.result", "solve_problem": "timeloop.loop"}
 
-#: The modules of the package a user may reach as ``vpcontact.<name>`` after ``import vpcontact``.
-SUBMODULES = ("adapt", "assembly", "case", "check", "checkpoint", "compose", "contact", "discretization", "errors",
-              "expressions", "indicators", "material", "mesh", "norms", "plots", "problem", "progress", "refinement",
-              "reproduction", "results", "run_reader", "rundir", "solvers", "stepping", "studies", "writers")
+#: The packages a user may reach as ``vpcontact.<name>`` after ``import vpcontact`` (and their modules as
+#: ``vpcontact.<name>.<module>``), and the modules of the package itself.
+SUBMODULES = ("case", "drivers", "errors", "estimate", "fem", "io", "laws", "mesh", "problem", "progress", "reproduction",
+              "results", "solvers", "timeloop")
+
+
+def submodule(package: str, name: str):
+    """The module ``name`` of ``package``, imported on first use: what a package's ``__getattr__`` returns, so
+    that ``vpcontact.results.norms`` needs no import of its own; AttributeError for a name that is none."""
+    try:
+        return importlib.import_module(f"{package}.{name}")
+    except ModuleNotFoundError as error:
+        if error.name != f"{package}.{name}":
+            raise
+        raise AttributeError(f"module {package!r} has no attribute {name!r}") from None
 
 
 def __getattr__(name: str):
@@ -63,11 +75,11 @@ def solve(case, *, progress=False, **laws) -> Result:
     True (the set-up phases and the steps reported on stderr, as the command line does) or a reporter
     (:mod:`vpcontact.progress`).
     """
-    from .case import Case, load_case
+    from .case.schema import Case, load_case
     from .errors import flag
-    from .problem import build_problem
+    from .problem.build import build_problem
     from .progress import reporting
-    from .stepping import solve_problem
+    from .timeloop.loop import solve_problem
 
     progress = flag("progress", progress)
     if not isinstance(case, Case):

@@ -22,8 +22,8 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.tri import Triangulation
 
-from ..contact import AT_LIMIT
-from ..plots import STATE_COLORS, STATE_LABELS  # Γ3 coloured by the state of its nodes, as in a run's figures
+from ..laws.contact import AT_LIMIT
+from ..results.plots import STATE_COLORS, STATE_LABELS  # Γ3 coloured by the state of its nodes, as in a run's figures
 from .frames import MAGNIFICATION, Frame
 from .paper import CONTACT_CONDITIONS, FIGURE_TIMES
 

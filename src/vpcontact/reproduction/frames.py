@@ -1,6 +1,6 @@
 """The deformed configurations the paper's Figs. 2, 3, 5 and 9 draw (`Frame`): the mesh, the
 displacement, and on Γ3 the normals, the contact pressure and the node states at one time, from a
-result in memory or from a run directory (:mod:`vpcontact.run_reader`). A frame also chooses the
+result in memory or from a run directory (:mod:`vpcontact.io.run_reader`). A frame also chooses the
 contact nodes that get a force arrow: no more than `ARROWS`, evenly spaced along Γ3."""
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import CaseError
-from ..plots import along_curve
-from ..run_reader import read_case, read_contact, read_solution
+from ..results.plots import along_curve
+from ..io.run_reader import read_case, read_contact, read_solution
 from .paper import CONTACT_CONDITIONS, FIGURE_TIMES, SHORT_LABELS
 from .plan import Plan, figure_step
 from .study_files import rho_id
@@ -50,7 +50,7 @@ class Frame:
 
     @classmethod
     def from_result(cls, result, step: int, title: str) -> "Frame":
-        """Step ``step`` (1-based; a field step or the last) of a :class:`~vpcontact.results.Result`."""
+        """Step ``step`` (1-based; a field step or the last) of a :class:`~vpcontact.results.result.Result`."""
         last = len(result.discretization.times)
         fields = result.fields.get(step) or (result.final if step == last else None)
         if fields is None:
@@ -59,7 +59,7 @@ class Frame:
         g = view.layer["g"]
         if g.size and np.any(g != g[0]):
             raise CaseError("the paper's figures draw its foundation, a layer of one thickness g; this run's g varies "
-                            "along Γ3 (contact.g an expression or contact.parts): draw it with vpcontact.plots")
+                            "along Γ3 (contact.g an expression or contact.parts): draw it with vpcontact.results.plots")
         i = result.end_of_step_rows()[step]
         pressure = result.contact_history("pressure_compliance")[i] + result.contact_history("pressure_rigid")[i]
         return cls(
@@ -84,7 +84,7 @@ class Frame:
         g = read_case(folder).contact.g
         if not isinstance(g, (int, float)):
             raise CaseError(f"the paper's figures draw its foundation, a layer of one thickness g; the run in "
-                            f"'{folder}' has contact.g = {g!r}: draw it with vpcontact.plots")
+                            f"'{folder}' has contact.g = {g!r}: draw it with vpcontact.results.plots")
         pressure = contact["pressure_compliance"] + contact["pressure_rigid"]
         return cls(title, solution["points"], solution["elements"], solution["displacement"][-1], contact["node"],
                    contact["normals"], pressure, contact["status"], float(g), float(solution["times"][-1]))

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case import load_case
-from ..norms import differences
+from ..case.schema import load_case
+from ..results.norms import differences
 from ..progress import SILENT, Progress
-from ..run_reader import read_summary, read_table, snapshots_at
-from ..studies import norm_column
+from ..io.run_reader import read_summary, read_table, snapshots_at
+from ..drivers.studies import norm_column
 from .paper import T
 from .plan import Plan, level_overrides, level_step
 from .runs import ReproduceError
@@ -124,7 +124,7 @@ def adaptive_record(base: Path, plan: Plan, out: Path, uniform: dict, progress: 
     that study's reference; and the DOFs the cycles need to reach the error of its finest uniform mesh
     (``uniform``: the rate in h's record; log–log interpolation between the two cycles around it; NaN if
     no cycle reaches it); ``progress`` hears of the adaptive run (its cycles, their set-up and steps)."""
-    from ..rundir import run as run_directory
+    from ..drivers.rundir import run as run_directory
 
     case = load_case(base, {"mesh.h": level_overrides(plan.adapt_level)["mesh.h"], "time.steps": plan.h_steps,
                             "output.field_steps": "final", "adapt.cycles": plan.adapt_cycles,

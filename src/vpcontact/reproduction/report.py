@@ -479,7 +479,7 @@ def _figures(data):
         Paragraph(
             f"K_ρ = ρK with the example's law (β = 1; the paper does not say which β), k = 0.1, mesh h = "
             f"{s['figure_mesh_h']:g}; u_* is the solution with K ≡ 0 (Signorini with gap g). The norms are "
-            f"‖v‖_V = ‖ε(v)‖_{{L²(Ω)}} and ‖τ‖_Q = ‖τ‖_{{L²(Ω)}} (`vpcontact.norms.differences`). The distance "
+            f"‖v‖_V = ‖ε(v)‖_{{L²(Ω)}} and ‖τ‖_Q = ‖τ‖_{{L²(Ω)}} (`vpcontact.results.norms.differences`). The distance "
             f"decreases monotonically and linearly in ρ (fitted slope {rho['slope']:.2f} for ρ ≤ 0.1)."
         ),
         Picture("fig08", "‖u_ρ − u_*‖_V + ‖σ_ρ − σ_*‖_Q at t = 1.1 s against ρ (log–log), and its two parts."),

@@ -10,7 +10,7 @@ The runs are a plain list, in the order of the paper:
 - the load: the printed load (1000 t N/m) for β = ±1 and ρ = 0.01, and the load recalibrated for
   k ≈ 1/128 (`plan.load_cases`, `calibration.calibrate`);
 - Figs. 8, 9: the study ρ = 1, …, 1e−6 against K ≡ 0 (`study_files.rho_study_text`, run by
-  `vpcontact.studies.run_study`);
+  `vpcontact.drivers.studies.run_study`);
 - Fig. 10: the study h = k = 1/4, …, 1/256 against 1/512 (`study_files.hk_study_text`);
 - beyond the paper: the rates in h alone and in k alone (`study_files.h_study_text`, `study_files.k_study_text`,
   `records.rate_record`), the residual error estimate's effectivity, and adaptive meshes against uniform
@@ -32,9 +32,10 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Callable
 
-from .. import __version__, directory, writers
+from .. import __version__
+from ..io import directory, writers
 from ..progress import SILENT, Progress
-from ..writers import json_safe
+from ..io.writers import json_safe
 from . import figures, report
 from .calibration import calibrate
 from .claims import assess, node_states, penetration_ordering

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..case import load_case
+from ..case.schema import load_case
 from ..progress import SILENT, Progress
-from ..results import INTEGER_COLUMNS
-from ..run_reader import read_table
+from ..results.result import INTEGER_COLUMNS
+from ..io.run_reader import read_table
 from .paper import T
 from .plan import CaseSpec
 
@@ -26,7 +26,7 @@ def solve_case(base: Path, spec: CaseSpec, out: Path, progress: Progress = SILEN
     """Solve one case and write its standard outputs; raises ReproduceError if a step fails. ``progress``
     hears of the run as a phase (its start, life while it runs, its status and wall time)."""
     from .. import solve
-    from ..writers import write_run
+    from ..io.writers import write_run
 
     with progress.phase(f"run '{spec.name}'") as phase:
         result = solve(load_case(base, spec.overrides))
@@ -87,7 +87,7 @@ def mesh_record(result) -> dict:
 def run_named_study(out: Path, name: str, text: str, executor, progress: Progress = SILENT) -> list[dict]:
     """Write DIR/studies/NAME.toml, run it into DIR/studies/NAME with ``executor``, return study.csv's rows;
     ``progress`` hears of its runs (``studies.run_study``)."""
-    from ..studies import load_study, run_study
+    from ..drivers.studies import load_study, run_study
 
     folder = out / "studies"
     folder.mkdir(exist_ok=True)

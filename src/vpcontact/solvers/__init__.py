@@ -48,7 +48,7 @@ def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float 
     ``rigid``: an orthonormal basis of the rigid motions held only by contact, (free dofs, k);
     ``layout``: the dofs' nodal layout; ``progress`` (:mod:`vpcontact.progress`) hears of the method chosen
     and of the set-up phases, each with ``setup_estimate(method)``, the seconds its set-up is expected to take
-    (:mod:`vpcontact.time_estimate`)."""
+    (:mod:`vpcontact.solvers.time_estimate`)."""
     r = augmentation_parameter(A, N, augmentation)
     method, reason = chosen_method(method, A, N, layout.dim)
     progress.note(f"method: {method} ({reason})")

@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..contact import ContactLaw
+from ..laws.contact import ContactLaw
 
 
 #: The norms whose sums of squares lose no digit to overflow or to subnormal numbers.

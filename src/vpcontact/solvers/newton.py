@@ -77,7 +77,7 @@ class SemismoothNewton:
 
     def kept(self) -> dict[str, np.ndarray]:
         """What this solver carries from one step to the next beyond the StepSolution (a checkpoint keeps
-        it, see :mod:`vpcontact.checkpoint`): nothing, unless a solver keeps something."""
+        it, see :mod:`vpcontact.io.checkpoint`): nothing, unless a solver keeps something."""
         return {}
 
     def restore(self, arrays: dict[str, np.ndarray]) -> None:

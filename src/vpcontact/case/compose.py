@@ -1,0 +1,176 @@
+"""A problem composed in Python, in the order a mechanician writes it: the body's mesh, its material,
+the boundary conditions, the contact law, the time grid and the solver options.
+
+    >>> import vpcontact
+    >>> from vpcontact import mesh
+    >>> problem = vpcontact.compose(
+    ...     mesh.half_disc(h=0.05),
+    ...     material={"E": 1000.0, "nu": 0.3},
+    ...     dirichlet={"axis": "x"},
+    ...     traction={"top_arc": lambda x, y, t: (0 * x, -18.0 * t + 0 * y)},
+    ...     contact={"part": "bottom_arc", "g": 0.2, "probe": [0.0, 0.0],
+    ...              "stiffness": {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": 1.0}},
+    ...     time={"T": 1.1, "steps": 11},
+    ... )
+    >>> result = problem.solve()
+
+Each piece is given as the table of the case file holds it (the same keys, the same checks, the same
+one-line :class:`~vpcontact.errors.CaseError` naming the key), or as a Python object where one is
+natural: a :class:`~vpcontact.mesh.Mesh` (or a mesh file's name), a traction or body force f(x, y, t)
+(f(x, y, z, t) in 3D), a stiffness law K(ξ) or a law p(r) (with a ``derivative`` method, or a
+central difference is used; K(ξ, x) of the contact nodes' coordinates x too), a viscoplastic law
+𝒢(σ, ε), and NumPy arrays of the initial state. A case file is one way to state the same problem:
+``vpcontact.build_problem(vpcontact.load_case(path))``; :func:`compose` another. Either way the problem
+keeps its :class:`~vpcontact.case.schema.Model` (``problem.model``, the tables) and the Python objects
+(``problem.objects``), so that :meth:`~vpcontact.problem.build.Problem.on` builds it again on a refined mesh.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+import skfem
+from pydantic import ValidationError
+
+from ..mesh import core as meshes
+from .schema import MeshSection, Model, _brief, _check_expressions, _check_tree, _describe, _material_keys, plain, section
+from ..errors import CaseError
+from ..problem.build import Problem, build_problem, make_mesh
+
+#: The contact keys that may be Python laws instead of tables, and the build_problem argument each becomes.
+PYTHON_LAWS = {"stiffness": "stiffness_law", "p": "p"}
+#: The initial fields that may be NumPy arrays instead of expressions, and the build_problem argument of each.
+INITIAL_ARRAYS = {"displacement": "initial_displacement", "stress": "initial_stress", "xi": "initial_xi"}
+
+
+def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=None, contact=None, solver=None,
+            initial=None, viscoplastic: Callable | None = None) -> Problem:
+    """The problem of a body on ``mesh`` made of ``material``, held by ``dirichlet``, loaded by ``traction`` and
+    ``body_force``, in ``contact`` with the foundation, over the time grid ``time``, solved with ``solver``:
+
+    - ``mesh``: a :class:`~vpcontact.mesh.Mesh` (``vpcontact.mesh.half_disc(h)``, ``quarter_ball``,
+      ``rectangle``, ``block``, ``read_mesh(path)``), a mesh file's name, or a ``[mesh]`` table;
+    - ``material``: a ``[material]`` table ({"E": ..., "nu": ..., "hypothesis": ..., "viscoplastic": {...}}), or
+      a list of them, each with its ``region``; ``viscoplastic``: a Python law 𝒢(σ, ε) (or 𝒢(σ, ε, x)) for the
+      whole body instead of the tables' laws;
+    - ``dirichlet``: {part: components} (components "x", ["x", "y"], or None for all: u = 0 there; a table of
+      prescribed values is refused, not supported yet), or the list of ``[[boundary.dirichlet]]`` tables;
+    - ``traction``: {part: value}, value the list of d expressions in x, y, (z,) t, or a Python function
+      f(x, y, (z,) t) -> (fx, fy, (fz)); ``body_force``: one such value for the whole body;
+    - ``contact``: the ``[contact]`` table; its ``stiffness`` may be a Python law K(ξ) and its ``p`` a law p(r);
+    - ``time``: the ``[time]`` table ({"T": ..., "steps": ..., "start": ...}); ``solver``: the ``[solver]`` table;
+    - ``initial``: the ``[initial]`` table; its ``displacement`` (nodes, d), ``stress`` (elements, d, d) or
+      (d, d) and ``xi`` (contact nodes,) may be NumPy arrays.
+
+    Numbers may be NumPy numbers, lists NumPy arrays or tuples (see :func:`vpcontact.case.schema.plain`). Every
+    value is checked before anything is assembled: a bad one, or one the problem would not use, is a
+    CaseError naming it."""
+    mesh = _mesh(mesh)
+    objects = {} if viscoplastic is None else {"viscoplastic": viscoplastic}
+    tables = {"material": material, "time": time, "solver": {} if solver is None else solver,
+              "boundary": {"dirichlet": _dirichlet(dirichlet)}}
+    tables["boundary"]["traction"], objects["tractions"] = _tractions(traction)
+    tables["boundary"]["body_force"], objects["body_force"] = _body_force(body_force)
+    python_laws: list[str] = []
+    if contact is not None:
+        contact = _table("contact", contact)
+        for key, argument in PYTHON_LAWS.items():
+            if callable(contact.get(key)):
+                objects[argument] = contact.pop(key)
+                python_laws.append(key)
+        tables["contact"] = contact
+    if initial is not None:
+        initial = _table("initial", initial)
+        for key, argument in INITIAL_ARRAYS.items():
+            if isinstance(initial.get(key), np.ndarray) and initial[key].ndim > 0:
+                objects[argument] = initial.pop(key)
+        tables["initial"] = initial
+    tables = plain(tables)
+    _check_tree(tables)
+    try:
+        model = Model.model_validate(tables, context={"python_laws": python_laws})
+    except ValidationError as error:
+        raise CaseError(_describe(error.errors()[0])) from None
+    _check_expressions(model)
+    if viscoplastic is not None:
+        tabled = [key for key, entry in _material_keys(model) if entry.viscoplastic is not None]
+        if tabled:
+            raise CaseError(f"{tabled[0]}.viscoplastic and viscoplastic = {_brief(viscoplastic)}: the Python law "
+                            f"replaces the tables' laws on the whole body, so {tabled[0]}.viscoplastic would not be "
+                            f"used; give one of them")
+    return build_problem(model, mesh=mesh, **{name: value for name, value in objects.items() if value is not None})
+
+
+def _mesh(mesh) -> meshes.Mesh:
+    """The mesh of ``compose``'s argument: a Mesh as it is, a file name read, a [mesh] table made."""
+    if isinstance(mesh, meshes.Mesh):
+        return mesh
+    if isinstance(mesh, (str, os.PathLike)):
+        return meshes.read_mesh(mesh)
+    if isinstance(mesh, Mapping):
+        return make_mesh(section(MeshSection, mesh, "mesh"))
+    if isinstance(mesh, skfem.Mesh):
+        raise CaseError(f"mesh = a scikit-fem {type(mesh).__name__} without named boundary parts: not accepted yet; "
+                        f"pass vpcontact.mesh.Mesh(m, parts={{name: indices of boundary facets}}, exact_normals={{}}) "
+                        f"(or save it to a mesh file with physical groups and pass its name)")
+    raise CaseError(f"mesh = {_brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, quarter_ball, "
+                    f"rectangle, block or read_mesh), a mesh file's name or a [mesh] table")
+
+
+def _table(key: str, value) -> dict:
+    """A copy of the table ``value`` of ``key``, or CaseError."""
+    if not isinstance(value, Mapping):
+        raise CaseError(f"{key} = {_brief(value)}: expected a table (dict) of the [{key}] keys")
+    return dict(value)
+
+
+def _dirichlet(dirichlet) -> list:
+    """The [[boundary.dirichlet]] tables of {part: components} (or of the tables themselves): u = 0 on the
+    part's components, "x", ["x", "y"] (a list, tuple or array of names) or None for all. A table of
+    values ({"z": "-0.01*t"}) would prescribe a displacement, which vpcontact does not do yet: refused, as
+    is any other value, rather than read as u = 0."""
+    if isinstance(dirichlet, Mapping):
+        return [{"part": part, **_components(part, components)} for part, components in dirichlet.items()]
+    if isinstance(dirichlet, Sequence) and not isinstance(dirichlet, str):
+        return list(dirichlet)
+    raise CaseError(f"dirichlet = {_brief(dirichlet)}: expected {{part: components}} (components \"x\", [\"x\", \"y\"] "
+                    f"or None for all) or a list of [[boundary.dirichlet]] tables")
+
+
+def _components(part, components) -> dict:
+    """The "components" key of the [[boundary.dirichlet]] table of ``dirichlet[part] = components``."""
+    where = f"dirichlet[{_brief(part)}] = {_brief(components)}"
+    if isinstance(components, Mapping):
+        raise CaseError(f"{where}: prescribed displacements are not supported yet (only u = 0): give the components "
+                        f"held at 0 (\"x\", [\"x\", \"y\"] or None for all)")
+    if components is None:
+        return {}
+    if isinstance(components, str):
+        return {"components": [components]}
+    if isinstance(components, (Sequence, np.ndarray)):
+        return {"components": list(components)}
+    raise CaseError(f"{where}: expected the components held at 0: \"x\", [\"x\", \"y\"] or None for all")
+
+
+def _tractions(traction) -> tuple[list, dict | None]:
+    """The [[boundary.traction]] tables of the expressions in ``traction`` ({part: value}), and the Python
+    functions in it ({part: f}, or None when there is none)."""
+    if traction is None:
+        return [], None
+    if not isinstance(traction, Mapping):
+        raise CaseError(f"traction = {_brief(traction)}: expected {{part: value}}, value a list of expressions or a "
+                        f"function f(x, y, (z,) t) -> (fx, fy, (fz))")
+    functions = {part: value for part, value in traction.items() if callable(value)}
+    tables = [{"part": part, "value": value} for part, value in traction.items() if not callable(value)]
+    return tables, functions or None
+
+
+def _body_force(body_force) -> tuple[list, Callable | None]:
+    """The [[boundary.body_force]] tables of ``body_force`` (a list of expressions), or the Python function."""
+    if body_force is None:
+        return [], None
+    if callable(body_force):
+        return [], body_force
+    return [{"value": body_force}], None

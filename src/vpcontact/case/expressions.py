@@ -1,0 +1,490 @@
+"""Safe arithmetic expressions from case files, evaluated vectorized with NumPy.
+
+A case file may give a value as a number or as a string such as ``"-1000*t"``,
+``"0.01*(x-0.5)**2"`` or ``"sin(pi*x)*exp(-t)"``. :func:`parse_expression` turns it
+into an :class:`Expression`, a callable that computes the value in float64 for arrays
+of coordinates and times.
+
+The text is never executed as Python. It is parsed with ``ast.parse(..., mode="eval")``
+and every node of the tree is checked against a whitelist: numbers, the variables
+given to :func:`parse_expression`, the constants ``pi`` and ``e``, the operators
+``+ - * / ** %`` (binary) and ``+ -`` (unary), and calls of the functions in
+:data:`FUNCTION_NAMES` by bare name with positional arguments. Anything else
+(attributes, subscripts, strings, lambdas, comparisons, keyword arguments, unknown
+names, ...) is a :class:`~vpcontact.errors.CaseError`. The checked tree is then turned
+into a tree of small Python closures over NumPy operations, built once at parse time.
+
+All numbers are float64 (integer literals are converted), so Python's unbounded
+integers never appear; a constant exponent is limited to ``MAX_EXPONENT`` in absolute
+value so that ``10**10**10`` is reported instead of silently giving ``inf``.
+Floating-point warnings are not silenced here: a result may be ``inf`` or ``nan`` (``1/x`` at
+``x = 0``, ``sqrt(-1)``) and the caller evaluates under ``np.errstate`` and checks finiteness where it
+matters (the loads, the initial gap), reporting the expression and where it is not finite.
+
+Messages show the source as ``<where> = "<source>"``; a long source (or a long part of it) is cut to
+its first characters and its length (:func:`~vpcontact.errors.quoted`), so the reason is always read.
+"""
+
+from __future__ import annotations
+
+import ast
+import keyword
+import math
+import operator
+from collections.abc import Callable, Iterable, Mapping
+from functools import reduce
+from typing import NamedTuple
+
+import numpy as np
+
+from ..errors import CaseError, quoted, shown
+from ..fem.space import coordinates
+
+__all__ = [
+    "CONSTANT_NAMES",
+    "FUNCTION_NAMES",
+    "MAX_DEPTH",
+    "MAX_EXPONENT",
+    "Expression",
+    "parse_expression",
+]
+
+MAX_EXPONENT = 100.0
+"""Largest absolute value allowed for an exponent that does not depend on a variable."""
+
+MAX_DEPTH = 100
+"""Deepest nesting of operations and calls allowed in one expression."""
+
+_Value = np.ndarray | np.float64
+_Evaluator = Callable[[Mapping[str, np.ndarray]], _Value]
+
+
+def _minimum(*values: _Value) -> _Value:
+    """Elementwise minimum of two or more values (NaN propagates)."""
+    return reduce(np.minimum, values)
+
+
+def _maximum(*values: _Value) -> _Value:
+    """Elementwise maximum of two or more values (NaN propagates)."""
+    return reduce(np.maximum, values)
+
+
+def _heaviside(value: _Value) -> _Value:
+    """Heaviside step: 1 where value > 0, 0 where value <= 0 (NaN stays NaN)."""
+    return np.heaviside(value, 0.0)
+
+
+class _Function(NamedTuple):
+    """A function callable from an expression, with the numbers of arguments it takes."""
+
+    compute: Callable[..., _Value]
+    min_args: int
+    max_args: int | None  # None: no upper limit
+
+
+_FUNCTIONS: dict[str, _Function] = {
+    "abs": _Function(np.abs, 1, 1),
+    "sqrt": _Function(np.sqrt, 1, 1),
+    "exp": _Function(np.exp, 1, 1),
+    "log": _Function(np.log, 1, 1),
+    "log10": _Function(np.log10, 1, 1),
+    "sin": _Function(np.sin, 1, 1),
+    "cos": _Function(np.cos, 1, 1),
+    "tan": _Function(np.tan, 1, 1),
+    "asin": _Function(np.arcsin, 1, 1),
+    "acos": _Function(np.arccos, 1, 1),
+    "atan": _Function(np.arctan, 1, 1),
+    "atan2": _Function(np.arctan2, 2, 2),
+    "sinh": _Function(np.sinh, 1, 1),
+    "cosh": _Function(np.cosh, 1, 1),
+    "tanh": _Function(np.tanh, 1, 1),
+    "floor": _Function(np.floor, 1, 1),
+    "ceil": _Function(np.ceil, 1, 1),
+    "min": _Function(_minimum, 2, None),
+    "max": _Function(_maximum, 2, None),
+    "sign": _Function(np.sign, 1, 1),
+    "heaviside": _Function(_heaviside, 1, 1),
+}
+
+FUNCTION_NAMES: tuple[str, ...] = tuple(_FUNCTIONS)
+"""Names of the functions an expression may call, e.g. ``atan2(y, x)``, ``max(0, y - 1)``."""
+
+_CONSTANTS: dict[str, np.float64] = {"pi": np.float64(math.pi), "e": np.float64(math.e)}
+
+CONSTANT_NAMES: tuple[str, ...] = tuple(_CONSTANTS)
+"""Names of the mathematical constants an expression may use."""
+
+_BINARY_OPERATORS: dict[type[ast.operator], Callable[[_Value, _Value], _Value]] = {
+    ast.Add: operator.add,
+    ast.Sub: operator.sub,
+    ast.Mult: operator.mul,
+    ast.Div: operator.truediv,
+    ast.Pow: operator.pow,
+    ast.Mod: operator.mod,
+}
+
+_UNARY_OPERATORS: dict[type[ast.unaryop], Callable[[_Value], _Value]] = {
+    ast.UAdd: operator.pos,
+    ast.USub: operator.neg,
+}
+
+_OPERATOR_SYMBOLS: dict[type[ast.AST], str] = {
+    ast.FloorDiv: "//",
+    ast.MatMult: "@",
+    ast.LShift: "<<",
+    ast.RShift: ">>",
+    ast.BitOr: "|",
+    ast.BitXor: "^",
+    ast.BitAnd: "&",
+    ast.Invert: "~",
+    ast.Not: "not",
+}
+
+# The problem reported for a construct outside the whitelist.
+_REJECTED_CONSTRUCTS: dict[type[ast.AST], str] = {
+    ast.Slice: "slices are not allowed",
+    ast.Lambda: "lambda is not allowed",
+    ast.Compare: "comparisons are not allowed",
+    ast.BoolOp: "'and'/'or' are not allowed",
+    ast.IfExp: "conditional expressions (a if c else b) are not allowed",
+    ast.NamedExpr: "assignment expressions (:=) are not allowed",
+    ast.Starred: "starred expressions are not allowed",
+    ast.Tuple: "tuples are not allowed",
+    ast.List: "lists are not allowed",
+    ast.Set: "sets are not allowed",
+    ast.Dict: "dicts are not allowed",
+    ast.ListComp: "comprehensions are not allowed",
+    ast.SetComp: "comprehensions are not allowed",
+    ast.DictComp: "comprehensions are not allowed",
+    ast.GeneratorExp: "comprehensions are not allowed",
+    ast.JoinedStr: "strings are not allowed",
+    ast.Await: "await is not allowed",
+    ast.Yield: "yield is not allowed",
+    ast.YieldFrom: "yield is not allowed",
+}
+
+
+class Expression:
+    """A parsed arithmetic expression in a fixed set of variables, evaluated with NumPy.
+
+    Create one with :func:`parse_expression`. Calling it with the variables as keyword
+    arguments (arrays or scalars) computes the expression elementwise in float64 and
+    returns a new array of the broadcast shape of all the values passed, also when the
+    expression uses only some of them or none (``"0"`` gives ``np.zeros(shape)``). When
+    every value passed is a scalar (or nothing is passed), the result is a Python float.
+
+    Equal expressions have the same source and variables. Pickling stores only
+    ``source``, ``variables`` and ``where`` and parses the text again when loaded.
+    """
+
+    __slots__ = ("source", "variables", "where", "_evaluate", "_depends_on")
+
+    source: str
+    variables: tuple[str, ...]
+    where: str
+
+    def __init__(
+        self,
+        source: str,
+        variables: tuple[str, ...],
+        where: str,
+        evaluate: _Evaluator,
+        depends_on: frozenset[str],
+    ) -> None:
+        """Wrap an already checked and compiled expression (use :func:`parse_expression`)."""
+        self.source = source
+        self.variables = variables
+        self.where = where
+        self._evaluate = evaluate
+        self._depends_on = depends_on
+
+    @property
+    def depends_on(self) -> frozenset[str]:
+        """The variables that occur in the expression, e.g. ``{"t"}`` for ``"-1000*t"``."""
+        return self._depends_on
+
+    def __call__(self, **values: object) -> np.ndarray | float:
+        """Compute the expression for the given variable values, broadcast together.
+
+        Values for variables the expression does not use may be omitted; those that are
+        given still take part in the broadcast shape. Passing a name that is not one of
+        ``variables``, or omitting one the expression uses, is a TypeError.
+        """
+        unknown = sorted(set(values) - set(self.variables))
+        if unknown:
+            raise TypeError(
+                f"{self!r} got unknown variable(s) {', '.join(unknown)};"
+                f" its variables are {', '.join(self.variables)}"
+            )
+        missing = [name for name in self.variables if name in self._depends_on and name not in values]
+        if missing:
+            raise TypeError(f"{self!r} needs a value for {', '.join(missing)}")
+        arrays = {name: np.asarray(value, dtype=np.float64) for name, value in values.items()}
+        shape = np.broadcast_shapes(*(array.shape for array in arrays.values()))
+        result = self._evaluate(arrays)
+        if shape == ():
+            return float(result)
+        out = np.empty(shape, dtype=np.float64)
+        out[...] = result
+        return out
+
+    def __reduce__(self) -> tuple[Callable[..., Expression], tuple[str, tuple[str, ...], str]]:
+        """Pickle as the call ``parse_expression(source, variables, where)``."""
+        return parse_expression, (self.source, self.variables, self.where)
+
+    def __eq__(self, other: object) -> bool:
+        """Expressions are equal when their source text and variables are equal."""
+        if not isinstance(other, Expression):
+            return NotImplemented
+        return (self.source, self.variables) == (other.source, other.variables)
+
+    def __hash__(self) -> int:
+        """Hash of the source text and variables (consistent with ``==``)."""
+        return hash((self.source, self.variables))
+
+    def __repr__(self) -> str:
+        """``Expression('-1000*t', variables=('x', 'y', 't'))``."""
+        return f"Expression({self.source!r}, variables={self.variables!r})"
+
+    def __str__(self) -> str:
+        """The source text."""
+        return self.source
+
+
+def parse_expression(
+    source: str | int | float,
+    variables: Iterable[str] = ("x", "y", "t"),
+    where: str = "expression",
+) -> Expression:
+    """Check and compile an expression given as text or as a number.
+
+    ``source`` is the text of the expression, or an int or float (as TOML gives
+    numbers), which is turned into its repr. ``variables`` are the names the expression
+    may use besides the constants ``pi`` and ``e``. ``where`` names the place in the case
+    for error messages, e.g. ``"boundary.traction[0].value[1]"``.
+
+    Raises CaseError with a one-line message ``<where> = <source>: <problem>`` for bad
+    input: a type other than str/int/float (bool and None included), a non-finite
+    number, an empty string, a syntax error, or anything outside the whitelist described
+    in the module docstring. Raises ValueError if ``variables`` themselves are invalid
+    (not identifiers, repeated, or clashing with a function or constant name).
+    """
+    variables = _check_variables(variables)
+    text = _source_text(source, where)
+    compiler = _Compiler(text, variables, where)
+    evaluate, depends_on = compiler.compile_source()
+    return Expression(text, variables, where, evaluate, depends_on)
+
+
+def values_at(source, where: str, points: np.ndarray) -> np.ndarray:
+    """The expression (or number) ``source`` of the case key ``where`` in the coordinates x, y[, z] at
+    ``points`` (d, k): k floats, not checked (a value that is not finite is for the caller to report)."""
+    names = coordinates(points.shape[0])
+    expression = parse_expression(source, names, where=where)
+    with np.errstate(all="ignore"):
+        return np.broadcast_to(expression(**dict(zip(names, points))), points.shape[1:]).astype(float)
+
+
+def _check_variables(variables: Iterable[str]) -> tuple[str, ...]:
+    """Return ``variables`` as a tuple after checking they can be used as names."""
+    names = tuple(variables)
+    for name in names:
+        if not isinstance(name, str) or not name.isidentifier() or keyword.iskeyword(name):
+            raise ValueError(f"expression variable {name!r} is not a valid name")
+        if name in _FUNCTIONS or name in _CONSTANTS:
+            raise ValueError(f"expression variable {name!r} clashes with a function or constant name")
+    if len(set(names)) != len(names):
+        raise ValueError(f"expression variables {names!r} contain a repeated name")
+    return names
+
+
+def _source_text(source: object, where: str) -> str:
+    """The text to parse for ``source``: a str as given, an int or float as its repr."""
+    if isinstance(source, str):
+        return source
+    if isinstance(source, bool) or not isinstance(source, (int, float, np.integer, np.floating)):
+        raise CaseError(
+            f"{where} = {shown(' '.join(repr(source).split()))}: expected a number or an expression string,"
+            f" got {type(source).__name__}"
+        )
+    try:
+        value = float(source)
+    except OverflowError:
+        value = math.inf
+    if math.isinf(value) and isinstance(source, (int, np.integer)):
+        raise CaseError(f"{where}: integer out of the float64 range")
+    if not math.isfinite(value):
+        raise CaseError(f"{where} = {value!r}: not a finite number")
+    if isinstance(source, (int, np.integer)):
+        return repr(int(source))
+    return repr(value)
+
+
+class _Compiler:
+    """Checks the syntax tree of one expression and builds its evaluator closure."""
+
+    def __init__(self, source: str, variables: tuple[str, ...], where: str) -> None:
+        self.source = source
+        self.variables = variables
+        self.where = where
+        # Leading whitespace would be an "unexpected indent"; it is stripped before
+        # parsing and its extent kept to report positions in the original text.
+        self.body = source.strip()
+        self.lead = source[: len(source) - len(source.lstrip())]
+
+    def error(self, problem: str) -> CaseError:
+        """A CaseError ``<where> = "<source>": <problem>`` (source quoted as in TOML, a long one cut)."""
+        return CaseError(f"{self.where} = {quoted(self.source)}: {problem}")
+
+    def compile_source(self) -> tuple[_Evaluator, frozenset[str]]:
+        """Parse the source, check it and return its evaluator and the variables it uses."""
+        if not self.body:
+            raise self.error("empty expression")
+        try:
+            # The newline makes the parser report an incomplete expression ("2*") at the
+            # column after its end instead of at column 0.
+            tree = ast.parse(self.body + "\n", mode="eval")
+        except SyntaxError as exc:
+            if exc.msg.startswith("Exceeds the limit"):  # an integer literal of more than 4300 digits
+                raise self.error("a number of thousands of digits, out of the float64 range") from None
+            raise self.error(f"not a valid expression ({exc.msg}{self.position(exc)})") from None
+        except ValueError as exc:  # e.g. null bytes on some Python versions
+            raise self.error(f"not a valid expression ({exc})") from None
+        except (RecursionError, MemoryError):
+            raise self.error(f"nested too deeply (more than {MAX_DEPTH} levels)") from None
+        return self.compile(tree.body, 1)
+
+    def position(self, exc: SyntaxError) -> str:
+        """`` at column C`` (or `` at line L, column C``) of a syntax error in the source."""
+        if exc.lineno is None or exc.offset is None or exc.offset < 1:
+            return ""
+        line, column = exc.lineno, exc.offset
+        if line == 1:
+            column += len(self.lead) - (self.lead.rfind("\n") + 1)
+        line += self.lead.count("\n")
+        if "\n" in self.source.rstrip():
+            return f" at line {line}, column {column}"
+        return f" at column {column}"
+
+    def segment(self, node: ast.AST) -> str:
+        """The source text of ``node`` (a long one cut, see :func:`~vpcontact.errors.shown`)."""
+        return shown(ast.get_source_segment(self.body, node) or type(node).__name__)
+
+    def compile(self, node: ast.AST, depth: int) -> tuple[_Evaluator, frozenset[str]]:
+        """Check ``node`` and return its evaluator and the variables occurring in it."""
+        if depth > MAX_DEPTH:
+            raise self.error(f"nested too deeply (more than {MAX_DEPTH} levels)")
+        if isinstance(node, ast.Constant):
+            return self.compile_constant(node)
+        if isinstance(node, ast.Name):
+            return self.compile_name(node)
+        if isinstance(node, ast.UnaryOp):
+            return self.compile_unary(node, depth)
+        if isinstance(node, ast.BinOp):
+            return self.compile_binary(node, depth)
+        if isinstance(node, ast.Call):
+            return self.compile_call(node, depth)
+        if isinstance(node, ast.Attribute):
+            raise self.error(f"attribute access '.{node.attr}' is not allowed")
+        if isinstance(node, ast.Subscript):
+            raise self.error(f"subscripts like '{self.segment(node)}' are not allowed")
+        raise self.error(_REJECTED_CONSTRUCTS.get(type(node), f"'{self.segment(node)}' is not allowed"))
+
+    def compile_constant(self, node: ast.Constant) -> tuple[_Evaluator, frozenset[str]]:
+        """A number literal, as a float64 constant; other literals are rejected."""
+        value = node.value
+        if isinstance(value, bool):
+            raise self.error(f"booleans ({value}) are not allowed")
+        if value is None:
+            raise self.error("None is not allowed")
+        if isinstance(value, (str, bytes)):
+            raise self.error("strings are not allowed")
+        if isinstance(value, complex):
+            raise self.error(f"complex numbers ({self.segment(node)}) are not allowed")
+        if not isinstance(value, (int, float)):
+            raise self.error(f"'{self.segment(node)}' is not allowed")
+        try:
+            number = np.float64(float(value))
+        except OverflowError:
+            number = np.float64(math.inf)
+        if not np.isfinite(number):
+            raise self.error(f"number {self.segment(node)} is out of the float64 range")
+        return (lambda values: number), frozenset()
+
+    def compile_name(self, node: ast.Name) -> tuple[_Evaluator, frozenset[str]]:
+        """A variable (looked up at evaluation) or a constant (pi, e)."""
+        name = node.id
+        if name in self.variables:
+            return (lambda values: values[name]), frozenset({name})
+        if name in _CONSTANTS:
+            constant = _CONSTANTS[name]
+            return (lambda values: constant), frozenset()
+        if name in _FUNCTIONS:
+            raise self.error(f"'{name}' is a function; call it as {name}(...)")
+        raise self.error(f"unknown name '{shown(name)}' (allowed: {self.allowed_names()})")
+
+    def compile_unary(self, node: ast.UnaryOp, depth: int) -> tuple[_Evaluator, frozenset[str]]:
+        """Unary plus or minus."""
+        apply = _UNARY_OPERATORS.get(type(node.op))
+        if apply is None:
+            raise self.error(f"operator '{_OPERATOR_SYMBOLS[type(node.op)]}' is not allowed (allowed: + -)")
+        operand, names = self.compile(node.operand, depth + 1)
+        return (lambda values: apply(operand(values))), names
+
+    def compile_binary(self, node: ast.BinOp, depth: int) -> tuple[_Evaluator, frozenset[str]]:
+        """``+ - * / ** %``; a ``**`` with a constant exponent must keep it within MAX_EXPONENT."""
+        apply = _BINARY_OPERATORS.get(type(node.op))
+        if apply is None:
+            raise self.error(
+                f"operator '{_OPERATOR_SYMBOLS[type(node.op)]}' is not allowed (allowed: + - * / ** %)"
+            )
+        left, left_names = self.compile(node.left, depth + 1)
+        right, right_names = self.compile(node.right, depth + 1)
+        if isinstance(node.op, ast.Pow) and not right_names:
+            with np.errstate(all="ignore"):
+                exponent = float(right({}))
+            if not abs(exponent) <= MAX_EXPONENT:
+                text = self.segment(node.right)
+                if text != f"{exponent:g}":
+                    text += f" (= {exponent:g})"
+                raise self.error(
+                    f"exponent {text} is too large (a constant exponent must be at most"
+                    f" {MAX_EXPONENT:g} in absolute value)"
+                )
+        return (lambda values: apply(left(values), right(values))), left_names | right_names
+
+    def compile_call(self, node: ast.Call, depth: int) -> tuple[_Evaluator, frozenset[str]]:
+        """A whitelisted function called by bare name with the right number of positional arguments."""
+        if not isinstance(node.func, ast.Name):
+            raise self.error(f"only functions called by name can be called, not '{self.segment(node.func)}'")
+        name = node.func.id
+        function = _FUNCTIONS.get(name)
+        if function is None:
+            if name in self.variables or name in _CONSTANTS:
+                raise self.error(f"'{name}' is not a function")
+            raise self.error(f"unknown function '{shown(name)}' (allowed: {', '.join(FUNCTION_NAMES)})")
+        if node.keywords:
+            raise self.error(f"keyword arguments are not allowed (in the call of {name})")
+        if any(isinstance(arg, ast.Starred) for arg in node.args):
+            raise self.error(f"starred arguments are not allowed (in the call of {name})")
+        count = len(node.args)
+        if count < function.min_args or (function.max_args is not None and count > function.max_args):
+            raise self.error(f"{name}() takes {_arity(function)}, got {count}")
+        compiled = [self.compile(arg, depth + 1) for arg in node.args]
+        arguments = [evaluate for evaluate, _ in compiled]
+        names = frozenset().union(*(arg_names for _, arg_names in compiled))
+        compute = function.compute
+        return (lambda values: compute(*[argument(values) for argument in arguments])), names
+
+    def allowed_names(self) -> str:
+        """``x, y, t, pi, e and the functions abs, sqrt, ...`` for error messages."""
+        return f"{', '.join(self.variables + CONSTANT_NAMES)} and the functions {', '.join(FUNCTION_NAMES)}"
+
+
+def _arity(function: _Function) -> str:
+    """``1 argument``, ``2 arguments`` or ``at least 2 arguments``."""
+    count = function.min_args
+    plural = "argument" if count == 1 else "arguments"
+    if function.max_args is None:
+        return f"at least {count} {plural}"
+    return f"{count} {plural}"

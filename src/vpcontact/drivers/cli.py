@@ -1,0 +1,260 @@
+"""The command line:
+
+    vpcontact run CASE.toml [--set key=value ...] --out DIR [--resume | --overwrite]
+    vpcontact check CASE.toml [--set key=value ...] [--json]
+    vpcontact study STUDY.toml --out DIR [--workers N | --scheduler tcp://HOST:PORT]
+
+Only what a command uses is imported when it runs (``--help`` imports no numerics).
+
+Exit status: 0 complete; 2 bad input or an unusable --out (one line on stderr, nothing written); 3 a
+step failed even after its cuts (the converged steps are written, summary.json has "status":
+"failed") or, for a study, a run failed; 4 the run directory was removed or replaced during the run,
+or a write failed (one line; nothing more written); 130 / 143 a run stopped by SIGINT / SIGTERM at
+the end of a step (outputs and a checkpoint written, "status": "interrupted"; ``--resume`` continues
+it), a study stopped by them (its workers stopped, study.csv written; rerun to continue).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .. import __version__
+from ..errors import CaseError, one_line
+
+EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OUTPUT = 2, 3, 4
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with the refusal of every other bad input: one line, exit status 2 (not the usage)."""
+
+    def error(self, message: str):
+        print(f"vpcontact: error: {one_line(message)} (see {self.prog} --help)", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="vpcontact", description=(
+        "Quasistatic contact of viscoplastic bodies with a foundation whose soft layer hardens or "
+        "softens with the history of penetration (Barboteu, Han, Sofonea)."))
+    parser.add_argument("--version", action="version", version=f"vpcontact {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("run", help="solve a case and write its results")
+    run.add_argument("case", type=Path, help="case file (TOML)")
+    run.add_argument("--out", type=Path, required=True, help="output directory")
+    run.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                     help="override a case value, e.g. --set contact.stiffness.beta=-1 (repeatable)")
+    run.add_argument("--quiet", action="store_true", help="no progress lines or bar")
+    replace = run.add_mutually_exclusive_group()
+    replace.add_argument("--overwrite", action="store_true", help="replace a non-empty output directory")
+    replace.add_argument("--resume", action="store_true",
+                         help="continue the run in --out from its checkpoint (a killed or interrupted run)")
+    check = commands.add_parser("check", help="validate a case without solving it and describe what would run")
+    check.add_argument("case", type=Path, help="case file (TOML)")
+    check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a case value, as for run (repeatable)")
+    check.add_argument("--json", action="store_true", help="the description as JSON")
+    study = commands.add_parser("study", help="run a parameter study (rerun to resume)")
+    study.add_argument("study", type=Path, help="study file (TOML)")
+    study.add_argument("--out", type=Path, required=True, help="study directory")
+    where = study.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS", help="a Dask scheduler, e.g. tcp://host:8786")
+    study.add_argument("--quiet", action="store_true", help="no progress lines or bar")
+    reproduce = commands.add_parser("reproduce", help="regenerate every result of Sect. 4 of the paper, with a report")
+    reproduce.add_argument("--out", type=Path, required=True, help="output directory (report.md, report.html, ...)")
+    reproduce.add_argument("--quick", action="store_true", help="a coarse version (under 2 minutes)")
+    reproduce.add_argument("--workers", type=int, default=None, help="worker processes of the studies (default: cores)")
+    reproduce.add_argument("--overwrite", action="store_true", help="replace an earlier reproduction in --out")
+    reproduce.add_argument("--quiet", action="store_true",
+                           help="no progress lines (on stdout: the parts; on stderr: the runs)")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    if args.command == "reproduce":
+        return _reproduce(args)
+    if args.command == "check":
+        return _check(args)
+    return _study(args) if args.command == "study" else _run(args)
+
+
+def _refuse(error) -> int:
+    """Bad input: one line on stderr (however long or multi-line the message), exit status 2."""
+    print(f"vpcontact: error: {one_line(str(error))}", file=sys.stderr)
+    return EXIT_BAD_INPUT
+
+
+def _run(args) -> int:
+    from ..case.schema import load_case
+    from ..progress import SILENT, Log
+    from .rundir import EXIT_SIGNAL, run
+
+    try:
+        case = load_case(args.case, args.overrides)
+        with (Log() if case.output.progress and not args.quiet else SILENT) as progress:  # lines on stderr
+            outcome = run(case, args.out, resume=args.resume, overwrite=args.overwrite, progress=progress)
+    except CaseError as error:
+        return _refuse(error)
+    except OSError as error:  # the run directory was replaced, or a write failed: the run stopped
+        print(f"vpcontact: {_describe(error)}", file=sys.stderr)
+        return EXIT_OUTPUT
+    if outcome.status == "interrupted":
+        print(f"vpcontact: {outcome.message}", file=sys.stderr)
+        return EXIT_SIGNAL[outcome.signal]
+    if outcome.status != "complete":
+        print(f"vpcontact: {outcome.message}", file=sys.stderr)
+        return EXIT_FAILED
+    if outcome.result is None:
+        print(f"vpcontact: {outcome.message}")
+        return 0
+    if case.adapt is not None:
+        print(f"adaptive: {outcome.message}; adapt.csv, cycles/ and the final_mesh.msh -> {args.out}")
+    summary = outcome.result.summary()
+    final = summary["final"]
+    cuts = f", {summary['step_cuts']} step cuts" if summary["step_cuts"] else ""
+    print(f"complete: {summary['steps']} steps{cuts}, {summary['dofs']} dofs, {summary['contact_nodes']} contact nodes, "
+          f"{summary['newton_iterations']} Newton iterations, {summary['wall_time_s']:.1f} s -> {args.out}")
+    if final.get("K_probe") is not None and summary["contact_nodes"]:
+        print(f"final t = {final['t']:g}: K_probe = {final['K_probe']:.6g}, penetration_probe = "
+              f"{final['penetration_probe']:.6g}, nodes separated/compliance/limit = {final['nodes_separated']}/"
+              f"{final['nodes_in_compliance']}/{final['nodes_at_limit']}")
+    return 0
+
+
+def _check(args) -> int:
+    import json
+
+    from ..case.schema import load_case
+    from .check import check_case
+
+    try:
+        checked = check_case(load_case(args.case, args.overrides))
+    except CaseError as error:
+        return _refuse(error)
+    if args.json:
+        print(json.dumps(checked.as_dict(), indent=2))
+    else:
+        print("\n".join(_check_lines(checked)))
+    return 0
+
+
+def _check_lines(c) -> list[str]:
+    """The description of :class:`~vpcontact.drivers.check.CaseCheck` ``c`` as lines of text."""
+    elements = "triangles" if c.dim == 2 else "tetrahedra"
+    angle = f", smallest angle {c.smallest_angle_degrees:.1f}°" if c.smallest_angle_degrees is not None else ""
+    lines = [f"{c.dim}D body: {c.nodes:,} nodes, {c.elements:,} {elements}, {c.dofs:,} dofs ({c.free_dofs:,} free)",
+             f"element quality (mean ratio, 1 = equilateral): min {c.quality_min:.3f}, median {c.quality_median:.3f}"
+             f"{angle}; element size (longest edge) {c.h_min:.3g} to {c.h_max:.3g}",
+             "parts: " + ", ".join(f"{p.name} ({p.facets:,} facets, {p.nodes:,} nodes)" for p in c.parts)]
+    if c.regions:
+        lines.append("regions: " + ", ".join(f"{r.name} ({r.elements:,} {elements}: {r.material})" for r in c.regions))
+    for m in c.materials:
+        where = f"regions {', '.join(m.regions)}" if m.regions else "the whole body"
+        law = f"viscoplastic ({m.viscoplastic})" if m.viscoplastic else "elastic"
+        lines.append(f"{m.key}: E = {m.E}, nu = {m.nu}, {law}, on {where} ({m.elements:,} {elements})")
+    if c.contact_nodes:
+        lines.append(f"contact: {c.contact_nodes:,} nodes (" +
+                     ", ".join(f"{part}: {count:,}" for part, count in c.contact_nodes_by_part.items()) + ")")
+    else:
+        lines.append("contact: none")
+    lines.append(f"time: {c.steps:,} steps of k = {c.k:.6g} from t = {c.start:g} to T = {c.T:g}; fields written at "
+                 f"{c.field_steps:,} steps")
+    lines.append(f"method: {c.method} ({c.method_reason})")
+    outputs = {part: size for part, size in c.memory_bytes.items() if part != "solver"}
+    solver = c.memory_bytes["solver"]
+    lines.append(f"memory: outputs {_bytes(sum(outputs.values()))} (" +
+                 ", ".join(f"{part} {_bytes(size)}" for part, size in outputs.items()) + "), solver " +
+                 (f"{_bytes(solver)}" if solver is not None else "not estimated") +
+                 f"; {_bytes(c.memory_available_bytes)} available")
+    t = c.time_seconds
+    lines.append(f"time: about {t['total']:.2g} s (build {t['build']:.2g} s, measured; solver setup "
+                 f"{t['solver setup']:.2g} s and time loop {t['time loop']:.2g} s, estimated to a factor of 2)")
+    return lines
+
+
+def _bytes(size: int) -> str:
+    """A size in MiB below 1 GiB, else in GiB."""
+    return f"{size / 2**20:.3g} MiB" if size < 2**30 else f"{size / 2**30:.3g} GiB"
+
+
+def _describe(error: OSError) -> str:
+    """One line for an OSError: its message, or its reason and the file."""
+    if error.strerror is None:
+        return str(error)
+    where = f": '{error.filename}'" if error.filename else ""
+    return f"stopped: {error.strerror}{where}"
+
+
+def _study(args) -> int:
+    from ..progress import SILENT, Log
+    from .rundir import EXIT_SIGNAL, StopOnSignals
+    from .studies import load_study, run_study
+
+    client = None
+    try:
+        if args.workers is not None and args.workers < 1:
+            raise CaseError(f"--workers {args.workers}: must be at least 1")
+        study = load_study(args.study, args.out)
+        if args.scheduler is not None:
+            client = _connect(args.scheduler)
+        with StopOnSignals() as stopper, (Log(hold=0.0, watch=False) if not args.quiet else SILENT) as progress:
+            report = run_study(study, args.out, executor=client.get_executor() if client else None,
+                               workers=args.workers, progress=progress, stop=stopper.reason)
+    except CaseError as error:
+        return _refuse(error)
+    except OSError as error:  # the study directory was replaced, or a write failed: the study stopped
+        print(f"vpcontact: {_describe(error)}", file=sys.stderr)
+        return EXIT_OUTPUT
+    finally:
+        if client is not None:
+            client.close()
+    table = args.out / "study.csv"
+    if report["stopped"]:
+        complete = len(report["skipped"]) + len(report["completed"])
+        print(f"vpcontact: study {report['stopped']}: {complete} of {len(study.runs)} runs complete, "
+              f"{len(report['interrupted'])} not finished -> {table} (rerun the study to continue)", file=sys.stderr)
+        return EXIT_SIGNAL.get(stopper.signal, EXIT_FAILED)
+    print(f"study: {len(study.runs)} runs: {len(report['completed'])} run, {len(report['skipped'])} already complete, "
+          f"{len(report['retried'])} retried, {len(report['failed'])} failed -> {table}")
+    for run_id in report["failed"]:
+        print(f"vpcontact: run '{run_id}' failed (see {args.out / 'runs' / run_id})", file=sys.stderr)
+    return EXIT_FAILED if report["failed"] else 0
+
+
+def _connect(address: str):
+    """A client of the Dask scheduler at ``address`` (CaseError without the cluster extra, or when it
+    cannot be reached)."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise CaseError(f'--scheduler {address}: the Dask client is not installed; install it with: '
+                        f'pip install "vpcontact[cluster]"') from None
+    try:
+        return Client(address, timeout="10s")
+    except (OSError, ValueError, TypeError) as error:
+        raise CaseError(f"--scheduler {address}: cannot connect ({error})") from None
+
+
+def _reproduce(args) -> int:
+    from ..progress import SILENT, Log
+    from ..reproduction.reproduce import OutputError, ReproduceError, run
+
+    if args.workers is not None and args.workers < 1:
+        return _refuse(f"--workers {args.workers}: must be at least 1")
+    log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
+    try:
+        with (SILENT if args.quiet else Log(hold=0.0)) as progress:  # its workers are spawned: a thread is safe
+            run(args.out, quick=args.quick, workers=args.workers, overwrite=args.overwrite, log=log, progress=progress)
+    except OutputError as error:  # --out unusable: nothing was run
+        return _refuse(error)
+    except ReproduceError as error:
+        print(f"vpcontact: {error}", file=sys.stderr)
+        return EXIT_FAILED
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

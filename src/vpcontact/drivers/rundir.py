@@ -1,0 +1,302 @@
+"""A run directory during and after a run: ``vpcontact run CASE --out DIR [--resume | --overwrite]``.
+
+The directory exists from the start: ``case.resolved.toml`` first, then a checkpoint (see
+:mod:`vpcontact.io.checkpoint`) every ``output.checkpoint_every_steps`` steps and/or every
+``output.checkpoint_every_seconds`` seconds, with ``history.csv`` refreshed at each; at the end every
+output, each written atomically, ``summary.json`` last. The checkpoint is removed once the run is
+complete or has failed; an interrupted or killed run keeps it, and ``--resume`` continues from it.
+
+Status (summary.json) and exit status of the command line:
+
+    complete      0    every step done
+    failed        3    a step did not converge even after ``solver.max_step_cuts`` halvings; the
+                       converged steps (and sub-steps) are written
+    interrupted   130  SIGINT (Ctrl-C) / 143 SIGTERM: the run stopped at the end of the current
+                       step, wrote what exists and its checkpoint; ``--resume`` continues it
+    (bad input)   2    one line on stderr; nothing computed, nothing written (an unusable ``--out`` too)
+    (no summary)  4    the run directory was removed or replaced during the run (the run stopped
+                       and wrote nothing into what is now at that path), or a write failed
+                       (disk full, ...; :class:`RunStopped`): one line on stderr naming the file,
+                       the step of the checkpoint left and what to do (make room, then --resume)
+
+A write that fails leaves the file it replaces as it was (every file is written atomically), so a
+full disk leaves the previous complete checkpoint: ``--resume`` continues from it once there is
+room, to the same numbers as an uninterrupted run.
+
+The directory is held while the run writes (see :mod:`vpcontact.io.directory`); ``--overwrite`` removes
+the outputs of an earlier run (``writers.OUTPUTS``) and nothing else. A symbolic link where a run writes
+(``fields/``, ``checkpoint/``, ``history.csv``, ...) is the user's: the run refuses to start (exit 2,
+one line naming the link), with or without ``--overwrite`` and ``--resume``, and no write ever goes
+through one (see :mod:`vpcontact.io.directory`). ``--out`` itself may be a link to a folder.
+
+A case with ``[adapt]`` runs its adaptive cycles (:mod:`vpcontact.estimate.adapt`): ``case.resolved.toml`` first,
+each cycle's run in ``cycles/<n>/`` (its outputs as above, summary.json last) with ``adapt.csv``
+refreshed after each cycle, then the last cycle's mesh ``final_mesh.msh`` and ``summary.json`` (the
+status, why the cycles stopped, the rows of adapt.csv). It writes no checkpoints: ``--resume`` is refused; the
+status and exit status are those of the last cycle's run ("failed" too when a refinement fails).
+"""
+
+from __future__ import annotations
+
+import csv
+import errno
+import json
+import signal
+import sys
+import threading
+import time as clock
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from ..io import checkpoint, directory
+from ..case.schema import Case
+from ..errors import CaseError
+from ..mesh.msh import write_mesh
+from ..problem.build import Problem, build_problem
+from ..progress import Progress, reporting
+from ..results.result import Result
+from ..io.run_reader import read_case, read_summary
+from ..timeloop.loop import TimeLoop
+from ..io.writers import (check_room, json_safe, remove_files, remove_outputs, remove_temporaries, replacing, versions,
+                      write_outputs, write_resolved_case, write_text)
+
+if TYPE_CHECKING:
+    from ..estimate.adapt import Adaptation, Cycle
+
+SIGNAL_NAMES = {signal.SIGINT: "SIGINT", signal.SIGTERM: "SIGTERM"}
+EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
+
+
+class RunStopped(OSError):
+    """A run stopped because a write into its directory failed (a full disk, a symbolic link put there
+    during the run, ...): one line, what failed and how to continue; ``errno`` is the failed write's."""
+
+
+@dataclass
+class Outcome:
+    """What ``run`` did: the result (None when a resumed run had nothing left to do), the status, a
+    message, and the signal that stopped it (if any)."""
+
+    result: Result | None
+    status: str
+    message: str = ""
+    signal: int | None = None
+
+
+def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = False,
+        progress: bool | Progress = False) -> Outcome:
+    """Solve ``case`` into the run directory ``out`` (see the module's docstring). Bad input, an
+    unusable ``out`` or a checkpoint of another case raise CaseError before anything is written; a
+    run directory removed or replaced during the run raises DirectoryReplaced (an OSError) and a
+    write that fails raises RunStopped (an OSError), and nothing more is written. ``progress``: True for the
+    set-up phases, the steps and the outputs reported on stderr (:mod:`vpcontact.progress`), or a reporter."""
+    out = Path(out)
+    if resume and overwrite:
+        raise CaseError("--resume and --overwrite exclude each other")
+    if resume and case.adapt is not None:
+        raise CaseError("--resume of an adaptive run ([adapt]) is not supported: it keeps no checkpoints; run it "
+                        "again with --overwrite")
+    directory.usable(out)
+    check_room(out)
+    if case.adapt is not None and (out / "cycles").exists() and not (out / "cycles").is_dir():
+        raise CaseError(f"--out '{out}': '{out / 'cycles'}' is not a folder, and an adaptive run writes its cycles/ "
+                        f"there: move it away")
+    used = directory.holds_files(out)
+    if used and not (resume or overwrite):
+        raise CaseError(f"--out '{out}' is not empty (use --overwrite to replace the outputs of a run in it, or "
+                        f"--resume to continue the run in it)")
+    if resume and used:
+        done = _finished(case, out)
+        if done is not None:
+            return done
+    held = directory.acquire(out)  # before any computation: an unusable directory is refused at once
+    started = False
+    try:
+        with StopOnSignals() as stopper, reporting(progress) as progress:
+            problem = build_problem(case, progress=progress)
+            if case.adapt is not None:
+                from ..estimate.adapt import check_start  # an adaptive run only (as _adapt_locked)
+
+                check_start(problem, case.adapt)
+                started = True  # from here on the directory is written to: nothing above wrote to it
+                adaptation = _adapt_locked(problem, case, held, clear=overwrite and used, stopper=stopper,
+                                           progress=progress)
+                return Outcome(adaptation.last.result, adaptation.status, adaptation.message, stopper.signal)
+            loop = TimeLoop(problem, case.output, progress)
+            resuming = resume and checkpoint.exists(out)
+            if resuming:
+                with progress.phase("checkpoint", f"restoring {checkpoint.folder(out)}") as phase:
+                    checkpoint.restore(loop, out)
+                    phase.done(f"{loop.state.step:,} of {len(problem.times):,} steps done")
+                now = versions()
+                changed = [f"{name} {loop.stored_versions.get(name)} -> {version}" for name, version in now.items()
+                           if loop.stored_versions.get(name) != version]
+                if changed:
+                    print(f"vpcontact: warning: resuming with other versions ({', '.join(changed)}): the numbers "
+                          f"may differ in the last digits from an uninterrupted run", file=sys.stderr)
+            elif resume and used:
+                _check_same_case(case, out)
+            started = True  # from here on the directory is written to: nothing above wrote to it
+            result = _run_locked(loop, case, held, clear=overwrite and used, stopper=stopper, progress=progress)
+    except OSError as error:
+        if not started or isinstance(error, directory.DirectoryReplaced):
+            raise
+        raise _stopped(error, case, out) from None
+    finally:
+        held.release(undo=not started)
+    return Outcome(result, result.status, result.message, stopper.signal)
+
+
+def _stopped(error: OSError, case: Case, out: Path) -> RunStopped:
+    """RunStopped for a write into ``out`` that failed with ``error``: what failed, what is left to
+    continue from, and what to do."""
+    if isinstance(error, directory.SymbolicLink):
+        what, fix = f"stopped: {error}", "remove the link (what it leads to is kept), then"
+    else:
+        where = f": '{error.filename}'" if error.filename else ""
+        what = f"stopped: {error.strerror or error}{where}"
+        fix = "make room, then" if error.errno == errno.ENOSPC else "once that is fixed,"
+    if case.adapt is not None:
+        left = f"{fix} run it again with --overwrite (an adaptive run keeps no checkpoint)"
+    else:
+        step = checkpoint.saved_step(out)
+        left = (f"the checkpoint of step {step} is intact: {fix} continue with --resume" if step is not None else
+                f"no checkpoint was written yet: {fix} run it again with --resume (it starts over)")
+    stopped = RunStopped(f"{what}; {left}")
+    stopped.errno = error.errno
+    return stopped
+
+
+def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool, stopper,
+                progress: Progress) -> Result:
+    """The run proper, in a directory this process holds: prepare it, loop with checkpoints, write.
+    Every step and every write first checks that the directory is still the one locked."""
+    out = held.path
+    if clear:
+        remove_outputs(out)
+    remove_temporaries(out)
+    checkpoint.remove_unrecorded(out, loop.result.fields)
+    remove_files(out, ("summary.json",))
+    write_resolved_case(case.to_toml(), out)
+    cadence = _Cadence(case.output.checkpoint_every_steps, case.output.checkpoint_every_seconds, loop.state.step)
+
+    def after_step(loop: TimeLoop) -> None:
+        held.check()
+        if cadence.due(loop.state.step):
+            checkpoint.save(loop, out)
+            write_outputs(loop.result, out, history_only=True)
+            cadence.saved(loop.state.step)
+
+    result = loop.run(after_step=after_step, stop=stopper.reason)
+    if result.status == "interrupted":
+        if cadence.last_step != loop.state.step or not checkpoint.exists(out):
+            checkpoint.save(loop, out)
+        result.message += f"; continue with --resume (checkpoint in {checkpoint.folder(out)})"
+    with progress.phase("outputs", f"writing into {out}"):
+        write_outputs(result, out)
+    if result.status != "interrupted":
+        checkpoint.remove(out)
+    return result
+
+
+def _adapt_locked(problem: Problem, case: Case, held: directory.Held, *, clear: bool, stopper,
+                  progress: Progress) -> Adaptation:
+    """The adaptive cycles of ``case.adapt`` from ``problem`` (the case's) in a directory this process holds
+    (see the module docstring)."""
+    from ..estimate.adapt import COLUMNS, adapt
+
+    out = held.path
+    if clear:
+        remove_outputs(out)
+    remove_temporaries(out)
+    remove_files(out, ("summary.json",))
+    write_resolved_case(case.to_toml(), out)
+    rows = []
+
+    def after_cycle(cycle: Cycle) -> None:
+        held.check()
+        directory.mkdir(out / "cycles")
+        folder = out / "cycles" / str(cycle.number)
+        directory.mkdir(folder)
+        with progress.phase("outputs", f"writing cycle {cycle.number} into {folder}"):
+            write_outputs(cycle.result, folder)
+        rows.append(cycle.row)
+        with replacing(out / "adapt.csv") as temporary, temporary.open("w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=COLUMNS)
+            writer.writeheader()
+            writer.writerows({k: repr(v) if isinstance(v, float) else v for k, v in row.items()} for row in rows)
+
+    adaptation = adapt(problem, case.adapt, case.output, after_cycle=after_cycle, stop=stopper.reason, progress=progress,
+                       after_step=lambda loop: held.check())
+    with replacing(out / "final_mesh.msh") as temporary:
+        write_mesh(adaptation.mesh, temporary)
+    summary = {"status": adaptation.status, "message": adaptation.message, "cycles": adaptation.rows,
+               "versions": versions()}
+    write_text(out / "summary.json", json.dumps(json_safe(summary), indent=2) + "\n")
+    return adaptation
+
+
+def _finished(case: Case, out: Path) -> Outcome | None:
+    """A run directory that holds a finished run of this case and no checkpoint: nothing to resume."""
+    summary = None if checkpoint.exists(out) else read_summary(out)
+    if summary is None or summary.get("status") not in ("complete", "failed"):
+        return None
+    _check_same_case(case, out)
+    message = summary.get("message", "") or f"the run in '{out}' is already complete; nothing to resume"
+    return Outcome(None, summary["status"], message)
+
+
+def _check_same_case(case: Case, out: Path) -> None:
+    """--resume in a directory without a checkpoint: it must hold a run of this same case."""
+    try:
+        before = read_case(out)
+    except CaseError:
+        raise CaseError(f"cannot resume: '{out}' holds no run of vpcontact (no readable case.resolved.toml)") from None
+    if checkpoint.comparable(before.resolved()) != checkpoint.comparable(case.resolved()):
+        raise checkpoint.ResumeError(f"cannot resume: the run in '{out}' was started with a different case "
+                                     f"({checkpoint.first_difference(before.resolved(), case.resolved())})")
+
+
+class _Cadence:
+    """When to checkpoint: every ``steps`` steps and/or every ``seconds`` seconds (0: not by that)."""
+
+    def __init__(self, steps: int, seconds: float, start: int):
+        self.steps, self.seconds = steps, seconds
+        self.last_step, self.last_time = start, clock.monotonic()
+
+    def due(self, step: int) -> bool:
+        by_steps = self.steps > 0 and step - self.last_step >= self.steps
+        by_time = self.seconds > 0 and clock.monotonic() - self.last_time >= self.seconds
+        return by_steps or by_time
+
+    def saved(self, step: int) -> None:
+        self.last_step, self.last_time = step, clock.monotonic()
+
+
+class StopOnSignals:
+    """While active (main thread only), SIGINT and SIGTERM ask the time loop to stop at the end of the
+    current step (a study: to stop its runs, see ``studies.run_study``); a second signal of the same
+    kind acts at once (the default action)."""
+
+    def __init__(self):
+        self.signal: int | None = None
+        self._previous = {}
+
+    def __enter__(self):
+        if threading.current_thread() is threading.main_thread():
+            for number in SIGNAL_NAMES:
+                self._previous[number] = signal.signal(number, self._handle)
+        return self
+
+    def __exit__(self, *exc):
+        for number, handler in self._previous.items():
+            signal.signal(number, handler)
+        return False
+
+    def _handle(self, number, frame):
+        self.signal = number
+        signal.signal(number, self._previous.get(number, signal.SIG_DFL))  # a second one is not deferred
+
+    def reason(self) -> str | None:
+        return None if self.signal is None else f"stopped by {SIGNAL_NAMES[self.signal]}"

@@ -1,0 +1,253 @@
+"""Checkpoints of a run in progress: everything the time loop needs to continue as if it had never
+stopped.
+
+Layout, inside the run directory:
+
+    checkpoint/state.npz           the loop state at the end of a time step and the results so far
+    checkpoint/fields_NNNNN.npz    the fields of field step NNNNN (written once, before the state
+                                   that includes that step)
+
+Every file is written atomically (a temporary file renamed into place), so a run killed at any
+moment, or stopped by a write that fails (a full disk), leaves the previous complete checkpoint. A
+fields file is written once, before the state that lists its step; one that no state lists (its
+session was killed in between) is removed when a session starts (``remove_unrecorded``). A field
+that a run has not (σ33 in 3D, z without viscoplastic history, η_K without the error estimate) is
+not stored, and None again on restore. state.npz holds
+
+- ``case``: the resolved case (TOML) the run was started with, and ``mesh_digest``: a hash of the
+  mesh, the free dofs and the contact nodes, both checked on resume;
+- the :class:`~vpcontact.timeloop.loop.LoopState`: the step reached, ξ, z and 𝒢 there (viscoplastic
+  history), and the last StepSolution (u at the free dofs for the full solver, λ, d, the active set,
+  its report) and its trend (how u, λ and d changed since the level before): the next Newton
+  iteration starts from the same prediction as in an uninterrupted run; ``rigid``, the body's
+  position on the rigid motions only the contact holds (where a level that nothing presses leaves it,
+  :mod:`vpcontact.timeloop.resting`);
+- the history rows (one array per column) and the per-node contact arrays so far (rows × m);
+- ``meta`` (JSON): the field steps saved, step cuts, wall time and linear solves so far, the steps
+  where the run was resumed before, the versions;
+- ``solver_method`` and ``solver_*``: what the step solver carries from step to step (its ``kept()``:
+  the condensed method's solved span, kept inverse and choice of factor; the iterative method's
+  Newton matrix its AMG hierarchy was built on).
+
+The step solver itself is rebuilt on resume (the condensed solver refactors A0 and rebuilds S) and
+given that state (``restore``): every method then continues exactly as an uninterrupted run, and
+the numbers are its bits (tests/test_resume_matrix.py).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import tomllib
+import zipfile
+from collections.abc import Collection
+from pathlib import Path
+
+import numpy as np
+
+from . import directory
+from ..case.schema import _brief
+from ..errors import CaseError
+from ..results.result import CONTACT_ARRAYS, FIELD_NAMES, INTEGER_COLUMNS, Fields
+from ..solvers import StepSolution
+from ..timeloop.loop import COUNTERS, LoopState, TimeLoop, Trend
+from .writers import OUTPUTS, matching, remove_files, replacing, versions
+
+FOLDER = "checkpoint"
+STATE = "state.npz"
+FILES = tuple(pattern for pattern in OUTPUTS if pattern.startswith(f"{FOLDER}/"))
+"""state.npz and fields_NNNNN.npz, as listed among the outputs of a run directory."""
+FORMAT = 1
+#: Output keys that do not change the numbers: they may differ between a run and its resumption.
+FREE_KEYS = ("progress", "checkpoint_every_steps", "checkpoint_every_seconds", "figures")
+
+
+class ResumeError(CaseError):
+    """A checkpoint that does not belong to the case given (or cannot be read): a one-line message."""
+
+
+def folder(out: Path) -> Path:
+    return Path(out) / FOLDER
+
+
+def exists(out: Path) -> bool:
+    return (folder(out) / STATE).is_file()
+
+
+def remove(out: Path) -> None:
+    """Delete the checkpoint's files (and checkpoint/, if that leaves it empty)."""
+    remove_files(out, FILES)
+
+
+def saved_step(out: Path) -> int | None:
+    """The step the checkpoint in ``out`` continues after; None when there is none (or it is damaged)."""
+    try:
+        with np.load(folder(out) / STATE, allow_pickle=False) as data:
+            return int(data["step"])
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):
+        return None
+
+
+def remove_unrecorded(out: Path, recorded: Collection[int]) -> None:
+    """Delete the fields files of checkpoint/ whose step is not in ``recorded`` (the field steps of the
+    state restored; none for a run that starts): a session that stopped before it saved the state
+    listing them wrote them, and their steps are computed again (``save`` writes a fields file once)."""
+    pattern = f"{FOLDER}/fields_*.npz"
+    found = [path.relative_to(out) for path, whole in matching(out, (pattern,)) if whole is not None]
+    remove_files(out, tuple(str(path) for path in found if path.name[7:-4] not in {f"{n:05d}" for n in recorded}))
+
+
+def comparable(case_dict: dict) -> dict:
+    """A resolved case without the keys that do not change the numbers."""
+    output = {k: v for k, v in case_dict.get("output", {}).items() if k not in FREE_KEYS}
+    return {**case_dict, "output": output}
+
+
+def mesh_digest(problem) -> str:
+    """A hash of what the numbers depend on beyond the case file: the mesh (a mesh file may change),
+    the free dofs and the contact nodes."""
+    digest = hashlib.sha256()
+    for array in (problem.mesh.mesh.p, problem.mesh.mesh.t, problem.free, problem.surface.nodes):
+        digest.update(np.ascontiguousarray(array).tobytes())
+    return digest.hexdigest()
+
+
+def save(loop: TimeLoop, out: Path) -> None:
+    """Write the checkpoint of ``loop`` (at the end of its last completed step) into ``out``."""
+    target = folder(out)
+    directory.mkdir(target)
+    result, state = loop.result, loop.state
+    saved = sorted(result.fields)
+    for n in saved:
+        path = target / f"fields_{n:05d}.npz"
+        if not path.exists():
+            fields = result.fields[n]
+            arrays = {name: getattr(fields, name) for name in FIELD_NAMES if getattr(fields, name) is not None}
+            with replacing(path) as temporary:
+                np.savez(temporary, **arrays)
+    rows = len(result.rows)
+    arrays = {
+        "format": np.array(FORMAT),
+        "case": np.array(loop.problem.source or ""),
+        "mesh_digest": np.array(mesh_digest(loop.problem)),
+        "step": np.array(state.step),
+        "xi": state.xi,
+        "rigid": loop.rigid_position(),
+    }
+    if state.z is not None:
+        arrays["z"] = state.z
+    if state.rate is not None:
+        arrays["rate"] = state.rate
+    previous = state.previous
+    if previous is not None:
+        if previous.u is not None:
+            arrays["previous_u"] = previous.u
+        arrays.update(previous_lam=previous.lam, previous_d=previous.d, previous_active=previous.active,
+                      previous_report=np.array([previous.iterations, previous.residual, previous.complementarity]))
+    trend = state.trend
+    if trend is not None:
+        if trend.u is not None:
+            arrays["trend_u"] = trend.u
+        arrays.update(trend_lam=trend.lam, trend_d=trend.d)
+    for column in result.columns:
+        arrays[f"row_{column}"] = np.array([row[column] for row in result.rows],
+                                           dtype=np.int64 if column in INTEGER_COLUMNS else np.float64)
+    arrays["row_time"] = np.array(result.times, dtype=np.float64)
+    for name in CONTACT_ARRAYS:
+        arrays[f"contact_{name}"] = np.array(result.contact[name]).reshape(rows, result.contact_nodes)
+    meta = {"field_steps": saved, "step_cuts": result.step_cuts, "resumed_at": result.resumed_at,
+            "elapsed_s": loop.elapsed(), **loop.counts(),
+            "versions": versions()}
+    arrays["meta"] = np.array(json.dumps(meta))
+    arrays["solver_method"] = np.array(loop.solver.name)
+    arrays.update({f"solver_{key}": value for key, value in loop.solver.kept().items()})
+    with replacing(target / STATE) as temporary:
+        np.savez(temporary, **arrays)
+
+
+def restore(loop: TimeLoop, out: Path) -> int:
+    """Load the checkpoint in ``out`` into a fresh ``loop`` (same case, same mesh: else ResumeError);
+    returns the step it continues after. Warns (stderr) when the versions differ."""
+    path = folder(out) / STATE
+    arrays = _read(path)
+    try:
+        return _restore(loop, out, path, arrays)
+    except (KeyError, IndexError, TypeError, json.JSONDecodeError, tomllib.TOMLDecodeError) as error:
+        raise ResumeError(f"cannot resume from '{path}': unreadable checkpoint ({type(error).__name__}: {error}); "
+                          f"{RESTART}") from None
+
+
+def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray]) -> int:
+    """``restore`` once state.npz (at ``path``) is read into ``arrays``."""
+    meta = json.loads(str(arrays["meta"]))
+    stored_case = tomllib.loads(str(arrays["case"]))
+    if int(arrays["format"]) != FORMAT:
+        raise ResumeError(f"cannot resume from '{path}': checkpoint format {int(arrays['format'])}, expected {FORMAT}")
+    problem = loop.problem
+    case_now = tomllib.loads(problem.source or "")
+    if comparable(stored_case) != comparable(case_now):
+        raise ResumeError(f"cannot resume: the run in '{out}' was started with a different case "
+                          f"({first_difference(stored_case, case_now)})")
+    if str(arrays["mesh_digest"]) != mesh_digest(problem):
+        raise ResumeError(f"cannot resume: the mesh of the run in '{out}' differs from the mesh of the case now")
+
+    result = loop.result
+    previous = None
+    if "previous_lam" in arrays:
+        iterations, residual, complementarity = arrays["previous_report"]
+        previous = StepSolution(arrays.get("previous_u"), arrays["previous_lam"], arrays["previous_d"],
+                                arrays["previous_active"].astype(bool), int(iterations), float(residual),
+                                float(complementarity), True)
+    trend = Trend(arrays.get("trend_u"), arrays["trend_lam"], arrays["trend_d"]) if "trend_lam" in arrays else None
+    step = int(arrays["step"])
+    loop.state = LoopState(step, arrays["xi"], arrays.get("z"), arrays.get("rate"), previous, trend,
+                           rigid=arrays["rigid"])
+    columns = {column: arrays[f"row_{column}"] for column in result.columns}
+    rows = len(arrays["row_time"])
+    result.rows = [{column: (int(values[i]) if column in INTEGER_COLUMNS else np.float64(values[i]))
+                    for column, values in columns.items()} for i in range(rows)]
+    result.times = [np.float64(t) for t in arrays["row_time"]]
+    result.contact = {name: list(arrays[f"contact_{name}"]) for name in CONTACT_ARRAYS}
+    result.completed_steps = step
+    result.step_cuts = int(meta["step_cuts"])
+    result.resumed_at = [*meta["resumed_at"], step]
+    for n in meta["field_steps"]:
+        data = _read(folder(out) / f"fields_{n:05d}.npz")
+        result.fields[n] = Fields(**{name: data.get(name) for name in FIELD_NAMES})  # absent: None
+    if result.fields:
+        result.final = result.fields[max(result.fields)]
+    if "solver_method" in arrays and str(arrays["solver_method"]) == loop.solver.name:
+        loop.solver.restore({key[7:]: value for key, value in arrays.items()
+                             if key.startswith("solver_") and key != "solver_method"})
+    loop.earlier_time = float(meta["elapsed_s"])
+    loop.earlier_counts = {name: int(meta.get(name, 0)) for name in COUNTERS}
+    loop.stored_versions = meta.get("versions", {})
+    return step
+
+
+RESTART = "the checkpoint cannot be used: start the run again with --overwrite"
+
+
+def _read(path: Path) -> dict[str, np.ndarray]:
+    """Every array of a checkpoint file; ResumeError naming the file when it is missing, empty,
+    truncated or damaged."""
+    if path.exists() and not path.is_file():
+        raise ResumeError(f"cannot resume: the checkpoint file '{path}' is not a regular file; {RESTART}")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {key: data[key] for key in data.files}
+    except FileNotFoundError:
+        raise ResumeError(f"cannot resume: the checkpoint file '{path}' is missing; {RESTART}") from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        what = "empty" if path.stat().st_size == 0 else f"truncated or damaged ({error})"
+        raise ResumeError(f"cannot resume: the checkpoint file '{path}' is {what}; {RESTART}") from None
+
+
+def first_difference(a, b, where: str = "") -> str:
+    """The first key where two nested tables differ, as 'key: old -> new'."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        for key in sorted(set(a) | set(b), key=str):
+            if a.get(key) != b.get(key):
+                return first_difference(a.get(key), b.get(key), f"{where}.{key}" if where else str(key))
+        return where or "?"
+    return f"{where} = {_brief(a)} in the run, {_brief(b)} now"

@@ -1,0 +1,109 @@
+"""Conforming refinement of a `Mesh` that keeps the model's data: parts, regions, exact normals, curved boundaries.
+
+`refine(mesh, marked)` refines the marked elements with scikit-fem's ``refined(marked)`` (red-green-blue
+refinement of triangles, longest-edge bisection of tetrahedra; neighbours are refined as far as the mesh
+needs to stay conforming), then carries the model's data over:
+
+- every new element lies in one element of the old mesh, its parent (the old element containing its
+  centroid); it is in the regions of its parent;
+- every new boundary facet lies in one boundary facet of the old mesh, its parent: the facet of the parent
+  element (of the new facet's element) on which the new facet's centroid lies, the one opposite the vertex
+  whose barycentric coordinate is 0 there; the new facet is in the parts of its parent;
+- the exact normals and the curved parts and interfaces (``Mesh.curved_parts``, ``Mesh.curved_interfaces``)
+  are the old mesh's; the new nodes of the facets of a curved part, or of the facets between elements of the
+  two regions of a curved interface, are moved onto the exact curve or surface. A mesh file has none: its
+  new nodes stay on its flat facets.
+
+The refined mesh is nested in the old one before the projection; the projection must not turn an element
+inside out (a curve much more curved than its elements are small): that is checked, element by element.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .ball import quiet_bisection
+from ..errors import CaseError
+from .core import SKFEM_MESH, Mesh, find_columns, with_parts
+from ..results.norms import Locator
+
+
+def refine(mesh: Mesh, marked) -> Mesh:
+    """The conforming refinement of `mesh` that refines at least the elements `marked` (indices of columns
+    of ``mesh.mesh.t``), with its parts, regions, exact normals and curved parts and interfaces."""
+    old = mesh.mesh
+    marked = np.unique(np.asarray(marked, dtype=np.int64))
+    if marked.size and (marked[0] < 0 or marked[-1] >= old.t.shape[1]):
+        raise ValueError(f"marked elements must be in 0 ... {old.t.shape[1] - 1}, got {marked[0]} ... {marked[-1]}")
+    if not marked.size:
+        return mesh
+    kind = SKFEM_MESH[mesh.dim]
+    with quiet_bisection():
+        fine = kind(old.p, old.t).refined(marked)
+    locator = Locator(old.p, old.t)
+    parent, _ = locator.locate(fine.p[:, fine.t].mean(axis=1).T)
+    boundary = fine.boundary_facets().astype(np.int64)
+    parent_facet = _parent_facets(old, locator, fine, boundary, parent)
+    parts = {name: boundary[np.isin(parent_facet, facets)] for name, facets in mesh.parts.items()}
+    regions = {name: np.flatnonzero(np.isin(parent, elements)) for name, elements in mesh.regions.items()}
+    p = _onto_curves(mesh, fine, parts, regions, first_new=old.p.shape[1])
+    refined = kind(np.ascontiguousarray(p), np.ascontiguousarray(fine.t))
+    return Mesh(with_parts(refined, parts, built=fine), parts, mesh.exact_normals, mesh.file, regions, mesh.curved_parts,
+                mesh.curved_interfaces)
+
+
+def _parent_facets(old, locator: Locator, fine, facets: np.ndarray, parent: np.ndarray) -> np.ndarray:
+    """The facet of the `old` mesh (column of ``old.facets``) that each facet `facets` of the refined mesh `fine`
+    lies in, given the `parent` (old element) of each new element and the `locator` of the old elements."""
+    element = parent[fine.f2t[0, facets]]
+    centroid = fine.p[:, fine.facets[:, facets]].mean(axis=1)
+    opposite = locator.barycentric(centroid.T, element).argmin(axis=0)  # the vertex the facet does not touch
+    vertices = locator.elements[:, element]
+    keep = np.arange(vertices.shape[0])[:, None] != opposite[None, :]
+    nodes = vertices.T[keep.T].reshape(-1, vertices.shape[0] - 1).T
+    return find_columns(old.facets, nodes)
+
+
+def _onto_curves(mesh: Mesh, fine, parts: dict[str, np.ndarray], regions: dict[str, np.ndarray],
+                 first_new: int) -> np.ndarray:
+    """The nodes of `fine` with its new nodes (index ≥ `first_new`) on the curved parts and interfaces of
+    `mesh` moved onto them; CaseError if that turns an element inside out."""
+    p = fine.p.copy()
+    surfaces = [(fine.facets[:, parts[name]], project) for name, project in mesh.curved_parts.items()]
+    inner = fine.f2t[1] >= 0
+    for (a, b), project in mesh.curved_interfaces.items():
+        in_a, in_b = (_mask(regions[name], fine.t.shape[1]) for name in (a, b))
+        between = inner & ((in_a[fine.f2t[0]] & in_b[fine.f2t[1]]) | (in_b[fine.f2t[0]] & in_a[fine.f2t[1]]))
+        surfaces.append((fine.facets[:, between], project))
+    moved = []
+    for nodes, project in surfaces:
+        new = np.unique(nodes[nodes >= first_new])
+        p[:, new] = project(fine.p[:, new])
+        moved.append(new)
+    if moved:
+        _check_not_folded(fine, p, np.unique(np.concatenate(moved)))
+    return p
+
+
+def _mask(indices: np.ndarray, size: int) -> np.ndarray:
+    """The boolean mask of `indices` among `size` items."""
+    mask = np.zeros(size, dtype=bool)
+    mask[indices] = True
+    return mask
+
+
+def signed_measures(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """det [x_1 − x_0, …, x_d − x_0] of each simplex of t (d + 1, m) on the nodes p (d, n): d! times its
+    signed area or volume."""
+    return np.linalg.det((p[:, t[1:]] - p[:, t[:1]]).transpose(2, 0, 1))
+
+
+def _check_not_folded(fine, p: np.ndarray, moved: np.ndarray) -> None:
+    """CaseError if moving the `moved` nodes of `fine` to `p` turns one of its elements inside out or flat."""
+    before, after = signed_measures(fine.p, fine.t), signed_measures(p, fine.t)
+    folded = np.flatnonzero(~(after * np.sign(before) > 0.0))
+    if folded.size:
+        at = ", ".join(f"{x:.6g}" for x in p[:, fine.t[:, folded[0]]].mean(axis=1))
+        raise CaseError(f"refining the mesh turns {folded.size} element(s) inside out near ({at}) when their new "
+                        f"nodes are moved onto the curved boundary or interface: the elements there are too large "
+                        f"for its curvature; start from a smaller mesh.h")

@@ -1,0 +1,425 @@
+"""The result of a run: time series, per-node contact history and fields at the requested steps.
+
+Conventions: the penetration d = u·ν − g0 (> 0 into the foundation); pressures are forces per unit
+length of Γ3 (per unit area in 3D), the compliance part ρK(ξ)p(d) and the rigid part λ_i / w_i;
+the normal stress σ_ν = −(compliance + rigid) ≤ 0; the contact force is the resultant the
+foundation exerts on the body, −Σ_i w_i (compliance_i + rigid_i) ν_i.
+
+Sub-steps: a step whose Newton iteration fails is cut in halves (``stepping``). Every converged
+time level is a row of the history and of the per-node arrays, in time order: a step done whole is
+one row (``substep`` 1, ``k`` the case's step), a step cut into s sub-steps is s rows with the same
+``step`` n, ``substep`` 1, …, s, their own ``t`` and ``k``, the last one at t_n. Fields are kept per
+step n, at t_n. Which rows are the steps t_n is decided in one place, :func:`step_ends` (for a run in
+memory and for a run directory's tables alike); ``series(..., substeps=False)`` and
+``contact_history(..., substeps=False)`` keep only those rows.
+
+Memory: the rows and the fields at the field steps are kept until the run is written; a case whose
+outputs would not fit in the memory available is refused before its first step (:func:`check_memory`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import os
+from collections.abc import Collection
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
+from ..problem.discretization import Discretization
+from ..errors import CaseError, flag, quoted, shown
+from ..memory import available_memory
+from ..fem.space import coordinates
+
+def history_columns(dim: int) -> tuple[str, ...]:
+    """The columns of history.csv for a d-dimensional body (one contact force component per coordinate)."""
+    return ("step", "t", "newton_iterations", "residual", "complementarity", "max_penetration", "mean_penetration",
+            "K_min", "K_max", "K_probe", "penetration_probe", "normal_stress_probe", "nodes_separated",
+            "nodes_in_compliance", "nodes_at_limit", *(f"contact_force_{c}" for c in coordinates(dim)), "substep", "k")
+
+
+#: The history columns of a 2D body (the paper's case).
+HISTORY_COLUMNS = history_columns(2)
+#: The terms of the residual error estimate (:mod:`vpcontact.estimate.residual`).
+ESTIMATE_TERMS = ("body_force", "jump", "neumann", "contact_tangential", "contact_normal", "complementarity")
+#: The history columns a run with ``output.error_estimate`` adds: η(t) = (Σ_K η_K²)^½ and each term's share
+#: (Σ_K η_K,term²)^½.
+ESTIMATE_COLUMNS = ("error_estimate", *(f"error_estimate_{term}" for term in ESTIMATE_TERMS))
+#: History columns holding integers (the others are floats).
+INTEGER_COLUMNS = ("step", "newton_iterations", "nodes_separated", "nodes_in_compliance", "nodes_at_limit", "substep")
+#: Most characters of a run's message that ``repr(result)`` shows (on its second line).
+REPR_MESSAGE = 200
+CONTACT_ARRAYS = ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid", "status")
+
+
+class UnknownName(CaseError, KeyError):
+    """A history column or contact array that does not exist (a KeyError, and a CaseError: one line)."""
+
+    __str__ = CaseError.__str__  # the message as it is, not quoted as a KeyError shows its key
+
+
+def _unknown(kind: str, name, valid: Collection[str], elsewhere: tuple[Collection[str], str]) -> UnknownName:
+    """The error for ``name`` not in ``valid``; ``elsewhere``: the names of the other accessor, and its call."""
+    close = difflib.get_close_matches(str(name), valid, n=1)
+    if name in elsewhere[0]:
+        hint = f"{elsewhere[1]}({name!r}) has it; "
+    else:
+        hint = f"did you mean '{close[0]}'? " if close else ""
+    return UnknownName(f"unknown {kind} {shown(repr(name))}; {hint}valid names: {', '.join(valid)}")
+
+
+def step_ends(steps, completed: int) -> np.ndarray:
+    """Per history row, given the step number n of each row (in time order): is it the row at t_n? It is
+    the last row of its step, for the steps n ≤ ``completed`` (the steps reached): a step cut into
+    sub-steps has several rows, its last one at t_n; the rows of a step not reached (a step that failed
+    even after its cuts) are none."""
+    steps = np.asarray(steps)
+    last = np.append(steps[1:] != steps[:-1], True) if steps.size else np.zeros(0, dtype=bool)
+    return last & (steps <= completed)
+
+
+def end_of_step_rows(steps, completed: int) -> dict[int, int]:
+    """Step n -> the index of its row at t_n (:func:`step_ends`), for the steps reached."""
+    ends = np.flatnonzero(step_ends(steps, completed))
+    return dict(zip(np.asarray(steps)[ends].astype(int).tolist(), ends.tolist()))
+
+
+def field_step_numbers(field_steps, steps: int) -> Collection[int]:
+    """The steps whose fields are kept, for ``output.field_steps`` ("all", "final", "none" or a list) in a
+    run of ``steps`` steps (a range for "all": no set of every step is built)."""
+    if isinstance(field_steps, str):
+        return {"all": range(1, steps + 1), "final": range(steps, steps + 1), "none": range(0)}[field_steps]
+    return frozenset(field_steps)
+
+
+@dataclass(repr=False)
+class Fields:
+    """Displacement at the nodes (nnodes, d); per element: the stress (nelements, d, d), in 2D also the
+    out-of-plane σ33 of the elastic response (None in 3D), and the von Mises stress of the 3D tensor;
+    with a viscoplastic law or initial data with z_0 = σ_0 − ℰε(u_0) ≠ 0, the history z (nelements, d, d)
+    of the step, so that stress = ℰε(u) + z (None otherwise: z = 0); with ``output.error_estimate`` the
+    error indicator η_K of each element (nelements,) (None otherwise)."""
+
+    displacement: np.ndarray
+    stress: np.ndarray
+    stress33: np.ndarray | None
+    von_mises: np.ndarray
+    z: np.ndarray | None = None
+    error_indicator: np.ndarray | None = None
+
+    def __repr__(self) -> str:
+        """The shapes, not the values."""
+        shapes = ", ".join(f"{name}{getattr(self, name).shape}" for name in FIELD_NAMES
+                           if getattr(self, name) is not None)
+        return f"Fields({shapes})"
+
+
+#: The fields of a time level (:class:`Fields`), in their order: what a checkpoint keeps of a field step.
+FIELD_NAMES = tuple(item.name for item in dataclasses.fields(Fields))
+
+
+@dataclass(repr=False)
+class Result:
+    """Everything a run computed. Arrays per contact node are (rows, m): one row per converged time
+    level, sub-steps included (see the module's docstring). ``times`` is the array of the rows' times."""
+
+    dofs: int
+    elements: int
+    nodes: int
+    contact_nodes: int
+    dim: int
+    probe: int | None
+    field_steps: Collection[int]
+    augmentation: float
+    _times: list = field(default_factory=list)  # t of each row (a list: appending is cheap)
+    rows: list = field(default_factory=list)
+    contact: dict = field(default_factory=lambda: {name: [] for name in CONTACT_ARRAYS})
+    fields: dict[int, Fields] = field(default_factory=dict)
+    final: Fields | None = None
+    status: str = "running"  # then "complete", "failed" or "interrupted"
+    message: str = ""
+    wall_time_s: float = 0.0
+    timings: dict = field(default_factory=dict)
+    method: str = ""
+    method_reason: str = ""  # why that step method runs (solver.method, or what "auto" weighed)
+    linear_solves: int = 0  # solves with a factored matrix in the time loop
+    krylov_iterations: int = 0  # GMRES iterations on Newton systems in the time loop
+    newton_factorizations: int = 0  # LU factorizations of condensed Newton matrices in the time loop
+    problem: object = None  # the Problem solved, in the process that solved it (None in a copy sent elsewhere)
+    discretization: object = None  # what the result needs of the problem (vpcontact.problem.discretization), always there
+    completed_steps: int = 0  # time steps t_n reached
+    step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
+    resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
+    error_estimate: bool = False  # output.error_estimate: the rows have the ESTIMATE_COLUMNS
+    output: object = None  # the OutputSection the run was made with (what the writers write)
+
+    @classmethod
+    def start(cls, problem, solver, output) -> "Result":
+        """The empty result of a run of ``problem`` by ``solver`` with the options ``output`` (OutputSection)."""
+        wanted = field_step_numbers(output.field_steps, len(problem.times))
+        return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
+                   contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
+                   augmentation=solver.r, method=solver.name, method_reason=solver.reason, problem=problem,
+                   discretization=Discretization.of(problem),
+                   output=output, error_estimate=output.error_estimate)
+
+    # --- filling in ------------------------------------------------------------------------------
+    def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status, substep: int = 1,
+               k: float = float("nan"), ends_step: bool = True):
+        """Store a converged time level of step n (the step itself, or its sub-step ``substep`` of
+        length k; ``ends_step``: t = t_n): the solver report, the contact state, the fields if computed."""
+        surface = self.discretization.surface
+        w, normals = surface.weights, surface.normals
+        rigid = np.divide(solution.lam, w, out=np.zeros_like(w), where=w > 0)
+        d = solution.d
+        for name, value in zip(CONTACT_ARRAYS, (d, xi, K, compliance, rigid, status)):
+            self.contact[name].append(np.asarray(value).copy())
+        force = -(normals * (w * (compliance + rigid))).sum(axis=1)
+        positive = np.maximum(d, 0.0)
+        has_contact = d.size > 0
+        probe = self.probe
+        self.rows.append({
+            "step": n, "t": t, "newton_iterations": solution.iterations, "residual": solution.residual,
+            "complementarity": solution.complementarity,
+            "max_penetration": positive.max() if has_contact else np.nan,
+            "mean_penetration": (w @ positive) / w.sum() if has_contact else np.nan,
+            "K_min": K.min() if has_contact else np.nan, "K_max": K.max() if has_contact else np.nan,
+            "K_probe": K[probe] if probe is not None else np.nan,
+            "penetration_probe": d[probe] if probe is not None else np.nan,
+            "normal_stress_probe": -(compliance[probe] + rigid[probe]) if probe is not None else np.nan,
+            "nodes_separated": int(np.sum(status == SEPARATED)),
+            "nodes_in_compliance": int(np.sum(status == IN_COMPLIANCE)),
+            "nodes_at_limit": int(np.sum(status == AT_LIMIT)),
+            **{f"contact_force_{c}": force[i] for i, c in enumerate(coordinates(self.dim))},
+            "substep": substep, "k": k,
+        })
+        self._times.append(t)
+        if ends_step:
+            self.completed_steps = n
+        if fields is not None:
+            self.final = fields
+            if ends_step and n in self.field_steps:
+                self.fields[n] = fields
+
+    def contact_row(self, row: int = -1) -> dict[str, np.ndarray]:
+        """The per-node contact arrays (CONTACT_ARRAYS) of one history row (default: the last)."""
+        return {name: np.asarray(self.contact[name][row]) for name in CONTACT_ARRAYS}
+
+    def record_estimate(self, indicators, fields: Fields) -> None:
+        """Add the error estimate (:class:`~vpcontact.estimate.indicators.Indicators`) of the last recorded level to
+        its history row (ESTIMATE_COLUMNS) and its η_K to that level's ``fields``."""
+        self.rows[-1].update({"error_estimate": indicators.total,
+                              **{f"error_estimate_{term}": float(np.sqrt(indicators.terms[term].sum()))
+                                 for term in ESTIMATE_TERMS}})
+        fields.error_indicator = np.sqrt(indicators.squared)
+
+    def fail(self, message: str) -> None:
+        self.status, self.message = "failed", message
+
+    def finish(self, timings: dict[str, float]) -> None:
+        """Close the run with its timings in seconds (setup stages, time loop, total)."""
+        if self.status == "running":
+            self.status = "complete"
+        self.timings = timings
+        self.wall_time_s = timings["total"]
+
+    # --- reading ---------------------------------------------------------------------------------
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """The history columns (history.csv) of this run's dimension, and with ``output.error_estimate``
+        the ESTIMATE_COLUMNS."""
+        return history_columns(self.dim) + (ESTIMATE_COLUMNS if self.error_estimate else ())
+
+    @property
+    def steps(self) -> int:
+        """Time steps t_n reached (the history has more rows when steps were cut)."""
+        return self.completed_steps
+
+    @property
+    def times(self) -> np.ndarray:
+        """The time t of each history row (a new array)."""
+        return np.array(self._times, dtype=float)
+
+    @times.setter
+    def times(self, values) -> None:
+        self._times = [np.float64(t) for t in values]
+
+    def ends_step(self) -> np.ndarray:
+        """Per history row: does it end a time step (t = t_n), rather than being an earlier sub-step
+        (:func:`step_ends`)?"""
+        return step_ends(self.series("step"), self.completed_steps)
+
+    def end_of_step_rows(self) -> dict[int, int]:
+        """Step n -> the history row at t_n, for the steps reached (:func:`end_of_step_rows`)."""
+        return end_of_step_rows(self.series("step"), self.completed_steps)
+
+    def series(self, column: str, *, substeps: bool = True) -> np.ndarray:
+        """One column of the history (see ``columns``) over the rows done; ``substeps=False``: only the
+        rows at the step times t_n. An unknown column is a KeyError naming the valid ones."""
+        if column not in self.columns:
+            raise _unknown("history column", column, self.columns, (CONTACT_ARRAYS, "contact_history"))
+        values = np.array([row[column] for row in self.rows])
+        return values if substeps else values[self.ends_step()]
+
+    def contact_history(self, name: str, *, substeps: bool = True) -> np.ndarray:
+        """(rows, m) array of a per-node quantity (see CONTACT_ARRAYS); ``substeps=False``: only the
+        rows at the step times t_n. An unknown name is a KeyError naming the valid ones."""
+        if name not in CONTACT_ARRAYS:
+            raise _unknown("contact array", name, CONTACT_ARRAYS, (self.columns, "series"))
+        values = np.array(self.contact[name]).reshape(len(self.rows), self.contact_nodes)
+        return values if substeps else values[self.ends_step()]
+
+    def snapshot(self, step: int | None = None):
+        """The solution at a field step (default: the last computed) as a :class:`~vpcontact.results.norms.Snapshot`,
+        for :func:`vpcontact.results.norms.differences`."""
+        from .norms import Snapshot
+
+        if step is not None and step not in self.fields:
+            kept = ", ".join(map(str, sorted(self.fields))) or "none (output.field_steps)"
+            raise UnknownName(f"no fields kept at step {shown(repr(step))}; steps kept: {kept}")
+        if self.final is None:
+            raise CaseError("no fields computed: the run did not complete a step")
+        fields = self.final if step is None else self.fields[step]
+        mesh = self.discretization.mesh.mesh
+        return Snapshot(mesh.p, mesh.t, fields.displacement, fields.stress)
+
+    def summary(self) -> dict:
+        """The content of summary.json (without versions)."""
+        final = {}
+        if self.rows:
+            last = self.rows[-1]
+            final = {key: last[key] for key in ("t", "max_penetration", "mean_penetration", "K_min", "K_max", "K_probe",
+                                                 "penetration_probe", "normal_stress_probe", "nodes_separated",
+                                                 "nodes_in_compliance", "nodes_at_limit")}
+            final["contact_force"] = [last[f"contact_force_{c}"] for c in coordinates(self.dim)]
+            if self.error_estimate:
+                final["error_estimate"] = last["error_estimate"]
+        return {
+            "status": self.status, "message": self.message, "dofs": self.dofs, "elements": self.elements,
+            "nodes": self.nodes, "contact_nodes": self.contact_nodes, "steps": self.steps,
+            "newton_iterations": int(sum(r["newton_iterations"] for r in self.rows)),
+            "solver_method": self.method, "solver_reason": self.method_reason, "linear_solves": self.linear_solves,
+            "krylov_iterations": self.krylov_iterations, "newton_factorizations": self.newton_factorizations,
+            "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s,
+            "timings_s": self.timings, "final": final,
+            "history_rows": len(self.rows), "step_cuts": self.step_cuts, "resumed_at_steps": list(self.resumed_at),
+        }
+
+    @property
+    def history(self):
+        """The history as a pandas DataFrame (a new one at each access): one row per converged time level,
+        the columns of history.csv (``columns``), integer columns as int64. ``result.history[result.ends_step()]``
+        keeps the rows at the step times t_n (those of ``series(..., substeps=False)``). See :mod:`vpcontact.results.tables`."""
+        from .tables import history_table
+
+        return history_table(self)
+
+    def contact_table(self, step: int | None = None):
+        """The contact nodes at the end of ``step`` (default: the last step done) as a pandas DataFrame, one
+        row per node: coordinates, normal, weight, arc length along Γ3 (2D), penetration, ξ, K, the two
+        pressures, σ_ν and the status (a category); see :func:`vpcontact.results.tables.contact_table`."""
+        from .tables import contact_table
+
+        return contact_table(self, step)
+
+    @property
+    def plot(self):
+        """The figures of this run (matplotlib Figures): ``result.plot.time_series(...)``,
+        ``.contact_pressure(step=...)``, ``.states(step=...)``, ``.deformed(field=..., scale=...)``; see
+        :class:`vpcontact.results.result_plots.ResultPlots`."""
+        from .result_plots import ResultPlots
+
+        return ResultPlots(self)
+
+    def to_pyvista(self, step: int | None = None):
+        """The body at a field step (default: the last one kept) as a ``pyvista.UnstructuredGrid`` with its
+        fields as point and cell data (needs pyvista); see :func:`vpcontact.io.pyvista_grid.body_grid`."""
+        from ..io.pyvista_grid import body_grid
+
+        return body_grid(self, step)
+
+    def write(self, out: str | os.PathLike, *, overwrite: bool = False) -> Path:
+        """Write the files of a run directory (README, "Outputs") into ``out``, as ``vpcontact run`` does:
+        created if missing; a directory that is not empty is refused (a CaseError, and a FileExistsError)
+        unless ``overwrite``, which removes only the files a run writes there. Returns ``out`` as a Path."""
+        from ..io.directory import folder_path
+        from ..io.writers import write_run
+
+        return write_run(self, folder_path(out, "output directory"), overwrite=flag("overwrite", overwrite))
+
+    def __getstate__(self) -> dict:
+        """A copy sent to another process (pickled) leaves the Problem behind (its operators, loads and the
+        Python objects it may hold); ``discretization`` has all the writers, tables, plots and norms read."""
+        return {**self.__dict__, "problem": None}
+
+    def __repr__(self) -> str:
+        """One line: status, dimension, sizes, steps done of those planned, step method and wall time (not the
+        arrays); a second one with the message of a run that did not complete."""
+        planned = len(self.discretization.times) if self.discretization is not None else "?"
+        cuts = f", {self.step_cuts} step cut{'s' * (self.step_cuts > 1)}" if self.step_cuts else ""
+        text = (f"Result({self.status}, {self.dim}D, {self.dofs} dofs, {self.contact_nodes} contact nodes, "
+                f"{self.steps}/{planned} steps{cuts}, method {self.method or '?'}, {self.wall_time_s:.3g} s)")
+        if not self.message:
+            return text
+        message = self.message if len(self.message) <= REPR_MESSAGE else self.message[:REPR_MESSAGE] + " …"
+        return f"{text}\n  {message}"
+
+
+# --- memory ----------------------------------------------------------------------------------------
+#: Bytes of one history row in memory: a dict of the HISTORY_COLUMNS and its time (CPython 3.11, measured).
+HISTORY_ROW_BYTES = 1100
+#: Bytes the ESTIMATE_COLUMNS add to a history row in memory (7 float objects and the larger dict; CPython 3.11, measured).
+ESTIMATE_ROW_BYTES = 900
+#: Bytes of a NumPy array object besides its data.
+ARRAY_BYTES = 112
+#: Bytes the writers add while they write, whatever the run's length (contact.csv is written in blocks).
+WRITING_BYTES = 2**24
+
+
+def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, contact_nodes: int,
+                  history: bool, dim: int = 2, estimate: bool = False) -> dict[str, int]:
+    """Bytes a run of ``steps`` steps keeps for its outputs until they are written, by part: the history
+    rows, the per-node contact rows and the fields at ``field_steps`` steps (``history``: with the
+    viscoplastic history z; ``estimate``: with the ESTIMATE_COLUMNS in every row and η_K in the fields),
+    each with the copy a checkpoint or solution.npz makes of them, and what the writers add. A step cut
+    into sub-steps adds rows: this is the least a run needs."""
+    columns = len(history_columns(dim)) + (len(ESTIMATE_COLUMNS) if estimate else 0)
+    copies = 8 * columns
+    row = HISTORY_ROW_BYTES + (ESTIMATE_ROW_BYTES if estimate else 0)
+    contact = len(CONTACT_ARRAYS) * ARRAY_BYTES + 2 * (8 * (len(CONTACT_ARRAYS) - 1) + 1) * contact_nodes
+    tensor = dim * dim
+    per_field = 5 * ARRAY_BYTES + 8 * (dim * nodes + (tensor + 2) * elements) + 8 * (dim * nodes + tensor * elements)
+    if history:
+        per_field += 2 * 8 * tensor * elements
+    if estimate:
+        per_field += ARRAY_BYTES + 2 * 8 * elements
+    return {"history rows": steps * (row + copies), "contact rows": steps * contact,
+            "fields": (field_steps + 1) * per_field, "writing": WRITING_BYTES}
+
+
+def check_memory(steps: int, output, nodes: int, elements: int, contact_nodes: int, history: bool,
+                 dim: int = 2) -> None:
+    """Refuse, before anything per step is allocated, a run of ``steps`` steps whose outputs (``output``, the
+    :class:`~vpcontact.case.schema.OutputSection`) would not fit in the memory available now: one line naming
+    time.steps (and output.field_steps when the fields are the most)."""
+    field_steps = len(field_step_numbers(output.field_steps, steps))
+    parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim,
+                          estimate=output.error_estimate)
+    needed, available = sum(parts.values()), available_memory()
+    if needed <= available:
+        return
+    gib = 2.0**30
+    detail = (f"history rows {parts['history rows'] / gib:.3g} GiB, contact rows of {contact_nodes} nodes "
+              f"{parts['contact rows'] / gib:.3g} GiB, fields at {field_steps} steps of {nodes} nodes and {elements} "
+              f"elements {parts['fields'] / gib:.3g} GiB")
+    key = f"time.steps = {steps}"
+    fix = "use fewer steps"
+    if parts["fields"] > parts["history rows"] + parts["contact rows"]:
+        chosen = output.field_steps
+        key += f" with output.field_steps = {quoted(chosen) if isinstance(chosen, str) else shown(repr(chosen))}"
+        fix = "keep the fields at fewer steps (output.field_steps) or use fewer steps"
+    raise CaseError(f"{key}: the run's outputs need about {needed / gib:.3g} GiB of memory ({detail}), more than "
+                    f"the {available / gib:.3g} GiB available; {fix}")
