@@ -90,7 +90,8 @@ def _refuse(error) -> int:
 def _run(args) -> int:
     from ..case.schema import load_case
     from ..progress import SILENT, Log
-    from .rundir import EXIT_SIGNAL, run
+    from .rundir import run
+    from .signals import EXIT_SIGNAL
 
     try:
         case = load_case(args.case, args.overrides)
@@ -151,8 +152,9 @@ def _describe(error: OSError) -> str:
 
 def _study(args) -> int:
     from ..progress import SILENT, Log
-    from .rundir import EXIT_SIGNAL, StopOnSignals
-    from .studies import load_study, run_study
+    from .signals import EXIT_SIGNAL, StopOnSignals
+    from .studies.file import load_study
+    from .studies.running import connect, run_study
 
     client = None
     try:
@@ -160,7 +162,7 @@ def _study(args) -> int:
             raise CaseError(f"--workers {args.workers}: must be at least 1")
         study = load_study(args.study, args.out)
         if args.scheduler is not None:
-            client = _connect(args.scheduler)
+            client = connect(args.scheduler)
         with StopOnSignals() as stopper, (Log(hold=0.0, watch=False) if not args.quiet else SILENT) as progress:
             report = run_study(study, args.out, executor=client.get_executor() if client else None,
                                workers=args.workers, progress=progress, stop=stopper.reason)
@@ -183,20 +185,6 @@ def _study(args) -> int:
     for run_id in report["failed"]:
         print(f"vpcontact: run '{run_id}' failed (see {args.out / 'runs' / run_id})", file=sys.stderr)
     return EXIT_FAILED if report["failed"] else 0
-
-
-def _connect(address: str):
-    """A client of the Dask scheduler at ``address`` (CaseError without the cluster extra, or when it
-    cannot be reached)."""
-    try:
-        from distributed import Client
-    except ImportError:
-        raise CaseError(f'--scheduler {address}: the Dask client is not installed; install it with: '
-                        f'pip install "vpcontact[cluster]"') from None
-    try:
-        return Client(address, timeout="10s")
-    except (OSError, ValueError, TypeError) as error:
-        raise CaseError(f"--scheduler {address}: cannot connect ({error})") from None
 
 
 def _reproduce(args) -> int:
