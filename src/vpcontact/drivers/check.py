@@ -23,7 +23,6 @@ from ..problem.build import build_problem
 from ..progress import size
 from ..timeloop.plan import RunPlan, free_operators, plan_run
 
-
 #: A boundary part: its name and its numbers of facets and nodes.
 Part = make_dataclass("Part", [("name", str), ("facets", int), ("nodes", int)], frozen=True)
 #: A region of the mesh (a group of elements), its number of elements and the material keys its elements have.
