@@ -41,32 +41,27 @@ from __future__ import annotations
 import csv
 import errno
 import json
-import signal
 import sys
-import threading
 import time as clock
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..io import checkpoint, directory
 from ..case.schema import Case
 from ..errors import CaseError
+from ..io import checkpoint, directory
+from ..io.run_reader import read_case, read_summary
+from ..io.writers import (check_room, json_safe, remove_files, remove_outputs, remove_temporaries, replacing,
+                          versions, write_outputs, write_resolved_case, write_text)
 from ..mesh.msh import write_mesh
 from ..problem.build import Problem, build_problem
 from ..progress import Progress, reporting
 from ..results.result import Result
-from ..io.run_reader import read_case, read_summary
 from ..timeloop.loop import TimeLoop
-from ..io.writers import (check_room, json_safe, remove_files, remove_outputs, remove_temporaries, replacing, versions,
-                      write_outputs, write_resolved_case, write_text)
+from .signals import StopOnSignals
 
 if TYPE_CHECKING:
     from ..estimate.adapt import Adaptation, Cycle
-
-SIGNAL_NAMES = {signal.SIGINT: "SIGINT", signal.SIGTERM: "SIGTERM"}
-EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
-
 
 class RunStopped(OSError):
     """A run stopped because a write into its directory failed (a full disk, a symbolic link put there
@@ -272,31 +267,3 @@ class _Cadence:
 
     def saved(self, step: int) -> None:
         self.last_step, self.last_time = step, clock.monotonic()
-
-
-class StopOnSignals:
-    """While active (main thread only), SIGINT and SIGTERM ask the time loop to stop at the end of the
-    current step (a study: to stop its runs, see ``studies.run_study``); a second signal of the same
-    kind acts at once (the default action)."""
-
-    def __init__(self):
-        self.signal: int | None = None
-        self._previous = {}
-
-    def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
-            for number in SIGNAL_NAMES:
-                self._previous[number] = signal.signal(number, self._handle)
-        return self
-
-    def __exit__(self, *exc):
-        for number, handler in self._previous.items():
-            signal.signal(number, handler)
-        return False
-
-    def _handle(self, number, frame):
-        self.signal = number
-        signal.signal(number, self._previous.get(number, signal.SIG_DFL))  # a second one is not deferred
-
-    def reason(self) -> str | None:
-        return None if self.signal is None else f"stopped by {SIGNAL_NAMES[self.signal]}"
