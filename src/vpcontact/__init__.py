@@ -32,8 +32,8 @@ API = {"Case": "case.schema", "Model": "case.schema", "load_case": "case.schema"
 
 #: The packages a user may reach as ``vpcontact.<name>`` after ``import vpcontact`` (and their modules as
 #: ``vpcontact.<name>.<module>``), and the modules of the package itself.
-SUBMODULES = ("case", "drivers", "errors", "estimate", "fem", "io", "laws", "mesh", "problem", "progress", "reproduction",
-              "results", "solvers", "timeloop")
+SUBMODULES = ("case", "drivers", "errors", "estimate", "expressions", "fem", "inputs", "io", "laws", "mesh", "problem",
+              "progress", "reproduction", "results", "solvers", "timeloop")
 
 
 def submodule(package: str, name: str):

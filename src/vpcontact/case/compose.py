@@ -35,8 +35,8 @@ import skfem
 from pydantic import ValidationError
 
 from ..mesh import core as meshes
-from .schema import MeshSection, Model, _brief, _check_expressions, _check_tree, _describe, _material_keys, plain, section
-from ..errors import CaseError
+from .schema import MeshSection, Model, _check_expressions, _check_tree, _describe, _material_keys, plain, section
+from ..errors import CaseError, brief
 from ..problem.build import Problem, build_problem, make_mesh
 
 #: The contact keys that may be Python laws instead of tables, and the build_problem argument each becomes.
@@ -97,7 +97,7 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     if viscoplastic is not None:
         tabled = [key for key, entry in _material_keys(model) if entry.viscoplastic is not None]
         if tabled:
-            raise CaseError(f"{tabled[0]}.viscoplastic and viscoplastic = {_brief(viscoplastic)}: the Python law "
+            raise CaseError(f"{tabled[0]}.viscoplastic and viscoplastic = {brief(viscoplastic)}: the Python law "
                             f"replaces the tables' laws on the whole body, so {tabled[0]}.viscoplastic would not be "
                             f"used; give one of them")
     return build_problem(model, mesh=mesh, **{name: value for name, value in objects.items() if value is not None})
@@ -115,14 +115,14 @@ def _mesh(mesh) -> meshes.Mesh:
         raise CaseError(f"mesh = a scikit-fem {type(mesh).__name__} without named boundary parts: not accepted yet; "
                         f"pass vpcontact.mesh.Mesh(m, parts={{name: indices of boundary facets}}, exact_normals={{}}) "
                         f"(or save it to a mesh file with physical groups and pass its name)")
-    raise CaseError(f"mesh = {_brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, quarter_ball, "
+    raise CaseError(f"mesh = {brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, quarter_ball, "
                     f"rectangle, block or read_mesh), a mesh file's name or a [mesh] table")
 
 
 def _table(key: str, value) -> dict:
     """A copy of the table ``value`` of ``key``, or CaseError."""
     if not isinstance(value, Mapping):
-        raise CaseError(f"{key} = {_brief(value)}: expected a table (dict) of the [{key}] keys")
+        raise CaseError(f"{key} = {brief(value)}: expected a table (dict) of the [{key}] keys")
     return dict(value)
 
 
@@ -135,13 +135,13 @@ def _dirichlet(dirichlet) -> list:
         return [{"part": part, **_components(part, components)} for part, components in dirichlet.items()]
     if isinstance(dirichlet, Sequence) and not isinstance(dirichlet, str):
         return list(dirichlet)
-    raise CaseError(f"dirichlet = {_brief(dirichlet)}: expected {{part: components}} (components \"x\", [\"x\", \"y\"] "
+    raise CaseError(f"dirichlet = {brief(dirichlet)}: expected {{part: components}} (components \"x\", [\"x\", \"y\"] "
                     f"or None for all) or a list of [[boundary.dirichlet]] tables")
 
 
 def _components(part, components) -> dict:
     """The "components" key of the [[boundary.dirichlet]] table of ``dirichlet[part] = components``."""
-    where = f"dirichlet[{_brief(part)}] = {_brief(components)}"
+    where = f"dirichlet[{brief(part)}] = {brief(components)}"
     if isinstance(components, Mapping):
         raise CaseError(f"{where}: prescribed displacements are not supported yet (only u = 0): give the components "
                         f"held at 0 (\"x\", [\"x\", \"y\"] or None for all)")
@@ -160,7 +160,7 @@ def _tractions(traction) -> tuple[list, dict | None]:
     if traction is None:
         return [], None
     if not isinstance(traction, Mapping):
-        raise CaseError(f"traction = {_brief(traction)}: expected {{part: value}}, value a list of expressions or a "
+        raise CaseError(f"traction = {brief(traction)}: expected {{part: value}}, value a list of expressions or a "
                         f"function f(x, y, (z,) t) -> (fx, fy, (fz))")
     functions = {part: value for part, value in traction.items() if callable(value)}
     tables = [{"part": part, "value": value} for part, value in traction.items() if not callable(value)]

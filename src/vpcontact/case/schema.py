@@ -23,9 +23,9 @@ import tomli_w
 from pydantic import (AfterValidator, BaseModel, BeforeValidator, ConfigDict, Discriminator, Field, Tag, ValidationError,
                       ValidationInfo, field_validator, model_validator)
 
-from ..errors import CaseError, one_line, quoted, shown
-from .expressions import parse_expression
-from .inputs import MAX_TOML_BYTES, check_regular_file
+from ..errors import CaseError, brief, one_line, quoted, shown
+from ..expressions.parse import parse_expression
+from ..inputs import MAX_TOML_BYTES, check_regular_file
 from ..solvers.factorization import BACKENDS, installed_backends
 from ..fem.space import CELLS
 
@@ -44,20 +44,6 @@ def _finite(number) -> bool:
         return False
 
 
-def _brief(value) -> str:
-    """repr(value), cut as :func:`~vpcontact.errors.shown` cuts (a huge number or list stays a short message)."""
-    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 200:
-        sign = "a negative" if value < 0 else "an"
-        return f"{sign} integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
-    try:
-        text = repr(value)
-    except Exception:  # noqa: BLE001 - an object of the API may have any repr
-        return f"a value of type {type(value).__name__}"
-    if "\n" in text:  # an object shown over several lines (a scikit-fem mesh, a table): one line
-        text = " ".join(text.split())
-    return shown(text)
-
-
 PositiveFloat = Annotated[float, Field(gt=0)]
 NonNegativeFloat = Annotated[float, Field(ge=0)]
 
@@ -65,9 +51,9 @@ NonNegativeFloat = Annotated[float, Field(ge=0)]
 def _expression_value(value):
     """An expression: a string (parsed later with its key in the message) or a number."""
     if isinstance(value, bool) or not isinstance(value, (str, int, float)):
-        raise ValueError(f"expected an expression (a string such as \"-1000*t\") or a number, got {_brief(value)}")
+        raise ValueError(f"expected an expression (a string such as \"-1000*t\") or a number, got {brief(value)}")
     if isinstance(value, (int, float)) and not _finite(value):  # an int too, beyond float64's range
-        raise ValueError(f"expected a finite number, got {_brief(value)}")
+        raise ValueError(f"expected a finite number, got {brief(value)}")
     return value
 
 
@@ -84,7 +70,7 @@ def _layer_value(minimum: float | None):
         value = _expression_value(value)
         if isinstance(value, (int, float)) and minimum is not None and not value >= minimum:
             raise ValueError(f"expected a number >= {minimum:g} or an expression in the coordinates, got "
-                             f"{_brief(value)}")
+                             f"{brief(value)}")
         return value
 
     return Annotated[Any, AfterValidator(check)]
@@ -105,10 +91,10 @@ def _thickness(value):
     if isinstance(value, str):
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-        raise ValueError(f"g = {_brief(value)}: must be > 0 (a number, \"inf\" or an expression in the "
+        raise ValueError(f"g = {brief(value)}: must be > 0 (a number, \"inf\" or an expression in the "
                          f"coordinates)")
     if isinstance(value, int) and not _finite(value):
-        raise ValueError(f"g = {_brief(value)}: beyond the range of float64; \"inf\" is a layer without rigid base")
+        raise ValueError(f"g = {brief(value)}: beyond the range of float64; \"inf\" is a layer without rigid base")
     return value
 
 
@@ -166,15 +152,15 @@ class MeshSection(_Section):
             raise ValueError(f"mesh.coating is only used with mesh.shape = \"half_disc\" or \"quarter_ball\" (not with "
                              f"{where})")
         if self.coating is not None and not self.coating < self.radius:
-            raise ValueError(f"mesh.coating = {_brief(self.coating)} must be less than mesh.radius = "
-                             f"{_brief(self.radius)} (the coating is the outer shell of that thickness; the core has "
+            raise ValueError(f"mesh.coating = {brief(self.coating)} must be less than mesh.radius = "
+                             f"{brief(self.radius)} (the coating is the outer shell of that thickness; the core has "
                              f"the radius radius - coating)")
         if self.file is not None and self.h is not None:
             raise ValueError("mesh.h is not used with mesh.file (the file fixes the elements)")
         if self.shape is not None:
             elements = self._elements(dim)
             if not elements <= MAX_ELEMENTS:
-                raise ValueError(f"mesh.h = {_brief(self.h)}: about {elements:.1e} {CELLS[dim][2]} for this "
+                raise ValueError(f"mesh.h = {brief(self.h)}: about {elements:.1e} {CELLS[dim][2]} for this "
                                  f"{self.shape}, more than {MAX_ELEMENTS:.0e}")
         return self
 
@@ -219,7 +205,7 @@ def _check_poisson_ratio(key: str, nu: float, hypothesis: str | None) -> None:
         bound = "<= 0.5" if hypothesis == "plane_stress" else "< 0.5"
         name = key.rpartition(".")[2]
         model = hypothesis or "plane_strain and 3D"
-        raise ValueError(f"{key} = {_brief(nu)}: must satisfy -1 < {name} {bound} for {model}")
+        raise ValueError(f"{key} = {brief(nu)}: must satisfy -1 < {name} {bound} for {model}")
 
 
 def _modulus(value):
@@ -227,7 +213,7 @@ def _modulus(value):
     if isinstance(value, str):
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not _finite(value) or not value > 0:
-        raise ValueError(f"= {_brief(value)}: expected a finite number > 0 or an expression in the coordinates")
+        raise ValueError(f"= {brief(value)}: expected a finite number > 0 or an expression in the coordinates")
     return value
 
 
@@ -239,7 +225,7 @@ def _region_names(value):
     names = value if isinstance(value, list) else [value]
     if not names or any(isinstance(name, bool) or not isinstance(name, (str, int)) for name in names):
         raise ValueError(f"expected a region name (a string or a physical group number) or a non-empty list of them, "
-                         f"got {_brief(value)}")
+                         f"got {brief(value)}")
     return value
 
 
@@ -299,19 +285,19 @@ def _stress_tensor(value):
     expressions in the coordinates (σ_0 per element, evaluated at the centroids), symmetric as written."""
     if not (isinstance(value, list) and len(value) in (2, 3)
             and all(isinstance(row, list) and len(row) == len(value) for row in value)):
-        raise ValueError(f"initial.stress = {_brief(value)}: expected a d x d table, [[sxx, sxy], [sxy, syy]] in 2D "
+        raise ValueError(f"initial.stress = {brief(value)}: expected a d x d table, [[sxx, sxy], [sxy, syy]] in 2D "
                          f"or [[sxx, sxy, sxz], [sxy, syy, syz], [sxz, syz, szz]] in 3D")
     for row in value:
         for entry in row:
             if isinstance(entry, bool) or not isinstance(entry, (int, float, str)) or (
                     not isinstance(entry, str) and not _finite(entry)):
-                raise ValueError(f"initial.stress = {_brief(value)}: expected finite numbers or expressions in the "
-                                 f"coordinates, got {_brief(entry)}")
+                raise ValueError(f"initial.stress = {brief(value)}: expected finite numbers or expressions in the "
+                                 f"coordinates, got {brief(entry)}")
     for i in range(len(value)):
         for j in range(i + 1, len(value)):
             if _source(value[i][j]) != _source(value[j][i]):
-                raise ValueError(f"initial.stress = {_brief(value)}: must be symmetric (stress[{i}][{j}] = "
-                                 f"{_brief(value[i][j])}, stress[{j}][{i}] = {_brief(value[j][i])})")
+                raise ValueError(f"initial.stress = {brief(value)}: must be symmetric (stress[{i}][{j}] = "
+                                 f"{brief(value[i][j])}, stress[{j}][{i}] = {brief(value[j][i])})")
     return [[entry if isinstance(entry, str) else float(entry) for entry in row] for row in value]
 
 
@@ -421,10 +407,10 @@ def _normal(value):
     vector = [float(c) for c in value]
     length = math.hypot(*vector)
     if not length > 0:
-        raise ValueError(f"contact.normal = {_brief(vector)}: expected \"body\" or a nonzero vector (the "
+        raise ValueError(f"contact.normal = {brief(vector)}: expected \"body\" or a nonzero vector (the "
                          f"foundation's outward direction seen from the body, e.g. [0, 0, -1])")
     if not NORMAL_LENGTHS[0] <= length <= NORMAL_LENGTHS[1]:
-        raise ValueError(f"contact.normal = {_brief(vector)}: its length {length:.3g} is outside "
+        raise ValueError(f"contact.normal = {brief(vector)}: its length {length:.3g} is outside "
                          f"[{NORMAL_LENGTHS[0]:g}, {NORMAL_LENGTHS[1]:g}], where it is made a unit vector without "
                          f"underflow or overflow; give the direction with entries of order 1, e.g. [0, 0, -1]")
     return vector
@@ -521,9 +507,9 @@ class ContactSection(_Section):
 def check_time_span(start: float, T: float, steps: int, where: str) -> None:
     """ValueError unless t_0 = ``start`` (named ``where``) is before T by steps of a positive float64 length."""
     if not T > start:
-        raise ValueError(f"time.T = {_brief(T)} must be > {where} = {_brief(start)}")
+        raise ValueError(f"time.T = {brief(T)} must be > {where} = {brief(start)}")
     if not (math.isfinite(T - start) and (T - start) / steps > 0):
-        raise ValueError(f"{where} = {_brief(start)}: the steps (T - {where}) / time.steps are not positive finite "
+        raise ValueError(f"{where} = {brief(start)}: the steps (T - {where}) / time.steps are not positive finite "
                          f"numbers in float64")
 
 
@@ -593,7 +579,7 @@ class OutputSection(_Section):
         if isinstance(value, list) and all(isinstance(s, int) and not isinstance(s, bool) and s >= 1 for s in value):
             return sorted(set(value))
         raise ValueError(
-            f"output.field_steps = {_brief(value)}: expected \"all\", \"final\", \"none\" or a list of step numbers >= 1"
+            f"output.field_steps = {brief(value)}: expected \"all\", \"final\", \"none\" or a list of step numbers >= 1"
         )
 
 
@@ -679,7 +665,7 @@ class Case(Model):
     def _field_steps_in_range(self):
         steps = self.output.field_steps
         if isinstance(steps, list) and steps and steps[-1] > self.time.steps:
-            raise ValueError(f"output.field_steps: step {_brief(steps[-1])} is after the last step ({self.time.steps})")
+            raise ValueError(f"output.field_steps: step {brief(steps[-1])} is after the last step ({self.time.steps})")
         return self
 
     @property
@@ -724,7 +710,7 @@ def _load_case(source, overrides) -> Case:
         try:
             path = Path(source)
         except TypeError:
-            raise CaseError(f"case file {_brief(source)}: not a file name") from None
+            raise CaseError(f"case file {brief(source)}: not a file name") from None
         check_regular_file(path, "case file", MAX_TOML_BYTES)
         try:
             text = path.read_text(encoding="utf-8")
@@ -773,7 +759,7 @@ def _check_tree(data, prefix: tuple = ()) -> None:
             raise CaseError(f"{_dotted(path) or 'the case'} = {_type_name(value)}: not a value a case file can hold "
                             f"(a number, string, boolean, list or table)")
         if isinstance(value, int) and value.bit_length() > 13000:  # Python cannot even print it (4300 digits)
-            raise CaseError(f"{_dotted(path) or 'the case'} = {_brief(value)}: too large for any value of a case")
+            raise CaseError(f"{_dotted(path) or 'the case'} = {brief(value)}: too large for any value of a case")
         if isinstance(value, dict):
             for key, item in value.items():
                 if not isinstance(key, str):
@@ -786,7 +772,7 @@ def _check_tree(data, prefix: tuple = ()) -> None:
 def _type_name(value) -> str:
     """A value for a message without calling its repr (any object may be given)."""
     if isinstance(value, (int, float, str, bytes, type(None))):
-        return _brief(value)
+        return brief(value)
     return f"a value of type {type(value).__name__}"
 
 
@@ -827,7 +813,7 @@ def section(model: type[_Section], value, key: str):
     if isinstance(value, model):
         return value
     if value is not None and not isinstance(value, Mapping):
-        raise CaseError(f"{key} = {_brief(value)}: expected a table (dict) of the [{key}] keys (or a "
+        raise CaseError(f"{key} = {brief(value)}: expected a table (dict) of the [{key}] keys (or a "
                         f"vpcontact.case.schema.{model.__name__})")
     data = plain(dict(value or {}))
     _check_tree(data, (key,))
@@ -854,7 +840,7 @@ def _parse_overrides(overrides) -> dict:
             raise CaseError(f"--set {_type_name(item)}: expected a \"key=value\" string")
         key, sep, text = item.partition("=")
         if not sep or not key.strip():
-            raise CaseError(f"--set {_brief(item)}: expected key=value, e.g. contact.stiffness.beta=-1")
+            raise CaseError(f"--set {brief(item)}: expected key=value, e.g. contact.stiffness.beta=-1")
         try:
             value = tomllib.loads(f"v = {text}")["v"]
         except (ValueError, RecursionError):  # not TOML (or an integer of more than 4300 digits)
@@ -872,27 +858,27 @@ def _set_dotted(data: dict, dotted: str, value) -> None:
     for piece in dotted.split("."):
         match = _KEY.match(piece)
         if match is None:
-            raise CaseError(f"override key {_brief(dotted)} is not a dotted key such as contact.stiffness.beta")
+            raise CaseError(f"override key {brief(dotted)} is not a dotted key such as contact.stiffness.beta")
         steps.append(match.group(1))
         steps += [int(i) if len(i) <= 18 else 10**18 for i in re.findall(r"\[(\d+)\]", match.group(2))]
     node = data
     for position, step in enumerate(steps[:-1]):
         if isinstance(step, int):
             if not isinstance(node, list) or step >= len(node):
-                raise CaseError(f"override key {_brief(dotted)}: no entry [{step}] there")
+                raise CaseError(f"override key {brief(dotted)}: no entry [{step}] there")
             node = node[step]
         else:
             if not isinstance(node, dict):
-                raise CaseError(f"override key {_brief(dotted)}: '{step}' is not inside a table")
+                raise CaseError(f"override key {brief(dotted)}: '{step}' is not inside a table")
             if step not in node and isinstance(steps[position + 1], int):
-                raise CaseError(f"override key {_brief(dotted)}: no list '{step}' to index")
+                raise CaseError(f"override key {brief(dotted)}: no list '{step}' to index")
             node = node.setdefault(step, {})
     last = steps[-1]
     if isinstance(last, int):
         if not isinstance(node, list) or last >= len(node):
-            raise CaseError(f"override key {_brief(dotted)}: no entry [{last}] there")
+            raise CaseError(f"override key {brief(dotted)}: no entry [{last}] there")
     elif not isinstance(node, dict):
-        raise CaseError(f"override key {_brief(dotted)}: '{last}' is not inside a table")
+        raise CaseError(f"override key {brief(dotted)}: '{last}' is not inside a table")
     node[last] = value
 
 
@@ -1008,7 +994,7 @@ def _show(value) -> str:
         return quoted(value)
     if isinstance(value, dict):
         return "{...}"
-    return _brief(value)
+    return brief(value)
 
 
 def _law_tag(raw_loc) -> str | None:

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..case.schema import MaterialSection, Model, _material_keys
 from ..errors import CaseError, quoted
-from ..case.expressions import values_at
+from ..expressions.parse import values_at
 from .elasticity import Elasticity, Perzyna, Relaxation
 from ..mesh.core import Mesh
 from ..fem.space import coordinates

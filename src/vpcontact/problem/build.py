@@ -23,11 +23,11 @@ from skfem import Basis
 from ..mesh import core as meshes
 from ..fem.assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
-from ..case.schema import Case, MeshSection, Model, OutputSection, _brief, _material_keys, section
+from ..case.schema import Case, MeshSection, Model, OutputSection, _material_keys, section
 from ..laws.contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
                       PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
-from ..errors import CaseError, quoted
-from ..case.expressions import parse_expression, values_at
+from ..errors import CaseError, brief, quoted
+from ..expressions.parse import parse_expression, values_at
 from .initial import InitialState, initial_state
 from ..laws.elasticity import Elasticity
 from ..laws.materials import AtCentroids, Materials, body_materials
@@ -112,7 +112,7 @@ class Problem:
 def checked_problem(problem) -> Problem:
     """``problem`` if it is a :class:`Problem`, else CaseError (a time loop or an adaptation given something else)."""
     if not isinstance(problem, Problem):
-        raise CaseError(f"problem = {_brief(problem)}: expected a vpcontact.Problem (vpcontact.compose or "
+        raise CaseError(f"problem = {brief(problem)}: expected a vpcontact.Problem (vpcontact.compose or "
                         f"vpcontact.build_problem)")
     return problem
 
@@ -162,10 +162,10 @@ def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable 
         initial_displacement=initial_displacement, initial_stress=initial_stress, initial_xi=initial_xi).items()
         if value is not None}
     if not isinstance(model, Model):
-        raise CaseError(f"build_problem: {_brief(model)} is not a model: expected a vpcontact.Case "
+        raise CaseError(f"build_problem: {brief(model)} is not a model: expected a vpcontact.Case "
                         f"(vpcontact.load_case) or a vpcontact.case.schema.Model")
     if mesh is not None and not isinstance(mesh, meshes.Mesh):
-        raise CaseError(f"mesh = {_brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, "
+        raise CaseError(f"mesh = {brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, "
                         f"quarter_ball, rectangle, block or read_mesh)")
     source = model.to_toml() if isinstance(model, Case) and mesh is None else None
     if mesh is None:
@@ -202,7 +202,7 @@ def _assembled(model: Model, mesh: meshes.Mesh, p, stiffness_law, tractions, bod
         basis = displacement_basis(mesh)
         A = stiffness(basis, materials.elasticity)
     if not np.all(np.isfinite(A.data)):
-        moduli = ", ".join(f"{key}.E = {_brief(entry.E)}" for key, entry in _material_keys(model))
+        moduli = ", ".join(f"{key}.E = {brief(entry.E)}" for key, entry in _material_keys(model))
         raise CaseError(f"{moduli}: the stiffness matrix is not finite in float64 (the moduli or the sizes of the "
                         f"{CELLS[dim][2]} are out of its range); state them in other units")
 
@@ -268,7 +268,7 @@ def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:
     """𝒢 of the API: G(sigma, strain) of arrays (d, d, elements), or G(sigma, strain, x) of the element
     centroids x (d, elements) too (𝒢(x, σ, ε) of (2.17)), bound to the mesh's centroids; else CaseError."""
     if not callable(G):
-        raise CaseError(f"viscoplastic = {_brief(G)}: expected a function G(sigma, strain) of arrays of shape "
+        raise CaseError(f"viscoplastic = {brief(G)}: expected a function G(sigma, strain) of arrays of shape "
                         f"(d, d, elements), or G(sigma, strain, x) with x the element centroids (d, elements)")
     required = _required_arguments(G)
     if len(required) > 3 or not (len(required) == 3 or _accepts(G, 2)):
@@ -348,14 +348,14 @@ def _traction_terms(model: Model, mesh: meshes.Mesh, tractions: Mapping | None) 
     if tractions is None:
         return terms
     if not isinstance(tractions, Mapping):
-        raise CaseError(f"tractions = {_brief(tractions)}: expected a dict {{part: f(x, y, (z,) t) -> (fx, fy, (fz))}}")
+        raise CaseError(f"tractions = {brief(tractions)}: expected a dict {{part: f(x, y, (z,) t) -> (fx, fy, (fz))}}")
     for part, density in tractions.items():
         if not (isinstance(part, (str, int)) and str(part) in mesh.parts):
-            raise CaseError(f"tractions: unknown part {_brief(part)}; the mesh has parts: {', '.join(mesh.part_names)}")
-        _check_density_arguments(f"tractions[{_brief(part)}]", density, mesh.dim)
+            raise CaseError(f"tractions: unknown part {brief(part)}; the mesh has parts: {', '.join(mesh.part_names)}")
+        _check_density_arguments(f"tractions[{brief(part)}]", density, mesh.dim)
         facets = mesh.facets(part)
         terms = [term for term in terms if not np.array_equal(mesh.facets(term[1]), facets)]
-        terms.append((f"tractions[{_brief(part)}]", part, density))
+        terms.append((f"tractions[{brief(part)}]", part, density))
     return terms
 
 
@@ -368,7 +368,7 @@ def _api_law(law, name: str):
     ``derivative`` method as it is, a plain function wrapped in CallableLaw; a law f(r, x) of the nodes'
     coordinates x is a LawOfNodes, tried when the contact nodes are known; else CaseError."""
     if not callable(law):
-        raise CaseError(f"{name} = {_brief(law)}: expected a function f(r) of a NumPy array (optionally with a "
+        raise CaseError(f"{name} = {brief(law)}: expected a function f(r) of a NumPy array (optionally with a "
                         f"method f.derivative(r)), or f(r, x) with x the coordinates of the contact nodes")
     derivative = getattr(law, "derivative", None)
     derivative = derivative if callable(derivative) else None
@@ -401,7 +401,7 @@ def _check_density_arguments(name: str, density, dim: int) -> None:
     refused where the load is made)."""
     if callable(density) and not _accepts(density, dim + 1):
         names = coordinates(dim)
-        raise CaseError(f"{name} = {_brief(density)} takes {_parameters(density)}: expected "
+        raise CaseError(f"{name} = {brief(density)} takes {_parameters(density)}: expected "
                         f"f({', '.join(names)}, t) -> ({', '.join('f' + c for c in names)})")
 
 
@@ -516,7 +516,7 @@ def _check_first_history(basis: Basis, initial: InitialState, written, strain0: 
     if not np.all(np.isfinite(force)):
         source = initial.names["stress"]
         if source == "initial.stress":
-            source += f" = {_brief(written)}"
+            source += f" = {brief(written)}"
         raise CaseError(f"{source}: its nodal forces are not finite in float64; state the stresses in other units")
 
 

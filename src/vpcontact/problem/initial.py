@@ -28,11 +28,11 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import Basis
 
-from ..case.schema import Model, _brief, check_time_span
+from ..case.schema import Model, check_time_span
 from ..laws.contact import ContactLaw, ContactSurface
-from ..errors import CaseError, quoted
-from ..case.expressions import values_at
-from ..case.inputs import check_regular_file
+from ..errors import CaseError, brief, quoted
+from ..expressions.parse import values_at
+from ..inputs import check_regular_file
 from ..mesh.core import Mesh
 from ..fem.space import CELLS, component, coordinates
 
@@ -175,7 +175,7 @@ def _api_array(name: str, value, shapes: list[tuple], expected: str) -> np.ndarr
         array = None
     if array is None or array.dtype.kind not in "iuf":
         what = "" if array is None else f" (real numbers, not {array.dtype})"
-        raise CaseError(f"{name} = {_brief(value)}: expected an array of numbers of shape {expected}{what}")
+        raise CaseError(f"{name} = {brief(value)}: expected an array of numbers of shape {expected}{what}")
     array = array.astype(float)
     if array.shape not in shapes:
         sizes = " or ".join(str(shape) for shape in shapes)
