@@ -78,7 +78,7 @@ def phases(case_path: str, overrides: dict, out: Path) -> dict:
     started = time.perf_counter()
     import vpcontact.drivers.cli  # noqa: F401  (what `vpcontact run` imports)
     from vpcontact.io import checkpoint, writers
-    from vpcontact.case.schema import load_case
+    from vpcontact.case.load import load_case
     from vpcontact.problem.build import build_problem
     from vpcontact.drivers.rundir import run  # noqa: F401
     from vpcontact.timeloop.loop import TimeLoop

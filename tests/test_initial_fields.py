@@ -13,7 +13,7 @@ from conftest import assert_refused, half_disc_case, rectangle_case, resumed_aft
 from test_3d_runs import ball_case
 from test_robustness import write
 from vpcontact.fem.assembly import element_strain
-from vpcontact.case.schema import load_case
+from vpcontact.case.load import load_case
 from vpcontact.problem.build import build_problem
 from vpcontact.drivers.rundir import run
 from vpcontact.timeloop.loop import TimeLoop, solve_problem

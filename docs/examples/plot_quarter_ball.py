@@ -27,7 +27,7 @@ import numpy as np
 import vpcontact
 from vpcontact import mesh
 from vpcontact.results import plots
-from vpcontact.case.schema import OutputSection
+from vpcontact.case.run import OutputSection
 
 C = 11.4443  # the traction's rate, per unit area of the upper half
 

@@ -26,7 +26,7 @@ except metadata.PackageNotFoundError:  # running from a source tree
     __version__ = "0+unknown"
 
 #: The names of the API, by the module that defines them.
-API = {"Case": "case.schema", "Model": "case.schema", "load_case": "case.schema", "CaseError": "errors",
+API = {"Case": "case.model", "Model": "case.model", "load_case": "case.load", "CaseError": "errors",
        "compose": "case.compose", "Problem": "problem.build", "build_problem": "problem.build",
        "Result": "results.result", "solve_problem": "timeloop.loop"}
 
@@ -75,7 +75,8 @@ def solve(case, *, progress=False, **laws) -> Result:
     True (the set-up phases and the steps reported on stderr, as the command line does) or a reporter
     (:mod:`vpcontact.progress`).
     """
-    from .case.schema import Case, load_case
+    from .case.load import load_case
+    from .case.model import Case
     from .errors import flag
     from .problem.build import build_problem
     from .progress import reporting

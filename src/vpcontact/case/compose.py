@@ -21,7 +21,7 @@ natural: a :class:`~vpcontact.mesh.Mesh` (or a mesh file's name), a traction or 
 central difference is used; K(ξ, x) of the contact nodes' coordinates x too), a viscoplastic law
 𝒢(σ, ε), and NumPy arrays of the initial state. A case file is one way to state the same problem:
 ``vpcontact.build_problem(vpcontact.load_case(path))``; :func:`compose` another. Either way the problem
-keeps its :class:`~vpcontact.case.schema.Model` (``problem.model``, the tables) and the Python objects
+keeps its :class:`~vpcontact.case.model.Model` (``problem.model``, the tables) and the Python objects
 (``problem.objects``), so that :meth:`~vpcontact.problem.build.Problem.on` builds it again on a refined mesh.
 """
 
@@ -35,7 +35,10 @@ import skfem
 from pydantic import ValidationError
 
 from ..mesh import core as meshes
-from .schema import MeshSection, Model, _check_expressions, _check_tree, _describe, _material_keys, plain, section
+from .body import MeshSection
+from .load import check_expressions, check_tree, plain, section
+from .messages import describe
+from .model import Model
 from ..errors import CaseError, brief
 from ..problem.build import Problem, build_problem, make_mesh
 
@@ -64,7 +67,7 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     - ``initial``: the ``[initial]`` table; its ``displacement`` (nodes, d), ``stress`` (elements, d, d) or
       (d, d) and ``xi`` (contact nodes,) may be NumPy arrays.
 
-    Numbers may be NumPy numbers, lists NumPy arrays or tuples (see :func:`vpcontact.case.schema.plain`). Every
+    Numbers may be NumPy numbers, lists NumPy arrays or tuples (see :func:`vpcontact.case.load.plain`). Every
     value is checked before anything is assembled: a bad one, or one the problem would not use, is a
     CaseError naming it."""
     mesh = _mesh(mesh)
@@ -88,14 +91,14 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
                 objects[argument] = initial.pop(key)
         tables["initial"] = initial
     tables = plain(tables)
-    _check_tree(tables)
+    check_tree(tables)
     try:
         model = Model.model_validate(tables, context={"python_laws": python_laws})
     except ValidationError as error:
-        raise CaseError(_describe(error.errors()[0])) from None
-    _check_expressions(model)
+        raise CaseError(describe(error.errors()[0])) from None
+    check_expressions(model)
     if viscoplastic is not None:
-        tabled = [key for key, entry in _material_keys(model) if entry.viscoplastic is not None]
+        tabled = [key for key, entry in model.keyed_materials() if entry.viscoplastic is not None]
         if tabled:
             raise CaseError(f"{tabled[0]}.viscoplastic and viscoplastic = {brief(viscoplastic)}: the Python law "
                             f"replaces the tables' laws on the whole body, so {tabled[0]}.viscoplastic would not be "

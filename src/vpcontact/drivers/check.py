@@ -17,7 +17,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..case.schema import Case, _material_keys
+from ..case.model import Case
 from ..memory import available_memory
 from ..mesh.quality import edge_lengths, mean_ratio, smallest_angles
 from ..problem.build import build_problem
@@ -146,15 +146,15 @@ def check_case(case: Case) -> CaseCheck:
 
 def _materials(case: Case, owner: np.ndarray) -> list[Material]:
     """The case's material entries with the number of elements each covers."""
-    covered = np.bincount(owner, minlength=len(_material_keys(case)))
+    covered = np.bincount(owner, minlength=len(case.keyed_materials()))
     return [Material(key, entry.regions, int(covered[i]), entry.E, entry.nu,
                      None if entry.viscoplastic is None else entry.viscoplastic.law)
-            for i, (key, entry) in enumerate(_material_keys(case))]
+            for i, (key, entry) in enumerate(case.keyed_materials())]
 
 
 def _regions(case: Case, mesh, owner: np.ndarray) -> list[Region]:
     """The mesh's regions, each with the material keys of its elements (one, unless the entries name other
     regions that split it)."""
-    keys = [key for key, _ in _material_keys(case)]
+    keys = [key for key, _ in case.keyed_materials()]
     return [Region(name, elements.size, ", ".join(keys[i] for i in np.unique(owner[elements])))
             for name, elements in sorted(mesh.regions.items())]

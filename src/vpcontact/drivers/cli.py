@@ -88,7 +88,7 @@ def _refuse(error) -> int:
 
 
 def _run(args) -> int:
-    from ..case.schema import load_case
+    from ..case.load import load_case
     from ..progress import SILENT, Log
     from .rundir import EXIT_SIGNAL, run
 
@@ -127,7 +127,7 @@ def _run(args) -> int:
 def _check(args) -> int:
     import json
 
-    from ..case.schema import load_case
+    from ..case.load import load_case
     from .check import check_case
 
     try:

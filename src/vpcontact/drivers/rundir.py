@@ -50,7 +50,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..io import checkpoint, directory
-from ..case.schema import Case
+from ..case.model import Case
 from ..errors import CaseError
 from ..mesh.msh import write_mesh
 from ..problem.build import Problem, build_problem

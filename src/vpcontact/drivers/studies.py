@@ -47,7 +47,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..io import directory
-from ..case.schema import load_case
+from ..case.load import load_case
 from ..errors import CaseError, brief
 from ..inputs import MAX_TOML_BYTES, check_regular_file
 from ..results.norms import Snapshot, differences

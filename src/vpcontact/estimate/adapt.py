@@ -24,7 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import recovery as recovery_estimate
-from ..case.schema import AdaptSection, OutputSection, section
+from ..case.load import section
+from ..case.run import AdaptSection, OutputSection
 from ..errors import CaseError
 from .indicators import Indicators, Level
 from ..mesh.core import Mesh
@@ -141,7 +142,7 @@ def check_start(problem: Problem, settings: AdaptSection) -> None:
 def adapt(problem: Problem, settings: AdaptSection, output: OutputSection | None = None, *,
           after_cycle: Callable[[Cycle], None] | None = None, stop: Callable[[], str | None] | None = None,
           progress: bool | Progress = False, after_step: Callable[[TimeLoop], None] | None = None) -> Adaptation:
-    """The adaptive cycles of ``settings`` (a case's ``[adapt]``, :class:`~vpcontact.case.schema.AdaptSection`) from
+    """The adaptive cycles of ``settings`` (a case's ``[adapt]``, :class:`~vpcontact.case.run.AdaptSection`) from
     the mesh of ``problem``, each run with the outputs ``output`` (see the module docstring);
     ``after_cycle(cycle)`` is called after each (its outputs), ``stop`` and ``after_step`` are the time
     loop's hooks. ``settings`` and ``output`` may be dicts (the tables [adapt] and [output]); ``progress``:

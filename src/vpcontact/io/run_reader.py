@@ -19,7 +19,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..case.schema import Case, load_case
+from ..case.load import load_case
+from ..case.model import Case
 from ..laws.contact import STATUS_NAMES
 from ..results.result import CONTACT_ARRAYS, step_ends
 from ..fem.space import CELLS, coordinates

@@ -16,7 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..case.schema import MaterialSection, Model, _material_keys
+from ..case.material import MaterialSection
+from ..case.model import Model
 from ..errors import CaseError, quoted
 from ..expressions.parse import values_at
 from .elasticity import Elasticity, Perzyna, Relaxation
@@ -72,7 +73,7 @@ class Materials:
 def body_materials(model: Model, mesh: Mesh) -> Materials:
     """The materials of ``model`` on the elements of ``mesh`` (CaseError naming the entry, region or
     element where they do not assign exactly one admissible material to every element)."""
-    entries = _material_keys(model)
+    entries = model.keyed_materials()
     owner = _owners(entries, mesh)
     dim = mesh.dim
     hypothesis = (model.materials[0].hypothesis or "plane_strain") if dim == 2 else None

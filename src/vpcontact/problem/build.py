@@ -23,7 +23,10 @@ from skfem import Basis
 from ..mesh import core as meshes
 from ..fem.assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
-from ..case.schema import Case, MeshSection, Model, OutputSection, _material_keys, section
+from ..case.body import MeshSection
+from ..case.load import section
+from ..case.model import Case, Model
+from ..case.run import OutputSection
 from ..laws.contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
                       PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
 from ..errors import CaseError, brief, quoted
@@ -80,7 +83,7 @@ class Problem:
 
     @property
     def solver(self):
-        """The options of the step solver (:class:`~vpcontact.case.schema.SolverSection`)."""
+        """The options of the step solver (:class:`~vpcontact.case.run.SolverSection`)."""
         return self.model.solver
 
     def on(self, mesh: meshes.Mesh, progress: Progress = SILENT) -> "Problem":
@@ -95,7 +98,7 @@ class Problem:
 
     def solve(self, *, output=None, progress: bool | Progress = False):
         """The :class:`~vpcontact.results.result.Result` of the time loop (:func:`~vpcontact.timeloop.loop.solve_problem`);
-        ``output``: the ``[output]`` table (a dict, or an :class:`~vpcontact.case.schema.OutputSection`); ``progress``:
+        ``output``: the ``[output]`` table (a dict, or an :class:`~vpcontact.case.run.OutputSection`); ``progress``:
         True for lines on stderr (:mod:`vpcontact.progress`), or a reporter."""
         from ..timeloop.loop import solve_problem
 
@@ -163,7 +166,7 @@ def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable 
         if value is not None}
     if not isinstance(model, Model):
         raise CaseError(f"build_problem: {brief(model)} is not a model: expected a vpcontact.Case "
-                        f"(vpcontact.load_case) or a vpcontact.case.schema.Model")
+                        f"(vpcontact.load_case) or a vpcontact.Model")
     if mesh is not None and not isinstance(mesh, meshes.Mesh):
         raise CaseError(f"mesh = {brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, "
                         f"quarter_ball, rectangle, block or read_mesh)")
@@ -202,7 +205,7 @@ def _assembled(model: Model, mesh: meshes.Mesh, p, stiffness_law, tractions, bod
         basis = displacement_basis(mesh)
         A = stiffness(basis, materials.elasticity)
     if not np.all(np.isfinite(A.data)):
-        moduli = ", ".join(f"{key}.E = {brief(entry.E)}" for key, entry in _material_keys(model))
+        moduli = ", ".join(f"{key}.E = {brief(entry.E)}" for key, entry in model.keyed_materials())
         raise CaseError(f"{moduli}: the stiffness matrix is not finite in float64 (the moduli or the sizes of the "
                         f"{CELLS[dim][2]} are out of its range); state them in other units")
 
@@ -309,7 +312,7 @@ def _check_dimension(model: Model, dim: int) -> None:
     if model.initial.stress is not None and len(model.initial.stress) != dim:
         raise CaseError(f"initial.stress is {len(model.initial.stress)} x {len(model.initial.stress)} and {where}: "
                         f"give a {dim} x {dim} table")
-    for key, entry in _material_keys(model):
+    for key, entry in model.keyed_materials():
         if dim == 3 and entry.hypothesis is not None:
             raise CaseError(f"{key}.hypothesis = \"{entry.hypothesis}\" is a 2D reduction and {where} (3D uses the "
                             f"full isotropic tensor): remove {key}.hypothesis")
@@ -321,7 +324,7 @@ def _check_dimension(model: Model, dim: int) -> None:
     expressions = [(f"{key}[{c}]", source) for key, value in loads for c, source in enumerate(value)]
     if model.contact is not None:
         expressions += [(f"{key}.gap", layer.gap) for key, layer in model.contact.layers()]
-    expressions += [(f"{key}.{name}", getattr(entry, name)) for key, entry in _material_keys(model) for name in ("E", "nu")]
+    expressions += [(f"{key}.{name}", getattr(entry, name)) for key, entry in model.keyed_materials() for name in ("E", "nu")]
     initial = model.initial
     expressions += [(f"initial.displacement[{c}]", source) for c, source in enumerate(initial.displacement or ())]
     expressions += [(f"initial.stress[{i}][{j}]", source) for i, row in enumerate(initial.stress or ())

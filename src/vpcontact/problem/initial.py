@@ -28,13 +28,14 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import Basis
 
-from ..case.schema import Model, check_time_span
+from ..case.model import Model
 from ..laws.contact import ContactLaw, ContactSurface
 from ..errors import CaseError, brief, quoted
 from ..expressions.parse import values_at
 from ..inputs import check_regular_file
 from ..mesh.core import Mesh
 from ..fem.space import CELLS, component, coordinates
+from .time_grid import check_time_span
 
 #: |u_0| below this fraction of the largest |u_0| is rounding: such values on a Dirichlet component are 0.
 ROUNDING = 1e-12

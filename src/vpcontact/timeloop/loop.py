@@ -37,7 +37,8 @@ from typing import Callable
 import numpy as np
 
 from ..fem.assembly import NonFiniteLoad, element_strain, stress_force
-from ..case.schema import OutputSection, section
+from ..case.load import section
+from ..case.run import OutputSection
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from ..laws.elasticity import von_mises
 from ..estimate.indicators import Level
@@ -123,7 +124,7 @@ class _Attempt:
 
 class TimeLoop:
     """The time loop of a problem: ``TimeLoop(problem, output).run()`` returns the :class:`Result`;
-    ``output`` (:class:`~vpcontact.case.schema.OutputSection`, default: its defaults) says which steps keep their
+    ``output`` (:class:`~vpcontact.case.run.OutputSection`, default: its defaults) says which steps keep their
     fields and whether the error is estimated at every step. A run whose outputs would not fit in memory
     is refused here, before its first step.
 
@@ -551,7 +552,7 @@ class TimeLoop:
 def solve_problem(problem: Problem, *, output: OutputSection | None = None,
                   progress: bool | Progress = False) -> Result:
     """Run the time loop of ``problem`` and return the result (status "failed" if a step fails); ``output``:
-    the fields kept and the error estimate (:class:`~vpcontact.case.schema.OutputSection`, default: its defaults);
+    the fields kept and the error estimate (:class:`~vpcontact.case.run.OutputSection`, default: its defaults);
     ``progress``: True for the solver's set-up and the steps reported on stderr (:mod:`vpcontact.progress`),
     or a reporter."""
     with reporting(progress) as reporter:
