@@ -12,7 +12,7 @@ the boundary conditions, the contact law, the time grid and the solver options.
     ...              "stiffness": {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": 1.0}},
     ...     time={"T": 1.1, "steps": 11},
     ... )
-    >>> result = problem.solve()
+    >>> result = vpcontact.solve(problem)
 
 Each piece is given as the table of the case file holds it (the same keys, the same checks, the same
 one-line :class:`~vpcontact.errors.CaseError` naming the key), or as a Python object where one is

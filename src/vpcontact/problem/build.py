@@ -24,9 +24,7 @@ from ..mesh import core as meshes
 from ..fem.assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
 from ..case.body import MeshSection
-from ..case.load import section
 from ..case.model import Case, Model
-from ..case.run import OutputSection
 from ..laws.contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
                       PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
 from ..errors import CaseError, brief, quoted
@@ -95,15 +93,6 @@ class Problem:
             raise CaseError(f"{given[0]} is an array on the mesh the problem was built on: a problem with initial "
                             f"arrays cannot be built on another mesh; give the initial state by expressions instead")
         return build_problem(self.model, mesh=mesh, progress=progress, **self.objects)
-
-    def solve(self, *, output=None, progress: bool | Progress = False):
-        """The :class:`~vpcontact.results.result.Result` of the time loop (:func:`~vpcontact.timeloop.loop.solve_problem`);
-        ``output``: the ``[output]`` table (a dict, or an :class:`~vpcontact.case.run.OutputSection`); ``progress``:
-        True for lines on stderr (:mod:`vpcontact.progress`), or a reporter."""
-        from ..timeloop.loop import solve_problem
-
-        output = section(OutputSection, output, "output")
-        return solve_problem(self, output=output, progress=progress)
 
     def __repr__(self) -> str:
         """One line: the sizes (not the operators)."""
