@@ -25,6 +25,7 @@ import tomli_w
 import vpcontact
 from vpcontact import mesh as meshes
 from vpcontact.drivers.cli import main
+from vpcontact.case.translate import output_options
 from vpcontact.errors import CaseError
 from vpcontact.timeloop.loop import TimeLoop, solve_problem
 
@@ -571,8 +572,8 @@ def test_numpy_numbers_and_arrays_are_the_numbers_and_lists_of_the_tables():
         solver={"tolerance": np.float64(1e-12), "max_iterations": np.int32(50)},
     )
     assert (numpy.A != plain.A).nnz == 0
-    assert numpy.model == plain.model
-    assert type(numpy.model.time.steps) is int and type(numpy.model.contact.probe[0]) is float
+    assert numpy.options == plain.options
+    assert type(numpy.options.time.steps) is int and type(numpy.options.contact.probe[0]) is float
     np.testing.assert_array_equal(vpcontact.solve(numpy, output={"progress": np.bool_(False)}).final.displacement,
                                   vpcontact.solve(plain).final.displacement)
 
@@ -691,8 +692,8 @@ def solved(problem):
 def test_an_output_table_is_a_dict_as_everywhere_in_compose(problem, call):
     output = {"field_steps": "all", "progress": np.bool_(False)}
     run = {"vpcontact.solve": lambda: vpcontact.solve(problem, output=output),
-           "solve_problem": lambda: solve_problem(problem, output=output),
-           "TimeLoop": lambda: TimeLoop(problem, output).run()}[call]
+           "solve_problem": lambda: solve_problem(problem, output=output_options(output)),
+           "TimeLoop": lambda: TimeLoop(problem, output_options(output)).run()}[call]
     result = run()
     assert result.status == "complete" and sorted(result.fields) == [1, 2, 3]
 
@@ -705,7 +706,7 @@ def test_an_output_table_is_a_dict_as_everywhere_in_compose(problem, call):
     ({"checkpoint_every_seconds": np.float64("nan")}, ["output.checkpoint_every_seconds = nan"]),
 ])
 def test_a_bad_output_table_is_refused_naming_its_key(problem, output, words):
-    for call in (lambda: vpcontact.solve(problem, output=output), lambda: TimeLoop(problem, output)):
+    for call in (lambda: vpcontact.solve(problem, output=output), lambda: TimeLoop(problem, output_options(output))):
         refused_by_api(call, *words)
 
 
@@ -764,7 +765,7 @@ def test_the_condensed_newton_matrix_of_a_floating_body_with_every_node_separate
     from vpcontact.solvers.condensed import KRYLOV_TOLERANCE
 
     case = vpcontact.load_case(half_disc_case(h=0.25), {"solver.method": "condensed"})
-    solver = TimeLoop(vpcontact.build_problem(case), case.output).solver
+    solver = TimeLoop(vpcontact.build_problem(case), output_options(case.output)).solver
     systems, c0 = solver.systems, solver.reference
     m = c0.size
     inactive, w = np.ones(m), -c0.copy()

@@ -16,9 +16,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from .case.load import load_case, section
+from .case.load import load_case
 from .case.model import Case, Model
-from .case.run import AdaptSection, OutputSection
+from .case.translate import adapt_options, output_options, problem_options, translate
 from .errors import CaseError, brief, flag
 from .problem.build import Problem
 from .problem.build import build_problem as build
@@ -38,7 +38,7 @@ def build_problem(case, *, mesh=None, progress: Progress = SILENT, **laws) -> Pr
     the assembly."""
     if not isinstance(case, Model):
         case = load_case(case)
-    return build(case, mesh=mesh, progress=progress, **laws)
+    return build(problem_options(case), mesh=mesh, progress=progress, **laws)
 
 
 def solve(case, *, output=None, progress=False, **laws) -> Result:
@@ -62,14 +62,13 @@ def solve(case, *, output=None, progress=False, **laws) -> Result:
         if laws:
             raise CaseError(f"{next(iter(laws))} = {brief(next(iter(laws.values())))}: a problem has its laws already; "
                             f"give them to vpcontact.build_problem or vpcontact.compose")
-        output = section(OutputSection, output, "output")
+        output = output_options(output)
         with reporting(progress) as reporter:
             return solve_problem(case, output=output, progress=reporter)
-    if not isinstance(case, Case):
-        case = load_case(case)
-    output = case.output if output is None else section(OutputSection, output, "output")
+    options = translate(case if isinstance(case, Case) else load_case(case))
+    output = options.output if output is None else output_options(output)
     with reporting(progress) as reporter:
-        return solve_problem(build(case, progress=reporter, **laws), output=output, progress=reporter)
+        return solve_problem(build(options.problem, progress=reporter, **laws), output=output, progress=reporter)
 
 
 def adapt(problem: Problem, settings, output=None, *, after_cycle: Callable | None = None,
@@ -81,6 +80,6 @@ def adapt(problem: Problem, settings, output=None, *, after_cycle: Callable | No
     are; ``progress``: True for each cycle, its set-up, steps and refinement reported on stderr, or a reporter."""
     from .estimate.adapt import adapt as cycles  # adaptive runs only: refinement is not loaded for the others
 
-    settings, output = section(AdaptSection, settings, "adapt"), section(OutputSection, output, "output")
+    settings, output = adapt_options(settings), output_options(output)
     return cycles(problem, settings, output, after_cycle=after_cycle, stop=stop, progress=progress,
                   after_step=after_step)

@@ -20,9 +20,10 @@ natural: a :class:`~vpcontact.mesh.Mesh` (or a mesh file's name), a traction or 
 (f(x, y, z, t) in 3D), a stiffness law K(ξ) or a law p(r) (with a ``derivative`` method, or a
 central difference is used; K(ξ, x) of the contact nodes' coordinates x too), a viscoplastic law
 𝒢(σ, ε), and NumPy arrays of the initial state. A case file is one way to state the same problem:
-``vpcontact.build_problem(vpcontact.load_case(path))``; :func:`compose` another. Either way the problem
-keeps its :class:`~vpcontact.case.model.Model` (``problem.model``, the tables) and the Python objects
-(``problem.objects``), so that :meth:`~vpcontact.problem.build.Problem.on` builds it again on a refined mesh.
+``vpcontact.build_problem(vpcontact.load_case(path))``; :func:`compose` another. Either way the tables are
+validated as a :class:`~vpcontact.case.model.Model`, translated once (:mod:`vpcontact.case.translate`), and the
+problem keeps their options (``problem.options``) and the Python objects (``problem.objects``), so that
+:meth:`~vpcontact.problem.build.Problem.on` builds it again on a refined mesh.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from .messages import describe
 from .model import Model
 from ..errors import CaseError, brief
 from ..problem.build import Problem, build_problem, make_mesh
+from .translate import mesh_source, problem_options
 
 #: The contact keys that may be Python laws instead of tables, and the build_problem argument each becomes.
 PYTHON_LAWS = {"stiffness": "stiffness_law", "p": "p"}
@@ -103,7 +105,8 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
             raise CaseError(f"{tabled[0]}.viscoplastic and viscoplastic = {brief(viscoplastic)}: the Python law "
                             f"replaces the tables' laws on the whole body, so {tabled[0]}.viscoplastic would not be "
                             f"used; give one of them")
-    return build_problem(model, mesh=mesh, **{name: value for name, value in objects.items() if value is not None})
+    return build_problem(problem_options(model), mesh=mesh,
+                         **{name: value for name, value in objects.items() if value is not None})
 
 
 def _mesh(mesh) -> meshes.Mesh:
@@ -113,7 +116,7 @@ def _mesh(mesh) -> meshes.Mesh:
     if isinstance(mesh, (str, os.PathLike)):
         return meshes.read_mesh(mesh)
     if isinstance(mesh, Mapping):
-        return make_mesh(section(MeshSection, mesh, "mesh"))
+        return make_mesh(mesh_source(section(MeshSection, mesh, "mesh")))
     if isinstance(mesh, skfem.Mesh):
         raise CaseError(f"mesh = a scikit-fem {type(mesh).__name__} without named boundary parts: not accepted yet; "
                         f"pass vpcontact.mesh.Mesh(m, parts={{name: indices of boundary facets}}, exact_normals={{}}) "

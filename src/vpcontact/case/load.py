@@ -34,6 +34,11 @@ def load_case(source: str | Path | dict, overrides: dict | list[str] | None = No
         raise CaseError(one_line(str(error))) from None
 
 
+def read_case(folder: str | os.PathLike) -> Case:
+    """case.resolved.toml of the run in ``folder`` (CaseError when it is missing or not a case)."""
+    return load_case(Path(folder) / "case.resolved.toml")
+
+
 def _load_case(source, overrides) -> Case:
     base_dir = "."
     if isinstance(source, dict):

@@ -29,8 +29,8 @@ class Model(Section):
     """The problem as a mechanician states it, without its mesh and without the settings of a run: the
     material(s), the boundary conditions, the contact condition, the initial state, the time grid and the
     solver options. A :class:`Case` is a Model with a mesh, outputs and adaptive meshes; a problem keeps
-    its Model (``Problem.model``), so that it can be built again on another mesh. ``base_dir`` resolves
-    relative file names (the case file's folder)."""
+    its options (``Problem.options``, :mod:`vpcontact.case.translate`), so that it can be built again on another
+    mesh. ``base_dir`` resolves relative file names (the case file's folder)."""
 
     material: Materials
     boundary: BoundarySection = BoundarySection()

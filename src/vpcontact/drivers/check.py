@@ -18,6 +18,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..case.model import Case
+from ..case.translate import translate
 from ..memory import available_memory
 from ..mesh.quality import edge_lengths, mean_ratio, smallest_angles
 from ..problem.build import build_problem
@@ -102,12 +103,13 @@ class CaseCheck:
 def check_case(case: Case) -> CaseCheck:
     """Build the problem of ``case``, make every check ``vpcontact run`` makes before its first step except
     the step solver's setup (CaseError as there), and describe what would run."""
-    problem = build_problem(case)
+    options = translate(case)
+    problem = build_problem(options.problem)
     mesh, surface, free = problem.mesh, problem.surface, problem.free
     if case.adapt is not None:
         from ..estimate.adapt import check_start
 
-        check_start(problem, case.adapt)
+        check_start(problem, options.adapt)
     A, N = problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr()
     augmentation_parameter(A, N, case.solver.augmentation)
     method, reason = chosen_method(case.solver.method, A, N, mesh.dim)
@@ -124,7 +126,7 @@ def check_case(case: Case) -> CaseCheck:
     sizes = edge_lengths(points, cells).max(axis=0)
     history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
     times = problem.times
-    check_memory(len(times), case.output, points.shape[1], cells.shape[1], surface.size, history, mesh.dim)
+    check_memory(len(times), options.output, points.shape[1], cells.shape[1], surface.size, history, mesh.dim)
     field_steps = len(field_step_numbers(case.output.field_steps, len(times)))
     outputs = memory_needed(len(times), field_steps, points.shape[1], cells.shape[1], surface.size, history, mesh.dim,
                             estimate=case.output.error_estimate)

@@ -47,12 +47,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..io import directory
-from ..case.load import load_case
+from ..case.load import load_case, read_case
 from ..errors import CaseError, brief
 from ..inputs import MAX_TOML_BYTES, check_regular_file
 from ..results.norms import Snapshot, differences
 from ..progress import Progress, duration, reporting
-from ..io.run_reader import read_case, read_summary, snapshots_at
+from ..io.run_reader import read_summary, snapshots_at
 from ..fem.space import COORDINATES
 from ..io.writers import check_room, refuse_links, replacing
 
@@ -223,13 +223,14 @@ def _with_field_times(base: Path, overrides: dict, times: list[float], run_id: s
 # --- running -------------------------------------------------------------------------------------
 def execute_run(spec: RunSpec) -> dict:
     """Solve one run and write its directory; returns its summary (status "error" on an exception)."""
+    from ..case.translate import translate
     from ..problem.build import build_problem
     from ..timeloop.loop import solve_problem
     from ..io.writers import write_run
 
     try:
-        case = load_case(spec.base, spec.overrides)
-        result = solve_problem(build_problem(case), output=case.output)
+        options = translate(load_case(spec.base, spec.overrides))
+        result = solve_problem(build_problem(options.problem), output=options.output)
         write_run(result, spec.out, overwrite=True)
         return result.summary()
     except Exception as error:  # a failed run is reported in study.csv, never stops the study

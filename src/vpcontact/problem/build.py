@@ -1,4 +1,4 @@
-"""From a model and a mesh to the discrete problem: spaces, operators, loads and the contact law.
+"""From the options of a case and a mesh to the discrete problem: spaces, operators, loads and the contact law.
 
 Everything that can fail on user input (mesh file, part names, rigid motions left free, loads that
 are not finite at a time step, outputs that would not fit in memory, Python objects of the API that
@@ -8,12 +8,10 @@ are not laws) fails here, before any computation and before anything is written.
 from __future__ import annotations
 
 import inspect
-import os
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import partial
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -23,13 +21,13 @@ from skfem import Basis
 from ..mesh import core as meshes
 from ..fem.assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
-from ..case.body import MeshSection
-from ..case.model import Case, Model
 from ..laws.contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
                       PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
 from ..errors import CaseError, brief, quoted
 from ..expressions.parse import parse_expression, values_at
+from ..solvers.factorization import check_installed
 from .initial import InitialState, initial_state
+from .options import ContactOptions, LawChoice, MeshSource, ProblemOptions
 from ..laws.elasticity import Elasticity
 from ..laws.materials import AtCentroids, Materials, body_materials
 from ..progress import SILENT, Progress
@@ -38,16 +36,15 @@ from ..fem.space import CELLS, component, coordinates
 from .time_grid import TimeGrid
 
 
-
-
 @dataclass
 class Problem:
-    """The discrete problem of a model on a mesh: Problem P_V of the paper on P1 × P0 with node-to-rigid
-    contact. ``model`` and ``objects`` (the Python objects that replace parts of it, see
-    :func:`build_problem`) are what it was built from: :meth:`on` builds the same problem on another mesh."""
+    """The discrete problem of a case on a mesh: Problem P_V of the paper on P1 × P0 with node-to-rigid
+    contact. ``options`` (:class:`~vpcontact.problem.options.ProblemOptions`) and ``objects`` (the Python objects
+    that replace parts of them, see :func:`build_problem`) are what it was built from: :meth:`on` builds the same
+    problem on another mesh."""
 
-    model: Model
-    objects: dict  # the keyword arguments of build_problem that replace parts of the model
+    options: ProblemOptions
+    objects: dict  # the keyword arguments of build_problem that replace parts of the options
     mesh: meshes.Mesh
     basis: Basis
     materials: Materials  # the material of each element, ℰ per element and the case's 𝒢
@@ -67,7 +64,7 @@ class Problem:
 
     def __post_init__(self):
         start = 0.0 if self.initial is None else self.initial.start
-        self.times = TimeGrid(self.model.time.T, self.model.time.steps, start)
+        self.times = TimeGrid(self.options.time.T, self.options.time.steps, start)
 
     @property
     def elasticity(self) -> Elasticity:
@@ -81,18 +78,18 @@ class Problem:
 
     @property
     def solver(self):
-        """The options of the step solver (:class:`~vpcontact.case.run.SolverSection`)."""
-        return self.model.solver
+        """The options of the step solver (:class:`~vpcontact.problem.options.SolverOptions`)."""
+        return self.options.solver
 
     def on(self, mesh: meshes.Mesh, progress: Progress = SILENT) -> "Problem":
-        """The same problem on ``mesh`` (a refinement, with the same parts and regions): the model and the
+        """The same problem on ``mesh`` (a refinement, with the same parts and regions): the options and the
         Python objects again, except arrays of an initial state, which belong to the mesh they were given on;
         ``progress`` hears of its assembly."""
         given = [name for name in INITIAL_ARRAYS if self.objects.get(name) is not None]
         if given:
             raise CaseError(f"{given[0]} is an array on the mesh the problem was built on: a problem with initial "
                             f"arrays cannot be built on another mesh; give the initial state by expressions instead")
-        return build_problem(self.model, mesh=mesh, progress=progress, **self.objects)
+        return build_problem(self.options, mesh=mesh, progress=progress, **self.objects)
 
     def __repr__(self) -> str:
         """One line: the sizes (not the operators)."""
@@ -113,16 +110,16 @@ def checked_problem(problem) -> Problem:
 INITIAL_ARRAYS = ("initial_displacement", "initial_stress", "initial_xi")
 
 
-def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable | None = None,
+def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p: Callable | None = None,
                   stiffness_law: Callable | None = None, tractions: Mapping | None = None,
                   body_force: Density | None = None, viscoplastic: Callable | None = None, initial_displacement=None,
                   initial_stress=None, initial_xi=None, progress: Progress = SILENT) -> Problem:
-    """Assemble the problem of ``model`` (a :class:`~vpcontact.model.Model`, or a whole
-    :class:`~vpcontact.model.Case`, whose outputs and adaptive meshes are not part of the problem) on
-    ``mesh``; the other keyword arguments replace parts of the model by Python objects:
+    """Assemble the problem of ``options`` (a case translated by :mod:`vpcontact.case.translate`: from a
+    :class:`~vpcontact.Case`, whose outputs and adaptive meshes are not part of the problem, or from a
+    :class:`~vpcontact.Model`) on ``mesh``; the other keyword arguments replace parts of the case by Python objects:
 
     - ``mesh``: the mesh to solve on (:mod:`vpcontact.mesh`: a built-in shape or a file); by default the
-      one the case's ``[mesh]`` makes (a Model without a mesh needs it);
+      one the case's ``[mesh]`` makes (a Model has none: it needs one);
 
     - ``p``, ``stiffness_law``: the laws p(r) and K(ξ) of the contact, vectorized over NumPy arrays; an
       object with a ``derivative`` method is used as it is (see :mod:`vpcontact.laws.contact`), a plain
@@ -153,27 +150,24 @@ def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable 
         p=p, stiffness_law=stiffness_law, tractions=tractions, body_force=body_force, viscoplastic=viscoplastic,
         initial_displacement=initial_displacement, initial_stress=initial_stress, initial_xi=initial_xi).items()
         if value is not None}
-    if not isinstance(model, Model):
-        raise CaseError(f"build_problem: {brief(model)} is not a model: expected a vpcontact.Case "
-                        f"(vpcontact.load_case) or a vpcontact.Model")
+    check_installed(options.solver.factorization)
     if mesh is not None and not isinstance(mesh, meshes.Mesh):
         raise CaseError(f"mesh = {brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, "
                         f"quarter_ball, rectangle, block or read_mesh)")
-    source = model.to_toml() if isinstance(model, Case) and mesh is None else None
+    source = options.source if mesh is None else None
     if mesh is None:
-        if not isinstance(model, Case):
+        if options.mesh is None:
             raise CaseError("a model without [mesh] needs a mesh: build_problem(model, mesh=...)")
-        with progress.phase("mesh", mesh_words(model.mesh)) as phase:
-            mesh = make_mesh(model.mesh, model.base_dir)
+        with progress.phase("mesh", mesh_words(options.mesh)) as phase:
+            mesh = make_mesh(options.mesh)
             phase.done(_mesh_size(mesh))
-    model = model.model if isinstance(model, Case) else model
-    if model.contact is None and (p is not None or stiffness_law is not None):
+    if options.contact is None and (p is not None or stiffness_law is not None):
         raise CaseError("p and stiffness_law are laws of the contact, and the case has no [contact]")
     p = None if p is None else _api_law(p, "p")
     stiffness_law = None if stiffness_law is None else _api_law(stiffness_law, "stiffness_law")
     meshed = time.perf_counter()
     with progress.phase("assembly", "stiffness, loads, contact surface and checks") as phase:
-        problem = _assembled(model, mesh, p, stiffness_law, tractions, body_force, viscoplastic, initial_displacement,
+        problem = _assembled(options, mesh, p, stiffness_law, tractions, body_force, viscoplastic, initial_displacement,
                              initial_stress, initial_xi)
         phase.done(f"{problem.free.size:,} free dofs of {problem.basis.N:,}, {problem.surface.size:,} contact nodes, "
                    f"a stiffness of {problem.A.nnz:,} entries")
@@ -183,49 +177,48 @@ def build_problem(model: Model, *, mesh: meshes.Mesh | None = None, p: Callable 
     return problem
 
 
-def _assembled(model: Model, mesh: meshes.Mesh, p, stiffness_law, tractions, body_force, viscoplastic,
+def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tractions, body_force, viscoplastic,
                initial_displacement, initial_stress, initial_xi) -> Problem:
-    """The problem of ``model`` on ``mesh`` (the laws of the API already wrapped; see build_problem), without
+    """The problem of ``options`` on ``mesh`` (the laws of the API already wrapped; see build_problem), without
     its timings, the objects of the API and the source."""
     dim = mesh.dim
-    _check_dimension(model, dim)
-    materials = body_materials(model, mesh)
+    _check_dimension(options, dim)
+    materials = body_materials(options.materials, mesh)
     with np.errstate(all="ignore"):  # a stiffness that is not finite is reported below
         basis = displacement_basis(mesh)
         A = stiffness(basis, materials.elasticity)
     if not np.all(np.isfinite(A.data)):
-        moduli = ", ".join(f"{key}.E = {brief(entry.E)}" for key, entry in model.keyed_materials())
+        moduli = ", ".join(f"{entry.key}.E = {brief(entry.E)}" for entry in options.materials)
         raise CaseError(f"{moduli}: the stiffness matrix is not finite in float64 (the moduli or the sizes of the "
                         f"{CELLS[dim][2]} are out of its range); state them in other units")
 
     fixed = np.zeros(basis.N, dtype=bool)
-    for item in model.boundary.dirichlet:
+    for item in options.boundary.dirichlet:
         components = [component(c) for c in (item.components or coordinates(dim))]
         fixed[basis.nodal_dofs[components][:, mesh.nodes(item.part)]] = True
     free = np.flatnonzero(~fixed)
 
     body_terms = [(f"boundary.body_force[{i}].value", _density(f.value, f"boundary.body_force[{i}].value"))
-                  for i, f in enumerate(model.boundary.body_force)]
+                  for i, f in enumerate(options.boundary.body_force)]
     if body_force is not None:
         _check_density_arguments("body_force", body_force, mesh.dim)
         body_terms = [("body_force", body_force)]
-    loads = LoadVector(basis, mesh, _traction_terms(model, mesh, tractions), body_terms)
+    loads = LoadVector(basis, mesh, _traction_terms(options, mesh, tractions), body_terms)
 
     surface, probe = empty_surface(basis.N, dim), None
     law = ContactLaw(PositivePart(), ConstantStiffness(0.0), np.inf)
-    if model.contact is not None:
-        c = model.contact
-        layers = c.layers()
-        gaps = [parse_expression(layer.gap, coordinates(dim), where=f"{key}.gap") for key, layer in layers]
-        surface = contact_surface(mesh, [layer.part for _, layer in layers], basis.nodal_dofs, gaps,
+    if options.contact is not None:
+        c = options.contact
+        gaps = [parse_expression(layer.gap, coordinates(dim), where=f"{layer.key}.gap") for layer in c.layers]
+        surface = contact_surface(mesh, [layer.part for layer in c.layers], basis.nodal_dofs, gaps,
                                   None if c.normal == "body" else c.normal)
-        law = _contact_law(model, surface, p, stiffness_law)
+        law = _contact_law(c, surface, p, stiffness_law)
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
-    _check_contact_can_move(model, mesh, basis, free, surface)
+    _check_contact_can_move(options, mesh, basis, free, surface)
     _check_rigid_motions(mesh, basis, free, surface)
 
-    initial = initial_state(model, mesh, basis, surface, law, displacement=initial_displacement, stress=initial_stress,
+    initial = initial_state(options, mesh, basis, surface, law, displacement=initial_displacement, stress=initial_stress,
                             xi=initial_xi)
     strain0 = element_strain(basis, initial.dofs(basis))
     z0 = initial.stress - materials.elasticity.stress(strain0)
@@ -234,15 +227,15 @@ def _assembled(model: Model, mesh: meshes.Mesh, p, stiffness_law, tractions, bod
         viscoplastic = materials.viscoplastic
     else:
         viscoplastic = _api_viscoplastic(viscoplastic, mesh)
-    grid = TimeGrid(model.time.T, model.time.steps, initial.start)
+    grid = TimeGrid(options.time.T, options.time.steps, initial.start)
     loads.check(grid)
-    _check_first_history(basis, initial, model.initial.stress, strain0, z0, viscoplastic, law_name, grid.k)
-    return Problem(model, {}, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic,
+    _check_first_history(basis, initial, options.initial.stress, strain0, z0, viscoplastic, law_name, grid.k)
+    return Problem(options, {}, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic,
                    initial=initial, initial_strain=strain0, initial_history=z0)
 
 
-def mesh_words(m: MeshSection) -> str:
-    """The mesh a ``[mesh]`` section makes, in words: "reading FILE", or the shape and its sizes."""
+def mesh_words(m: MeshSource) -> str:
+    """The mesh a case's ``[mesh]`` makes, in words: "reading FILE", or the shape and its sizes."""
     if m.file is not None:
         return f"reading {m.file}"
     sizes = [f"{key} = {getattr(m, key):g}" for key in ("h", "h_bottom", "radius", "width", "depth", "height",
@@ -270,10 +263,10 @@ def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:
     return G
 
 
-def make_mesh(m: MeshSection, base_dir: str | os.PathLike = ".") -> meshes.Mesh:
-    """The mesh of a ``[mesh]`` section: a built-in shape, or a mesh file (relative to ``base_dir``)."""
-    if m.file is not None:
-        return meshes.read_mesh(Path(base_dir) / m.file)
+def make_mesh(m: MeshSource) -> meshes.Mesh:
+    """The mesh of a case's ``[mesh]``: a built-in shape, or a mesh file."""
+    if m.path is not None:
+        return meshes.read_mesh(m.path)
     if m.shape == "half_disc":
         return meshes.half_disc(m.h, m.radius, m.coating)
     if m.shape == "quarter_ball":
@@ -283,38 +276,40 @@ def make_mesh(m: MeshSection, base_dir: str | os.PathLike = ".") -> meshes.Mesh:
     return meshes.rectangle(m.width, m.height, m.h)
 
 
-def _check_dimension(model: Model, dim: int) -> None:
+def _check_dimension(options: ProblemOptions, dim: int) -> None:
     """Refuse vectors and tensors of the case that do not have the mesh's dimension d, a plane
     hypothesis in 3D, and the coordinate z in 2D."""
     names = coordinates(dim)
     where = f"the mesh is {dim}D"
     give = f"give {dim} ({', '.join(names)})"
-    loads = [(f"boundary.traction[{i}].value", t.value) for i, t in enumerate(model.boundary.traction)]
-    loads += [(f"boundary.body_force[{i}].value", f.value) for i, f in enumerate(model.boundary.body_force)]
+    loads = [(f"boundary.traction[{i}].value", t.value) for i, t in enumerate(options.boundary.traction)]
+    loads += [(f"boundary.body_force[{i}].value", f.value) for i, f in enumerate(options.boundary.body_force)]
     vectors = list(loads)
-    if model.contact is not None:
-        vectors += [("contact.probe", model.contact.probe), ("contact.normal", model.contact.normal)]
-    vectors.append(("initial.displacement", model.initial.displacement))
+    if options.contact is not None:
+        vectors += [("contact.probe", options.contact.probe), ("contact.normal", options.contact.normal)]
+    vectors.append(("initial.displacement", options.initial.displacement))
     for key, value in vectors:
         if isinstance(value, list) and len(value) != dim:
             raise CaseError(f"{key} has {len(value)} components and {where}: {give}")
-    if model.initial.stress is not None and len(model.initial.stress) != dim:
-        raise CaseError(f"initial.stress is {len(model.initial.stress)} x {len(model.initial.stress)} and {where}: "
+    if options.initial.stress is not None and len(options.initial.stress) != dim:
+        raise CaseError(f"initial.stress is {len(options.initial.stress)} x {len(options.initial.stress)} and {where}: "
                         f"give a {dim} x {dim} table")
-    for key, entry in model.keyed_materials():
+    for entry in options.materials:
+        key = entry.key
         if dim == 3 and entry.hypothesis is not None:
             raise CaseError(f"{key}.hypothesis = \"{entry.hypothesis}\" is a 2D reduction and {where} (3D uses the "
                             f"full isotropic tensor): remove {key}.hypothesis")
-    for i, item in enumerate(model.boundary.dirichlet):
+    for i, item in enumerate(options.boundary.dirichlet):
         extra = [c for c in item.components or () if c not in names]
         if extra:
             raise CaseError(f"boundary.dirichlet[{i}].components names \"{extra[0]}\" and {where}: use "
                             f"{', '.join(repr(n) for n in names)}")
     expressions = [(f"{key}[{c}]", source) for key, value in loads for c, source in enumerate(value)]
-    if model.contact is not None:
-        expressions += [(f"{key}.gap", layer.gap) for key, layer in model.contact.layers()]
-    expressions += [(f"{key}.{name}", getattr(entry, name)) for key, entry in model.keyed_materials() for name in ("E", "nu")]
-    initial = model.initial
+    if options.contact is not None:
+        expressions += [(f"{layer.key}.gap", layer.gap) for layer in options.contact.layers]
+    expressions += [(f"{entry.key}.{name}", getattr(entry, name)) for entry in options.materials
+                    for name in ("E", "nu")]
+    initial = options.initial
     expressions += [(f"initial.displacement[{c}]", source) for c, source in enumerate(initial.displacement or ())]
     expressions += [(f"initial.stress[{i}][{j}]", source) for i, row in enumerate(initial.stress or ())
                     for j, source in enumerate(row)]
@@ -333,10 +328,11 @@ def _density(values, where: str) -> ExpressionDensity:
     return ExpressionDensity(*(parse_expression(v, (*names, "t"), where=f"{where}[{i}]") for i, v in enumerate(values)))
 
 
-def _traction_terms(model: Model, mesh: meshes.Mesh, tractions: Mapping | None) -> list[tuple[str, object, Density]]:
+def _traction_terms(options: ProblemOptions, mesh: meshes.Mesh,
+                    tractions: Mapping | None) -> list[tuple[str, object, Density]]:
     """(name, part, density) of the case's tractions, those of ``tractions`` replacing the case's on their part."""
     terms = [(f"boundary.traction[{i}].value", t.part, _density(t.value, f"boundary.traction[{i}].value"))
-             for i, t in enumerate(model.boundary.traction)]
+             for i, t in enumerate(options.boundary.traction)]
     if tractions is None:
         return terms
     if not isinstance(tractions, Mapping):
@@ -512,12 +508,14 @@ def _check_first_history(basis: Basis, initial: InitialState, written, strain0: 
         raise CaseError(f"{source}: its nodal forces are not finite in float64; state the stresses in other units")
 
 
-def _contact_law(model: Model, surface: ContactSurface, p: Callable | None, stiffness_law: Callable | None) -> ContactLaw:
+def _contact_law(contact: ContactOptions, surface: ContactSurface, p: Callable | None,
+                 stiffness_law: Callable | None) -> ContactLaw:
     """The layer of each contact part at the nodes it owns (its keys' numbers, or expressions evaluated
     there), merged into one law over the contact nodes (see contact.merged_law); ``p`` and
     ``stiffness_law`` of the API, when given, replace the case's on every part."""
     ps, stiffnesses, limits = [], [], []
-    for j, (key, layer) in enumerate(model.contact.layers()):
+    for j, layer in enumerate(contact.layers):
+        key = layer.key
         at = partial(_layer_parameter, points=surface.coordinates[:, surface.owner == j])
         if p is None:
             ps.append(PositivePart() if layer.p == "positive_part" else
@@ -528,18 +526,20 @@ def _contact_law(model: Model, surface: ContactSurface, p: Callable | None, stif
     owner = surface.owner
     p, stiffness_law = (law.at(surface.coordinates) if isinstance(law, LawOfNodes) else law
                         for law in (p, stiffness_law))
-    return ContactLaw(p=merged_law(ps, owner) if p is None else p, g=per_node(limits, owner), rho=model.contact.rho,
+    return ContactLaw(p=merged_law(ps, owner) if p is None else p, g=per_node(limits, owner), rho=contact.rho,
                       stiffness=merged_law(stiffnesses, owner) if stiffness_law is None else stiffness_law)
 
 
-def _stiffness_law(s, key: str, at: Callable):
-    """K(x, ξ) of the stiffness table ``s`` (2.18) of the case key ``key``: each parameter a number, or an
+def _stiffness_law(choice: LawChoice, key: str, at: Callable):
+    """K(x, ξ) of the stiffness law ``choice`` (2.18) of the case key ``key``: each parameter a number, or an
     expression in the coordinates evaluated by ``at`` at the nodes of its part."""
-    if s.law == "power":
-        return PowerStiffness(at(f"{key}.c_v", s.c_v, 0.0), at(f"{key}.alpha", s.alpha, 0.0), at(f"{key}.beta", s.beta))
-    if s.law == "constant":
-        return ConstantStiffness(at(f"{key}.value", s.value, 0.0))
-    return ExponentialStiffness(at(f"{key}.c_v", s.c_v, 0.0), at(f"{key}.alpha", s.alpha))
+    s = choice.parameters
+    if choice.law == "power":
+        return PowerStiffness(at(f"{key}.c_v", s["c_v"], 0.0), at(f"{key}.alpha", s["alpha"], 0.0),
+                              at(f"{key}.beta", s["beta"]))
+    if choice.law == "constant":
+        return ConstantStiffness(at(f"{key}.value", s["value"], 0.0))
+    return ExponentialStiffness(at(f"{key}.c_v", s["c_v"], 0.0), at(f"{key}.alpha", s["alpha"]))
 
 
 def _layer_parameter(where: str, value, minimum: float | None = None, *, points: np.ndarray, strict: bool = False):
@@ -564,7 +564,7 @@ def _layer_parameter(where: str, value, minimum: float | None = None, *, points:
     return values.copy()
 
 
-def _check_contact_can_move(model: Model, mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
+def _check_contact_can_move(options: ProblemOptions, mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
     """Refuse a contact part on which the Dirichlet conditions leave no node free to move along its
     normal: its contact force would be 0 (or fixed) whatever the load. (A few clamped nodes, such as
     the corners the contact part shares with a clamped part, are fine.)"""
@@ -577,7 +577,7 @@ def _check_contact_can_move(model: Model, mesh: meshes.Mesh, basis: Basis, free:
         return
     contact_dofs = basis.nodal_dofs[:, surface.nodes].ravel()
     entries = []
-    for i, item in enumerate(model.boundary.dirichlet):
+    for i, item in enumerate(options.boundary.dirichlet):
         names = item.components or coordinates(mesh.dim)
         components = [component(c) for c in names]
         if np.intersect1d(basis.nodal_dofs[components][:, mesh.nodes(item.part)], contact_dofs).size:
