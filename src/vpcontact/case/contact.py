@@ -10,8 +10,8 @@ from typing import Annotated, Any, Literal, Optional, Union
 from pydantic import AfterValidator, Field, ValidationInfo, model_validator
 
 from ..errors import brief
-from .values import (Exponent, Expression, LayerValue, NonNegativeFloat, NonNegativeLayerValue, Part, Section, Thickness,
-                     finite, show)
+from .values import (Exponent, Expression, LayerValue, NonNegativeFloat, NonNegativeLayerValue, Part, Section,
+                     Thickness, finite, show)
 
 
 class PowerStiffnessSection(Section):
