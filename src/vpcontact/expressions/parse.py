@@ -16,7 +16,6 @@ from collections.abc import Callable, Iterable
 import numpy as np
 
 from ..errors import CaseError, shown
-from ..fem.space import coordinates
 from .language import Compiler, Evaluator, check_variables
 
 
@@ -132,10 +131,9 @@ def parse_expression(
     return Expression(text, variables, where, evaluate, depends_on)
 
 
-def values_at(source, where: str, points: np.ndarray) -> np.ndarray:
-    """The expression (or number) ``source`` of the case key ``where`` in the coordinates x, y[, z] at
+def values_at(source, where: str, points: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """The expression (or number) ``source`` of the case key ``where`` in the coordinates ``names`` (x, y[, z]) at
     ``points`` (d, k): k floats, not checked (a value that is not finite is for the caller to report)."""
-    names = coordinates(points.shape[0])
     expression = parse_expression(source, names, where=where)
     with np.errstate(all="ignore"):
         return np.broadcast_to(expression(**dict(zip(names, points))), points.shape[1:]).astype(float)

@@ -161,7 +161,7 @@ def _coefficient(key: str, value, centroids: np.ndarray, *, minimum: float | Non
     refused (naming the element's centroid) where not finite, not > ``minimum``, or (ν) not admissible
     for ``hypothesis``."""
     names = coordinates(centroids.shape[0])
-    values = values_at(value, key, centroids)
+    values = values_at(value, key, centroids, names)
     if minimum is not None:
         wrong, expected = ~(values > minimum), f"a finite number > {minimum:g}"
     else:

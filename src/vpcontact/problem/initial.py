@@ -143,7 +143,9 @@ def _at_nodes(sources, mesh: Mesh) -> np.ndarray:
     p = mesh.mesh.p
     if sources is None:
         return np.zeros((p.shape[1], mesh.dim))
-    return np.column_stack([values_at(source, f"initial.displacement[{i}]", p) for i, source in enumerate(sources)])
+    names = coordinates(mesh.dim)
+    return np.column_stack([values_at(source, f"initial.displacement[{i}]", p, names)
+                            for i, source in enumerate(sources)])
 
 
 def _at_centroids(sources, mesh: Mesh) -> np.ndarray:
@@ -155,7 +157,7 @@ def _at_centroids(sources, mesh: Mesh) -> np.ndarray:
         return sigma
     for i, row in enumerate(sources):
         for j, source in enumerate(row):
-            sigma[i, j] = values_at(source, f"initial.stress[{i}][{j}]", mesh.centroids)
+            sigma[i, j] = values_at(source, f"initial.stress[{i}][{j}]", mesh.centroids, coordinates(d))
     return sigma
 
 
@@ -163,7 +165,7 @@ def _at_contact_nodes(source, surface: ContactSurface) -> np.ndarray:
     """ξ_0 of initial.xi at the contact nodes (m,); 0 when not given."""
     if source is None or surface.size == 0:
         return np.zeros(surface.size)
-    return values_at(source, "initial.xi", surface.coordinates)
+    return values_at(source, "initial.xi", surface.coordinates, coordinates(surface.coordinates.shape[0]))
 
 
 # --- the arrays of the API -------------------------------------------------------------------------

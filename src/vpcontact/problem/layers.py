@@ -59,7 +59,7 @@ def _layer_parameter(where: str, value, minimum: float | None = None, *, points:
     if not isinstance(value, str):
         return float(value)
     names, count = coordinates(points.shape[0]), points.shape[1]
-    values = values_at(value, where, points)
+    values = values_at(value, where, points, names)
     if minimum is None:
         wrong = ~np.isfinite(values)
     else:
