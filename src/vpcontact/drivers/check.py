@@ -17,7 +17,8 @@ from dataclasses import asdict, dataclass, make_dataclass
 
 import numpy as np
 
-from ..case.schema import Case, _material_keys
+from ..case.model import Case
+from ..case.translate import translate
 from ..mesh.quality import edge_lengths, mean_ratio, smallest_angles
 from ..problem.build import build_problem
 from ..progress import size
@@ -102,12 +103,13 @@ class CaseCheck(RunPlan):
 def check_case(case: Case) -> CaseCheck:
     """Build the problem of ``case``, make every check ``vpcontact run`` makes before its first step except
     the step solver's setup (CaseError as there), and describe what would run."""
-    problem = build_problem(case)
-    if case.adapt is not None:
+    options = translate(case)
+    problem = build_problem(options.problem)
+    if options.adapt is not None:
         from ..estimate.adapt import check_start
 
-        check_start(problem, case.adapt)
-    plan = plan_run(problem, case.output, *free_operators(problem))
+        check_start(problem, options.adapt)
+    plan = plan_run(problem, options.output, *free_operators(problem))
     mesh, surface = problem.mesh, problem.surface
     points, cells = mesh.mesh.p, mesh.mesh.t
     quality = mean_ratio(points, cells)
@@ -124,15 +126,15 @@ def check_case(case: Case) -> CaseCheck:
 
 def _materials(case: Case, owner: np.ndarray) -> list[Material]:
     """The case's material entries with the number of elements each covers."""
-    covered = np.bincount(owner, minlength=len(_material_keys(case)))
+    covered = np.bincount(owner, minlength=len(case.keyed_materials()))
     return [Material(key, entry.regions, int(covered[i]), entry.E, entry.nu,
                      None if entry.viscoplastic is None else entry.viscoplastic.law)
-            for i, (key, entry) in enumerate(_material_keys(case))]
+            for i, (key, entry) in enumerate(case.keyed_materials())]
 
 
 def _regions(case: Case, mesh, owner: np.ndarray) -> list[Region]:
     """The mesh's regions, each with the material keys of its elements (one, unless the entries name other
     regions that split it)."""
-    keys = [key for key, _ in _material_keys(case)]
+    keys = [key for key, _ in case.keyed_materials()]
     return [Region(name, elements.size, ", ".join(keys[i] for i in np.unique(owner[elements])))
             for name, elements in sorted(mesh.regions.items())]

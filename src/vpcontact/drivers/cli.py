@@ -88,7 +88,7 @@ def _refuse(error) -> int:
 
 
 def _run(args) -> int:
-    from ..case.schema import load_case
+    from ..case.load import load_case
     from ..progress import SILENT, Log
     from .rundir import run
     from .signals import EXIT_SIGNAL
@@ -128,7 +128,7 @@ def _run(args) -> int:
 def _check(args) -> int:
     import json
 
-    from ..case.schema import load_case
+    from ..case.load import load_case
     from .check import check_case
 
     try:

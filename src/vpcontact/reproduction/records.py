@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case.schema import load_case
+from ..case.load import load_case
 from ..results.norms import differences
 from ..progress import SILENT, Progress
 from ..io.run_reader import read_summary, read_table, snapshots_at

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..case.schema import load_case
+from ..case.load import load_case
 from ..progress import SILENT, Progress
 from ..results.result import INTEGER_COLUMNS
 from ..io.run_reader import read_table

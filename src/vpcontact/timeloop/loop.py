@@ -37,13 +37,13 @@ from typing import Callable
 import numpy as np
 
 from ..fem.assembly import NonFiniteLoad, element_strain, stress_force
-from ..case.schema import OutputSection, section
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from ..laws.elasticity import von_mises
 from ..estimate.indicators import Level
 from ..problem.build import Problem, checked_problem
 from ..progress import SILENT, Progress, StepReport, reporting
 from ..estimate.residual import ResidualEstimator
+from ..results.output_options import OutputOptions
 from ..results.result import Fields, Result
 from .plan import free_operators, plan_run
 from .resting import least_shift, unbalanced
@@ -123,10 +123,10 @@ class _Attempt:
 
 class TimeLoop:
     """The time loop of a problem: ``TimeLoop(problem, output).run()`` returns the :class:`Result`;
-    ``output`` (:class:`~vpcontact.case.schema.OutputSection`, default: its defaults) says which steps keep their
-    fields and whether the error is estimated at every step. The run's plan (:mod:`vpcontact.timeloop.plan`,
-    ``self.plan``) is made here: what cannot run is refused before its first step, and the step solver is the
-    plan's.
+    ``output`` (:class:`~vpcontact.results.output_options.OutputOptions`, default: its defaults) says which steps
+    keep their fields and whether the error is estimated at every step. The run's plan
+    (:mod:`vpcontact.timeloop.plan`, ``self.plan``) is made here: what cannot run is refused before its first
+    step, and the step solver is the plan's.
 
     ``run`` takes two hooks: ``after_step(loop)``, called after every completed time step (the
     checkpoints of :mod:`vpcontact.drivers.rundir`), and ``stop()``, asked before every step (a signal
@@ -136,10 +136,10 @@ class TimeLoop:
     the time steps in ``run``.
     """
 
-    def __init__(self, problem: Problem, output: OutputSection | None = None, progress: Progress = SILENT):
+    def __init__(self, problem: Problem, output: OutputOptions | None = None, progress: Progress = SILENT):
         started = clock.perf_counter()
         self.problem, self.progress = checked_problem(problem), progress
-        output = section(OutputSection, output, "output")  # a dict is the [output] table
+        output = OutputOptions() if output is None else output
         free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
         A, N = free_operators(problem)
@@ -537,12 +537,12 @@ class TimeLoop:
                 f"complementarity {s.complementarity:.3e}{counts}{advice}")
 
 
-def solve_problem(problem: Problem, *, output: OutputSection | None = None,
+def solve_problem(problem: Problem, *, output: OutputOptions | None = None,
                   progress: bool | Progress = False) -> Result:
     """Run the time loop of ``problem`` and return the result (status "failed" if a step fails); ``output``:
-    the fields kept and the error estimate (:class:`~vpcontact.case.schema.OutputSection`, default: its defaults);
-    ``progress``: True for the solver's set-up and the steps reported on stderr (:mod:`vpcontact.progress`),
-    or a reporter."""
+    the fields kept and the error estimate (:class:`~vpcontact.results.output_options.OutputOptions`, default:
+    its defaults); ``progress``: True for the solver's set-up and the steps reported on stderr
+    (:mod:`vpcontact.progress`), or a reporter."""
     with reporting(progress) as reporter:
         return TimeLoop(problem, output, reporter).run()
 

@@ -12,9 +12,9 @@ import unicodedata
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ...case.inputs import MAX_TOML_BYTES, check_regular_file
-from ...case.schema import _brief, load_case
-from ...errors import CaseError
+from ...case.load import load_case
+from ...errors import CaseError, brief
+from ...inputs import MAX_TOML_BYTES, check_regular_file
 
 STUDY_KEYS = {"base", "set", "vary", "runs", "compare"}
 MAX_ID = 100
@@ -67,7 +67,7 @@ def load_study(path: str | os.PathLike, out: str | os.PathLike) -> Study:
         run = dict(_table(run, f"runs[{i}]"))
         given = _explicit_id(run.pop("id"), f"runs[{i}]") if "id" in run else None
         if given is not None and _folded(given) in where:
-            raise CaseError(f"study runs[{where[_folded(given)]}] and runs[{i}] have the same id {_brief(given)} "
+            raise CaseError(f"study runs[{where[_folded(given)]}] and runs[{i}] have the same id {brief(given)} "
                             f"(ids name directories: they must differ in more than letter case)")
         if given is not None:
             where[_folded(given)] = i
@@ -115,9 +115,9 @@ def _explicit_id(value, where: str) -> str:
     """A run id given in the study file: a single, visible path component (DIR/runs/<id> is its
     directory), else CaseError."""
     if not isinstance(value, str):
-        raise CaseError(f"study {where}: id = {_brief(value)} must be a string")
+        raise CaseError(f"study {where}: id = {brief(value)} must be a string")
     if not re.fullmatch(r"[\w=.,+\-]+", value) or value.startswith(".") or len(value) > MAX_ID:
-        raise CaseError(f"study {where}: id = {_brief(value)} cannot name a run directory: use 1 to {MAX_ID} letters, "
+        raise CaseError(f"study {where}: id = {brief(value)} cannot name a run directory: use 1 to {MAX_ID} letters, "
                         f"digits and = . , + - _, not starting with '.'")
     return value
 

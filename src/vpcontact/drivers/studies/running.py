@@ -12,10 +12,10 @@ from concurrent.futures import FIRST_COMPLETED, Executor, ProcessPoolExecutor, w
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
-from ...case.schema import load_case
+from ...case.load import load_case, read_case
 from ...errors import CaseError
 from ...io import directory
-from ...io.run_reader import read_case, read_summary
+from ...io.run_reader import read_summary
 from ...io.writers import check_room, refuse_links
 from ...progress import Progress, duration, reporting
 from .file import RunSpec, Study
@@ -24,13 +24,14 @@ from .table import write_study_table
 
 def execute_run(spec: RunSpec) -> dict:
     """Solve one run and write its directory; returns its summary (status "error" on an exception)."""
+    from ...case.translate import translate
     from ...io.writers import write_run
     from ...problem.build import build_problem
     from ...timeloop.loop import solve_problem
 
     try:
-        case = load_case(spec.base, spec.overrides)
-        result = solve_problem(build_problem(case), output=case.output)
+        options = translate(load_case(spec.base, spec.overrides))
+        result = solve_problem(build_problem(options.problem), output=options.output)
         write_run(result, spec.out, overwrite=True)
         return result.summary()
     except Exception as error:  # a failed run is reported in study.csv, never stops the study
