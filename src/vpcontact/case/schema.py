@@ -28,6 +28,10 @@ from .expressions import parse_expression
 from .inputs import MAX_TOML_BYTES, check_regular_file
 from ..solvers.factorization import BACKENDS, installed_backends
 from ..fem.space import CELLS
+from ..laws.spec import Parameter
+from ..laws.stiffness import STIFFNESS
+from ..laws.viscoplastic import VISCOPLASTIC
+from .law_sections import COMPLIANCE_KEYS, LAW_TAGS, check_compliance, law_tables, poisson_ratios, with_compliance
 
 # --- value types ---------------------------------------------------------------------------------
 #: Most time steps and (estimated) triangles of a built-in shape a case may ask for: beyond, the run
@@ -75,19 +79,28 @@ Expression = Annotated[Any, AfterValidator(_expression_value)]
 Part = Union[str, int]
 
 
-def _layer_value(minimum: float | None):
-    """A layer parameter: a number (at least ``minimum`` when given) or an expression in the coordinates,
-    evaluated at the contact nodes (its values there are checked against ``minimum`` when the problem is
-    built)."""
+def _layer_value(parameter: Parameter):
+    """A parameter of a contact law: a number (within the parameter's bound) or an expression in the
+    coordinates, evaluated at the contact nodes (its values there are checked against the bound when the
+    problem is built)."""
+    minimum, strict = parameter.minimum, parameter.strict
 
     def check(value):
         value = _expression_value(value)
-        if isinstance(value, (int, float)) and minimum is not None and not value >= minimum:
-            raise ValueError(f"expected a number >= {minimum:g} or an expression in the coordinates, got "
-                             f"{_brief(value)}")
+        if isinstance(value, (int, float)) and minimum is not None and not (value > minimum if strict else
+                                                                             value >= minimum):
+            raise ValueError(f"expected a number {'>' if strict else '>='} {minimum:g} or an expression in the "
+                             f"coordinates, got {_brief(value)}")
         return value
 
     return Annotated[Any, AfterValidator(check)]
+
+
+def _number(parameter: Parameter):
+    """A parameter of a viscoplastic law: a number within the parameter's bound."""
+    if parameter.minimum is None:
+        return float
+    return Annotated[float, Field(gt=parameter.minimum) if parameter.strict else Field(ge=parameter.minimum)]
 
 
 def _infinite(value):
@@ -114,12 +127,6 @@ def _thickness(value):
 
 Thickness = Annotated[Any, BeforeValidator(_infinite), AfterValidator(_thickness)]
 
-
-#: Layer parameters that may vary along Γ3 (the paper's K(x, ξ), (2.18)).
-NonNegativeLayerValue = _layer_value(0.0)
-LayerValue = _layer_value(None)
-#: The exponent m ≥ 1 of p = power, which may vary along Γ3 too (the paper's p(x, r), (2.19)).
-Exponent = _layer_value(1.0)
 
 
 class _Section(BaseModel):
@@ -193,24 +200,8 @@ class MeshSection(_Section):
         return (2.0 if dim == 2 else 6.0) * count  # triangles per square, tetrahedra per cube of side h
 
 
-class PerzynaSection(_Section):
-    """𝒢(σ, ε) = −(1/η) (σ − P(σ)), P the projection onto {τ ∈ S² : ‖dev τ‖ ≤ yield_stress}."""
-
-    law: Literal["perzyna"]
-    eta: PositiveFloat  # viscosity η: the Lipschitz constant of 𝒢 is 1/η
-    yield_stress: NonNegativeFloat  # σ_y; 0: the whole deviator relaxes
-
-
-class RelaxationSection(_Section):
-    """𝒢(σ, ε) = −μ (σ − 𝒞ε), 𝒞 isotropic (E_inf, nu_inf) with the material's hypothesis."""
-
-    law: Literal["relaxation"]
-    mu: PositiveFloat  # relaxation rate μ (1/time)
-    E_inf: PositiveFloat
-    nu_inf: float
-
-
-Viscoplastic = Annotated[Union[PerzynaSection, RelaxationSection], Field(discriminator="law")]
+#: material.viscoplastic: the table of a law of vpcontact.laws.viscoplastic (law = its name, its parameters).
+Viscoplastic = law_tables(VISCOPLASTIC, _Section, _number)
 
 
 def _check_poisson_ratio(key: str, nu: float, hypothesis: str | None) -> None:
@@ -261,8 +252,9 @@ class MaterialSection(_Section):
         names the entry in the message ("material" or "material[i]")."""
         if not isinstance(self.nu, str):
             _check_poisson_ratio(f"{key}.nu", self.nu, self.hypothesis)
-        if isinstance(self.viscoplastic, RelaxationSection):
-            _check_poisson_ratio(f"{key}.viscoplastic.nu_inf", self.viscoplastic.nu_inf, self.hypothesis)
+        if self.viscoplastic is not None:
+            for name, value in poisson_ratios(self.viscoplastic):
+                _check_poisson_ratio(f"{key}.viscoplastic.{name}", value, self.hypothesis)
 
     @property
     def regions(self) -> list[str]:
@@ -375,33 +367,9 @@ class BoundarySection(_Section):
     body_force: list[BodyForceSection] = []
 
 
-class PowerStiffnessSection(_Section):
-    """K(ξ) = c_v (1 + α ξ)^β (the paper's law)."""
-
-    law: Literal["power"]
-    c_v: NonNegativeLayerValue
-    alpha: NonNegativeLayerValue
-    beta: LayerValue
-
-
-class ConstantStiffnessSection(_Section):
-    """K(ξ) = value; 0 gives the Signorini condition with gap g."""
-
-    law: Literal["constant"]
-    value: NonNegativeLayerValue
-
-
-class ExponentialStiffnessSection(_Section):
-    """K(ξ) = c_v exp(α ξ)."""
-
-    law: Literal["exponential"]
-    c_v: NonNegativeLayerValue
-    alpha: LayerValue
-
-
-Stiffness = Annotated[
-    Union[PowerStiffnessSection, ConstantStiffnessSection, ExponentialStiffnessSection], Field(discriminator="law")
-]
+#: contact.stiffness: the table of a law of vpcontact.laws.stiffness (law = its name, its parameters, each a number
+#: or an expression in the coordinates: the paper's K(x, ξ), (2.18)).
+Stiffness = law_tables(STIFFNESS, _Section, _layer_value)
 
 
 #: The lengths a vector contact.normal may have: only its direction counts (it is divided by its length), and
@@ -431,19 +399,23 @@ def _normal(value):
 
 
 #: The keys of one layer: stated in [contact] for one contact part, in each entry of contact.parts for several.
-LAYER_KEYS = ("part", "g", "gap", "p", "exponent", "stiffness")
+LAYER_KEYS = ("part", "g", "gap", *COMPLIANCE_KEYS, "stiffness")
 #: The keys of the whole contact, one value for all its parts.
 GLOBAL_CONTACT_KEYS = ("rho", "probe", "normal")
 
 
-class ContactPartSection(_Section):
-    """One part of Γ3 with its own layer (an entry of contact.parts)."""
+class _PartLayer(_Section):
+    """The keys of a contact part's layer before those of its law p (contact.p and its parameters: the law's
+    exponent, the paper's p(x, r) of (2.19), a number or an expression in the coordinates too)."""
 
     part: Part
     g: Thickness
     gap: Expression = 0.0
-    p: Literal["positive_part", "power"] = "positive_part"
-    exponent: Optional[Exponent] = None
+
+
+class ContactPartSection(with_compliance(_PartLayer, "positive_part", _layer_value)):
+    """One part of Γ3 with its own layer (an entry of contact.parts)."""
+
     stiffness: Stiffness
 
     @model_validator(mode="before")
@@ -457,17 +429,21 @@ class ContactPartSection(_Section):
         return data
 
 
-class ContactSection(_Section):
+class _ContactLayer(_Section):
+    """The keys of the one-part form's layer before those of its law p (contact.p, default "positive_part" with
+    part, and its parameters)."""
+
+    part: Optional[Part] = None
+    g: Thickness = None
+    gap: Optional[Expression] = None  # default 0 with part
+
+
+class ContactSection(with_compliance(_ContactLayer, None, _layer_value)):
     """The contact condition (2.5) on Γ3: soft layer of thickness g on a rigid base. Γ3 is one part
     (``part`` and its layer's keys here) or several (``parts``: a list of parts, each with its layer); a
     node where two parts meet takes the layer of the one listed first. rho, probe and normal are the
     whole contact's."""
 
-    part: Optional[Part] = None
-    g: Thickness = None
-    gap: Optional[Expression] = None  # default 0 with part
-    p: Optional[Literal["positive_part", "power"]] = None  # default "positive_part" with part
-    exponent: Optional[Exponent] = None
     rho: NonNegativeFloat = 1.0
     probe: Optional[Annotated[list[float], Field(min_length=2, max_length=3)]] = None
     normal: Annotated[Any, AfterValidator(_normal)] = "body"
@@ -484,10 +460,7 @@ class ContactSection(_Section):
         else:
             self._several_parts()
         for key, layer in self.layers():
-            if layer.p == "power" and layer.exponent is None:
-                raise ValueError(f"missing required value '{key}.exponent' (needed by {key}.p = \"power\")")
-            if layer.p != "power" and layer.exponent is not None:
-                raise ValueError(f"{key}.exponent is only used with {key}.p = \"power\" ({key}.p = \"{layer.p}\")")
+            check_compliance(key, layer)
         return self
 
     def _one_part(self, python_laws: Collection[str]) -> None:
@@ -512,7 +485,7 @@ class ContactSection(_Section):
 
     def layers(self) -> list[tuple[str, "ContactSection | ContactPartSection"]]:
         """(key, layer) of each contact part, in order: ("contact", self) for one part, else
-        ("contact.parts[j]", entry); a layer has the attributes part, g, gap, p, exponent, stiffness."""
+        ("contact.parts[j]", entry); a layer has the attributes LAYER_KEYS."""
         if self.parts is None:
             return [("contact", self)]
         return [(f"contact.parts[{j}]", entry) for j, entry in enumerate(self.parts)]
@@ -939,9 +912,6 @@ _TYPE_WORDS = {
     "model_attributes_type": "expected a table",
     "finite_number": "expected a finite number",
 }
-_STIFFNESS_TAGS = ("power", "constant", "exponential")
-_VISCOPLASTIC_TAGS = ("perzyna", "relaxation")
-_LAW_TAGS = {"stiffness": _STIFFNESS_TAGS, "viscoplastic": _VISCOPLASTIC_TAGS}  # tagged unions by section name
 _FORM_TAGS = {"material": ("table", "list")}  # a section given as one table or a list of them
 
 
@@ -957,7 +927,7 @@ def _clean_loc(loc) -> tuple:
     material.list.0.E -> material[0].E)."""
     cleaned = []
     for item in loc:
-        tags = (*_LAW_TAGS.get(cleaned[-1], ()), *_FORM_TAGS.get(cleaned[-1], ())) if cleaned else ()
+        tags = (*LAW_TAGS.get(cleaned[-1], ()), *_FORM_TAGS.get(cleaned[-1], ())) if cleaned else ()
         if item in tags or (cleaned and cleaned[-1] in ("part", "region") and item in ("str", "int")):
             continue  # a law's or a form's tag, or the member of the union str | int of a part or region name
         cleaned.append(item)
@@ -983,7 +953,7 @@ def _describe(error: dict) -> str:
             return key + message[len(name):]
         return f"{key}: {message}"
     if kind in ("union_tag_invalid", "union_tag_not_found"):
-        laws = ", ".join(f'"{t}"' for t in _LAW_TAGS.get(loc[-1] if loc else "", _STIFFNESS_TAGS))
+        laws = ", ".join(f'"{t}"' for t in LAW_TAGS.get(loc[-1] if loc else "", LAW_TAGS["stiffness"]))
         given = ctx.get("tag")
         if kind == "union_tag_not_found":
             return f"missing required value '{key}.law' (one of {laws})"
@@ -1013,7 +983,7 @@ def _show(value) -> str:
 
 def _law_tag(raw_loc) -> str | None:
     """The law a tagged union was validated as (the last tag pydantic inserts after "stiffness" etc.)."""
-    tags = [item for before, item in zip(raw_loc, raw_loc[1:]) if item in _LAW_TAGS.get(before, ())]
+    tags = [item for before, item in zip(raw_loc, raw_loc[1:]) if item in LAW_TAGS.get(before, ())]
     return tags[-1] if tags else None
 
 

@@ -1,4 +1,5 @@
-"""The contact condition (2.5) at the nodes of Γ3: laws p and K(ξ), nodal normals and weights.
+"""The contact condition (2.5) at the nodes of Γ3: the layer's law from p and K(ξ) (:mod:`vpcontact.laws.compliance`,
+:mod:`vpcontact.laws.stiffness`, or Python laws), one law over the parts of Γ3, nodal normals and weights.
 
 Node-to-rigid contact: node i of Γ3 carries a unit normal ν_i (the body's outward normal, the
 paper's u_ν, or the fixed direction of a flat foundation), a weight w_i (its share of the measure of
@@ -12,7 +13,8 @@ and the rigid base adds a multiplier λ_i ≥ 0 once d_i reaches g.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -20,87 +22,16 @@ import scipy.sparse as sp
 from skfem import FacetBasis
 
 from ..errors import CaseError, quoted
-from ..case.expressions import Expression
+from ..case.expressions import Expression, values_at
 from ..mesh.core import Mesh
 from ..fem.space import coordinates as coordinates_names
+from .compliance import COMPLIANCE
+from .spec import Law
+from .stiffness import STIFFNESS
 
 #: Node states reported per contact node and step.
 SEPARATED, IN_COMPLIANCE, AT_LIMIT = 0, 1, 2
 STATUS_NAMES = ("separated", "in_compliance", "at_limit")
-
-
-# --- normal compliance functions p (2.19) ------------------------------------------------------
-@dataclass(frozen=True)
-class PositivePart:
-    """p(r) = r⁺, with the generalized derivative p'(r) = 1 for r ≥ 0 (so p'(0) = 1), else 0."""
-
-    def __call__(self, r: np.ndarray) -> np.ndarray:
-        return np.maximum(r, 0.0)
-
-    def derivative(self, r: np.ndarray) -> np.ndarray:
-        return (r >= 0.0).astype(float)
-
-
-@dataclass(frozen=True)
-class Power:
-    """p(r) = (r⁺)^m with m ≥ 1 (Lipschitz on bounded sets; p'(0) = 1 when m = 1); m is a number or one
-    exponent per contact node (the paper's p(x, r), (2.19))."""
-
-    exponent: float | np.ndarray
-
-    def __call__(self, r: np.ndarray) -> np.ndarray:
-        return np.maximum(r, 0.0) ** self.exponent
-
-    def derivative(self, r: np.ndarray) -> np.ndarray:
-        """m (r⁺)^(m−1), and where m = 1 the derivative of r⁺ (1 for r ≥ 0, 0 below: (r⁺)^0 would be 1
-        for r < 0 too)."""
-        m = self.exponent
-        return np.where(m == 1.0, PositivePart().derivative(r), m * np.maximum(r, 0.0) ** (m - 1.0))
-
-
-# --- stiffness coefficients K(ξ) (2.18) --------------------------------------------------------
-# Their parameters are numbers, or arrays with one value per contact node: the layer varies along Γ3,
-# K(x, ξ) (the laws are evaluated on arrays of all the contact nodes).
-@dataclass(frozen=True)
-class PowerStiffness:
-    """K(ξ) = c_v (1 + α ξ)^β: the paper's law; β > 0 hardens, β < 0 softens, α = 0 is constant."""
-
-    c_v: float | np.ndarray
-    alpha: float | np.ndarray
-    beta: float | np.ndarray
-
-    def __call__(self, xi: np.ndarray) -> np.ndarray:
-        return self.c_v * (1.0 + self.alpha * xi) ** self.beta
-
-    def derivative(self, xi: np.ndarray) -> np.ndarray:
-        return self.c_v * self.alpha * self.beta * (1.0 + self.alpha * xi) ** (self.beta - 1.0)
-
-
-@dataclass(frozen=True)
-class ConstantStiffness:
-    """K(ξ) = value (value = 0: the Signorini condition with gap g)."""
-
-    value: float | np.ndarray
-
-    def __call__(self, xi: np.ndarray) -> np.ndarray:
-        return np.zeros_like(xi, dtype=float) + self.value
-
-    def derivative(self, xi: np.ndarray) -> np.ndarray:
-        return np.zeros_like(xi, dtype=float)
-
-
-@dataclass(frozen=True)
-class ExponentialStiffness:
-    """K(ξ) = c_v exp(α ξ): α > 0 hardens, α < 0 softens."""
-
-    c_v: float | np.ndarray
-    alpha: float | np.ndarray
-
-    def __call__(self, xi: np.ndarray) -> np.ndarray:
-        return self.c_v * np.exp(self.alpha * xi)
-
-    def derivative(self, xi: np.ndarray) -> np.ndarray:
-        return self.alpha * self(xi)
 
 
 @dataclass(frozen=True)
@@ -161,10 +92,34 @@ class PiecewiseLaw:
         return self._each("derivative", r)
 
 
-#: The laws whose parameters are known by name (the columns of the layer in the outputs).
-PARAMETRIC_LAWS = (PositivePart, Power, PowerStiffness, ConstantStiffness, ExponentialStiffness)
-#: The layer's parameters per contact node, in the order of the outputs' columns.
-LAYER_PARAMETERS = ("g", "c_v", "alpha", "beta", "value", "exponent")
+def law_at_nodes(law: Law, parameters: Mapping, key: str, points: np.ndarray):
+    """The object of ``law`` (a law K or p of the registries) on a contact part whose nodes are ``points`` (d, k):
+    each of its parameters, ``parameters[name]`` of the case key ``key.name``, a number or an expression's values
+    at the nodes (:func:`layer_parameter`, checked against the parameter's bound)."""
+    return law.made(lambda parameter: layer_parameter(f"{key}.{parameter.name}", parameters[parameter.name],
+                                                      parameter.minimum, points=points, strict=parameter.strict))
+
+
+def layer_parameter(where: str, value, minimum: float | None = None, *, points: np.ndarray, strict: bool = False):
+    """The layer parameter of the case key ``where``: a number as it is; an expression's values at the
+    contact nodes ``points`` (d, k), refused (naming the node) where they are not finite or below
+    ``minimum`` (or equal to it, when ``strict``)."""
+    if not isinstance(value, str):
+        return float(value)
+    names, count = coordinates_names(points.shape[0]), points.shape[1]
+    values = values_at(value, where, points)
+    if minimum is None:
+        wrong = ~np.isfinite(values)
+    else:
+        wrong = ~np.isfinite(values) | ~(values > minimum if strict else values >= minimum)
+    if wrong.any():
+        node = np.flatnonzero(wrong)[0]
+        at = ", ".join(f"{c:.6g}" for c in points[:, node])
+        expected = "finite" if minimum is None else f"a finite number {'>' if strict else '>='} {minimum:g}"
+        raise CaseError(f"{where} = {quoted(value)} is {values[node]:g} at the contact node ({', '.join(names)}) = "
+                        f"({at}) ({wrong.sum()} of {count} nodes): expected {expected} at every node of the "
+                        f"contact part")
+    return values.copy()
 
 
 def per_node(values: list, owner: np.ndarray) -> float | np.ndarray:
@@ -185,9 +140,10 @@ def merged_law(laws: list, owner: np.ndarray):
     first = laws[0]
     if len(laws) == 1:
         return first
-    if any(type(law) is not type(first) for law in laws) or not isinstance(first, PARAMETRIC_LAWS):
+    declared = _declared(first)
+    if declared is None or any(type(law) is not type(first) for law in laws):
         return PiecewiseLaw(tuple(laws), owner)
-    return type(first)(**{f.name: per_node([getattr(law, f.name) for law in laws], owner) for f in fields(first)})
+    return declared.made(lambda parameter: per_node([getattr(law, parameter.name) for law in laws], owner))
 
 
 def law_parameters(law, m: int) -> dict[str, np.ndarray]:
@@ -200,9 +156,23 @@ def law_parameters(law, m: int) -> dict[str, np.ndarray]:
             for name, value in law_parameters(part_law, int(mine.sum())).items():
                 values.setdefault(name, np.full(m, np.nan))[mine] = value
         return values
-    if isinstance(law, PARAMETRIC_LAWS):
-        return {f.name: np.broadcast_to(np.asarray(getattr(law, f.name), dtype=float), (m,)) for f in fields(law)}
-    return {}
+    declared = _declared(law)
+    if declared is None:
+        return {}
+    return {p.name: np.broadcast_to(np.asarray(getattr(law, p.name), dtype=float), (m,)) for p in declared.parameters}
+
+
+def _declared(law) -> Law | None:
+    """The law of the registries (K or p) whose object ``law`` is, None for a law of the API."""
+    declared = (entry for registry in (STIFFNESS, COMPLIANCE) for entry in registry.values() if type(law) is entry.make)
+    return next(declared, None)
+
+
+def layer_parameters() -> tuple[str, ...]:
+    """The layer's parameters per contact node, in the order of the outputs' columns: g, then those of the
+    laws K and p in the order of their registries."""
+    names = [p.name for registry in (STIFFNESS, COMPLIANCE) for law in registry.values() for p in law.parameters]
+    return ("g", *dict.fromkeys(names))
 
 
 @dataclass(frozen=True)
@@ -220,11 +190,11 @@ class ContactLaw:
         return self.g if np.ndim(self.g) == 0 else self.g[nodes]
 
     def parameters(self, m: int) -> dict[str, np.ndarray]:
-        """The local layer parameters at the m contact nodes, in the order of LAYER_PARAMETERS: g, those
+        """The local layer parameters at the m contact nodes, in the order of layer_parameters(): g, those
         of K (c_v, alpha, beta or value) and the exponent of p = power, where the laws have them."""
         values = {"g": np.broadcast_to(np.asarray(self.g, dtype=float), (m,)),
                   **law_parameters(self.stiffness, m), **law_parameters(self.p, m)}
-        return {name: values[name] for name in LAYER_PARAMETERS if name in values}
+        return {name: values[name] for name in layer_parameters() if name in values}
 
     def K(self, xi: np.ndarray) -> np.ndarray:
         """ρ K(ξ): the stiffness coefficient in force (the paper's K_ρ)."""

@@ -11,7 +11,7 @@ claiming one element are refused before any computation.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,7 +19,8 @@ import numpy as np
 from ..case.schema import MaterialSection, Model, _material_keys
 from ..errors import CaseError, quoted
 from ..case.expressions import values_at
-from .elasticity import Elasticity, Perzyna, Relaxation
+from .elasticity import Elasticity
+from .viscoplastic import VISCOPLASTIC
 from ..mesh.core import Mesh
 from ..fem.space import coordinates
 
@@ -87,7 +88,8 @@ def body_materials(model: Model, mesh: Mesh) -> Materials:
             E[mine] = _coefficient(f"{key}.E", entry.E, centroids[:, mine], minimum=0.0)
             nu[mine] = _coefficient(f"{key}.nu", entry.nu, centroids[:, mine], hypothesis=hypothesis)
         elasticity = Elasticity(E, nu, hypothesis)
-    laws = [(np.flatnonzero(owner == i), _viscoplastic_law(entry, hypothesis))
+    laws = [(np.flatnonzero(owner == i), _viscoplastic_law(entry.viscoplastic.law, dict(entry.viscoplastic),
+                                                           hypothesis))
             for i, (_, entry) in enumerate(entries) if entry.viscoplastic is not None]
     if not laws:
         viscoplastic = None
@@ -98,12 +100,10 @@ def body_materials(model: Model, mesh: Mesh) -> Materials:
     return Materials(owner, elasticity, viscoplastic)
 
 
-def _viscoplastic_law(entry: MaterialSection, hypothesis: str | None) -> Callable:
-    """𝒢 of an entry's ``viscoplastic`` table."""
-    v = entry.viscoplastic
-    if v.law == "perzyna":
-        return Perzyna(v.eta, v.yield_stress)
-    return Relaxation(v.mu, Elasticity(v.E_inf, v.nu_inf, hypothesis))
+def _viscoplastic_law(name: str, parameters: Mapping, hypothesis: str | None) -> Callable:
+    """𝒢 of the viscoplastic law ``name`` (VISCOPLASTIC) with its ``parameters`` by name, under the material's
+    2D ``hypothesis``."""
+    return VISCOPLASTIC[name].made(lambda parameter: parameters[parameter.name], hypothesis=hypothesis)
 
 
 def _owners(entries: list[tuple[str, MaterialSection]], mesh: Mesh) -> np.ndarray:

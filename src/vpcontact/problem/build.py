@@ -12,7 +12,6 @@ import os
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import partial
 from pathlib import Path
 from typing import Callable
 
@@ -24,10 +23,14 @@ from ..mesh import core as meshes
 from ..fem.assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
 from ..case.schema import Case, MeshSection, Model, OutputSection, _brief, _material_keys, section
-from ..laws.contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
-                      PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
+from ..laws.compliance import COMPLIANCE
+from ..laws.compliance.positive_part import PositivePart
+from ..laws.contact import (AtNodes, CallableLaw, ContactLaw, ContactSurface, contact_surface, empty_surface,
+                            law_at_nodes, layer_parameter, merged_law, per_node)
+from ..laws.stiffness import STIFFNESS
+from ..laws.stiffness.constant import ConstantStiffness
 from ..errors import CaseError, quoted
-from ..case.expressions import parse_expression, values_at
+from ..case.expressions import parse_expression
 from .initial import InitialState, initial_state
 from ..laws.elasticity import Elasticity
 from ..laws.materials import AtCentroids, Materials, body_materials
@@ -526,50 +529,18 @@ def _contact_law(model: Model, surface: ContactSurface, p: Callable | None, stif
     ``stiffness_law`` of the API, when given, replace the case's on every part."""
     ps, stiffnesses, limits = [], [], []
     for j, (key, layer) in enumerate(model.contact.layers()):
-        at = partial(_layer_parameter, points=surface.coordinates[:, surface.owner == j])
+        points = surface.coordinates[:, surface.owner == j]
         if p is None:
-            ps.append(PositivePart() if layer.p == "positive_part" else
-                      Power(at(f"{key}.exponent", layer.exponent, 1.0)))
+            ps.append(law_at_nodes(COMPLIANCE[layer.p], dict(layer), key, points))
         if stiffness_law is None:
-            stiffnesses.append(_stiffness_law(layer.stiffness, f"{key}.stiffness", at))
-        limits.append(at(f"{key}.g", layer.g, 0.0, strict=True))
+            stiffnesses.append(law_at_nodes(STIFFNESS[layer.stiffness.law], dict(layer.stiffness), f"{key}.stiffness",
+                                            points))
+        limits.append(layer_parameter(f"{key}.g", layer.g, 0.0, points=points, strict=True))
     owner = surface.owner
     p, stiffness_law = (law.at(surface.coordinates) if isinstance(law, LawOfNodes) else law
                         for law in (p, stiffness_law))
     return ContactLaw(p=merged_law(ps, owner) if p is None else p, g=per_node(limits, owner), rho=model.contact.rho,
                       stiffness=merged_law(stiffnesses, owner) if stiffness_law is None else stiffness_law)
-
-
-def _stiffness_law(s, key: str, at: Callable):
-    """K(x, ξ) of the stiffness table ``s`` (2.18) of the case key ``key``: each parameter a number, or an
-    expression in the coordinates evaluated by ``at`` at the nodes of its part."""
-    if s.law == "power":
-        return PowerStiffness(at(f"{key}.c_v", s.c_v, 0.0), at(f"{key}.alpha", s.alpha, 0.0), at(f"{key}.beta", s.beta))
-    if s.law == "constant":
-        return ConstantStiffness(at(f"{key}.value", s.value, 0.0))
-    return ExponentialStiffness(at(f"{key}.c_v", s.c_v, 0.0), at(f"{key}.alpha", s.alpha))
-
-
-def _layer_parameter(where: str, value, minimum: float | None = None, *, points: np.ndarray, strict: bool = False):
-    """The layer parameter of the case key ``where``: a number as it is; an expression's values at the
-    contact nodes ``points`` (d, k), refused (naming the node) where they are not finite or below
-    ``minimum`` (or equal to it, when ``strict``)."""
-    if not isinstance(value, str):
-        return float(value)
-    names, count = coordinates(points.shape[0]), points.shape[1]
-    values = values_at(value, where, points)
-    if minimum is None:
-        wrong = ~np.isfinite(values)
-    else:
-        wrong = ~np.isfinite(values) | ~(values > minimum if strict else values >= minimum)
-    if wrong.any():
-        node = np.flatnonzero(wrong)[0]
-        at = ", ".join(f"{c:.6g}" for c in points[:, node])
-        expected = "finite" if minimum is None else f"a finite number {'>' if strict else '>='} {minimum:g}"
-        raise CaseError(f"{where} = {quoted(value)} is {values[node]:g} at the contact node ({', '.join(names)}) = "
-                        f"({at}) ({wrong.sum()} of {count} nodes): expected {expected} at every node of the "
-                        f"contact part")
-    return values.copy()
 
 
 def _check_contact_can_move(model: Model, mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
