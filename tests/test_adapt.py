@@ -10,7 +10,8 @@ import pytest
 
 import vpcontact
 from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree
-from vpcontact.estimate.adapt import ESTIMATORS, adapt, dorfler, solve_and_estimate
+from vpcontact.estimate.adapt import adapt, dorfler, solve_and_estimate
+from vpcontact.estimate.estimators import ESTIMATORS
 from vpcontact.case.schema import AdaptSection
 from vpcontact.estimate.indicators import Level
 from vpcontact.mesh import read_mesh

@@ -27,6 +27,7 @@ from ..errors import CaseError, one_line, quoted, shown
 from .expressions import parse_expression
 from .inputs import MAX_TOML_BYTES, check_regular_file
 from ..solvers.factorization import BACKENDS, installed_backends
+from ..estimate.estimators import ESTIMATORS
 from ..fem.space import CELLS
 from ..laws.spec import Parameter
 from ..laws.stiffness import STIFFNESS
@@ -579,7 +580,7 @@ class AdaptSection(_Section):
     theta: Annotated[float, Field(gt=0, le=1)] = 0.5
     max_dofs: Annotated[int, Field(gt=0)] = 1_000_000
     functional: Literal["max", "l2"] = "max"  # max over the steps of η_K²(t_n), or Σ_n k_n η_K²(t_n)
-    estimator: Literal["residual", "recovery"] = "residual"  # the keys of vpcontact.estimate.adapt.ESTIMATORS
+    estimator: Literal[ESTIMATORS.names] = "residual"  # vpcontact.estimate.estimators.ESTIMATORS
 
 
 class Model(_Section):
