@@ -20,13 +20,13 @@ import scipy.sparse as sp
 from skfem import Basis
 
 from ..mesh import core as meshes
+from ..fem.contact_surface import ContactSurface, contact_surface, empty_surface
 from ..fem.assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
 from ..case.schema import Case, MeshSection, Model, OutputSection, _brief, _material_keys, section
 from ..laws.compliance import COMPLIANCE
 from ..laws.compliance.positive_part import PositivePart
-from ..laws.contact import (AtNodes, CallableLaw, ContactLaw, ContactSurface, contact_surface, empty_surface,
-                            law_at_nodes, layer_parameter, merged_law, per_node)
+from ..laws.contact import AtNodes, CallableLaw, ContactLaw, law_at_nodes, layer_parameter, merged_law, per_node
 from ..laws.stiffness import STIFFNESS
 from ..laws.stiffness.constant import ConstantStiffness
 from ..errors import CaseError, quoted

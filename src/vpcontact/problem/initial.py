@@ -29,7 +29,8 @@ import numpy as np
 from skfem import Basis
 
 from ..case.schema import Model, _brief, check_time_span
-from ..laws.contact import ContactLaw, ContactSurface
+from ..fem.contact_surface import ContactSurface
+from ..laws.contact import ContactLaw
 from ..errors import CaseError, quoted
 from ..case.expressions import values_at
 from ..case.inputs import check_regular_file
