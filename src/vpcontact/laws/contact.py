@@ -18,7 +18,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import CaseError, quoted
-from ..case.expressions import values_at
+from ..expressions.parse import values_at
 from ..fem.space import coordinates as coordinates_names
 from .compliance import COMPLIANCE
 from .spec import Law
@@ -102,7 +102,7 @@ def layer_parameter(where: str, value, minimum: float | None = None, *, points: 
     if not isinstance(value, str):
         return float(value)
     names, count = coordinates_names(points.shape[0]), points.shape[1]
-    values = values_at(value, where, points)
+    values = values_at(value, where, points, names)
     if minimum is None:
         wrong = ~np.isfinite(values)
     else:

@@ -11,14 +11,13 @@ claiming one element are refused before any computation.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..case.schema import MaterialSection, Model, _material_keys
 from ..errors import CaseError, quoted
-from ..case.expressions import values_at
+from ..expressions.parse import values_at
 from .elasticity import Elasticity
 from .viscoplastic import VISCOPLASTIC
 from ..mesh.core import Mesh
@@ -55,7 +54,7 @@ class AtCentroids:
 class Materials:
     """The body's materials on the elements: which entry each element has, ℰ per element and 𝒢."""
 
-    owner: np.ndarray  # the index of each element's entry in ``model.materials`` (nelements,)
+    owner: np.ndarray  # the index of each element's entry in the case's materials (nelements,)
     elasticity: Elasticity  # E, ν floats for one homogeneous material, else arrays over the elements
     viscoplastic: Callable | None  # 𝒢(σ, ε) over arrays (d, d, nelements); None: 𝒢 = 0 everywhere
 
@@ -70,15 +69,16 @@ class Materials:
         return np.broadcast_to(np.asarray(self.elasticity.nu, dtype=float), self.owner.shape)
 
 
-def body_materials(model: Model, mesh: Mesh) -> Materials:
-    """The materials of ``model`` on the elements of ``mesh`` (CaseError naming the entry, region or
-    element where they do not assign exactly one admissible material to every element)."""
-    entries = _material_keys(model)
+def body_materials(materials: Sequence, mesh: Mesh) -> Materials:
+    """The case's ``materials`` (:class:`~vpcontact.problem.options.MaterialOptions`: key, E, ν, hypothesis,
+    regions, viscoplastic law) on the elements of ``mesh`` (CaseError naming the entry, region or element where
+    they do not assign exactly one admissible material to every element)."""
+    entries = [(entry.key, entry) for entry in materials]
     owner = _owners(entries, mesh)
     dim = mesh.dim
-    hypothesis = (model.materials[0].hypothesis or "plane_strain") if dim == 2 else None
-    if len(entries) == 1 and not any(isinstance(v, str) for v in (model.materials[0].E, model.materials[0].nu)):
-        entry = model.materials[0]
+    hypothesis = (materials[0].hypothesis or "plane_strain") if dim == 2 else None
+    if len(entries) == 1 and not any(isinstance(v, str) for v in (materials[0].E, materials[0].nu)):
+        entry = materials[0]
         elasticity = Elasticity(float(entry.E), float(entry.nu), hypothesis)  # homogeneous: the scalar form
     else:
         centroids = mesh.centroids
@@ -88,8 +88,7 @@ def body_materials(model: Model, mesh: Mesh) -> Materials:
             E[mine] = _coefficient(f"{key}.E", entry.E, centroids[:, mine], minimum=0.0)
             nu[mine] = _coefficient(f"{key}.nu", entry.nu, centroids[:, mine], hypothesis=hypothesis)
         elasticity = Elasticity(E, nu, hypothesis)
-    laws = [(np.flatnonzero(owner == i), _viscoplastic_law(entry.viscoplastic.law, dict(entry.viscoplastic),
-                                                           hypothesis))
+    laws = [(np.flatnonzero(owner == i), _viscoplastic_law(entry.viscoplastic, hypothesis))
             for i, (_, entry) in enumerate(entries) if entry.viscoplastic is not None]
     if not laws:
         viscoplastic = None
@@ -100,13 +99,13 @@ def body_materials(model: Model, mesh: Mesh) -> Materials:
     return Materials(owner, elasticity, viscoplastic)
 
 
-def _viscoplastic_law(name: str, parameters: Mapping, hypothesis: str | None) -> Callable:
-    """𝒢 of the viscoplastic law ``name`` (VISCOPLASTIC) with its ``parameters`` by name, under the material's
-    2D ``hypothesis``."""
-    return VISCOPLASTIC[name].made(lambda parameter: parameters[parameter.name], hypothesis=hypothesis)
+def _viscoplastic_law(choice, hypothesis: str | None) -> Callable:
+    """𝒢 of a material's viscoplastic law ``choice`` (:class:`~vpcontact.problem.options.LawChoice`: a name of
+    VISCOPLASTIC and its parameters by name) under the material's 2D ``hypothesis``."""
+    return VISCOPLASTIC[choice.law].made(lambda parameter: choice.parameters[parameter.name], hypothesis=hypothesis)
 
 
-def _owners(entries: list[tuple[str, MaterialSection]], mesh: Mesh) -> np.ndarray:
+def _owners(entries: list[tuple[str, object]], mesh: Mesh) -> np.ndarray:
     """The entry of each element; refused: a region the mesh does not have, an element claimed twice or
     by no entry (naming the regions)."""
     elements = mesh.mesh.t.shape[1]
@@ -161,7 +160,7 @@ def _coefficient(key: str, value, centroids: np.ndarray, *, minimum: float | Non
     refused (naming the element's centroid) where not finite, not > ``minimum``, or (ν) not admissible
     for ``hypothesis``."""
     names = coordinates(centroids.shape[0])
-    values = values_at(value, key, centroids)
+    values = values_at(value, key, centroids, names)
     if minimum is not None:
         wrong, expected = ~(values > minimum), f"a finite number > {minimum:g}"
     else:

@@ -2,8 +2,11 @@
 
 A law's module (one per law, in the package of its family: ``laws.stiffness``, ``laws.compliance``,
 ``laws.viscoplastic``) defines the law's object and ``LAW``, a :class:`Law`; its family's registry lists it by
-name. The case schema makes the law's table from ``LAW`` (a key per parameter, checked against its bounds),
-the translation of a case makes the law's object with ``LAW.make``.
+name. The case schema makes the law's table from ``LAW`` (a key per parameter, checked against its bounds,
+:mod:`vpcontact.case.law_sections`), the translation makes the table a
+:class:`~vpcontact.problem.options.LawChoice` (the law's name and its parameters), and the problem finds the law by
+that name in its registry and makes its object with ``LAW.make`` (:func:`vpcontact.laws.contact.law_at_nodes`,
+:mod:`vpcontact.laws.materials`).
 """
 
 from __future__ import annotations
