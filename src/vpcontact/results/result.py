@@ -41,13 +41,14 @@ def history_columns(dim: int) -> tuple[str, ...]:
             "nodes_in_compliance", "nodes_at_limit", *(f"contact_force_{c}" for c in coordinates(dim)), "substep", "k")
 
 
+def estimate_columns(terms: tuple[str, ...]) -> tuple[str, ...]:
+    """The history columns of an error estimate of ``terms`` at every level (``output.error_estimate``): η(t) =
+    (Σ_K η_K²)^½ and each term's share (Σ_K η_K,term²)^½; none without terms (no estimate)."""
+    return ("error_estimate", *(f"error_estimate_{term}" for term in terms)) if terms else ()
+
+
 #: The history columns of a 2D body (the paper's case).
 HISTORY_COLUMNS = history_columns(2)
-#: The terms of the residual error estimate (:mod:`vpcontact.estimate.residual`).
-ESTIMATE_TERMS = ("body_force", "jump", "neumann", "contact_tangential", "contact_normal", "complementarity")
-#: The history columns a run with ``output.error_estimate`` adds: η(t) = (Σ_K η_K²)^½ and each term's share
-#: (Σ_K η_K,term²)^½.
-ESTIMATE_COLUMNS = ("error_estimate", *(f"error_estimate_{term}" for term in ESTIMATE_TERMS))
 #: History columns holding integers (the others are floats).
 INTEGER_COLUMNS = ("step", "newton_iterations", "nodes_separated", "nodes_in_compliance", "nodes_at_limit", "substep")
 #: Most characters of a run's message that ``repr(result)`` shows (on its second line).
@@ -153,18 +154,19 @@ class Result:
     completed_steps: int = 0  # time steps t_n reached
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
-    error_estimate: bool = False  # output.error_estimate: the rows have the ESTIMATE_COLUMNS
+    estimate_terms: tuple[str, ...] = ()  # output.error_estimate: the estimator's terms (the rows' estimate_columns)
     output: object = None  # the OutputOptions the run was made with (what the writers write)
 
     @classmethod
-    def start(cls, problem, solver, output) -> "Result":
-        """The empty result of a run of ``problem`` by ``solver`` with the options ``output`` (OutputOptions)."""
+    def start(cls, problem, solver, output, estimate_terms: tuple[str, ...] = ()) -> "Result":
+        """The empty result of a run of ``problem`` by ``solver`` with the options ``output`` (OutputOptions), whose
+        levels record the error estimate of ``estimate_terms`` (none: no estimate)."""
         wanted = field_step_numbers(output.field_steps, len(problem.times))
         return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
                    contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
                    augmentation=solver.r, method=solver.name, method_reason=solver.reason, problem=problem,
                    discretization=Discretization.of(problem),
-                   output=output, error_estimate=output.error_estimate)
+                   output=output, estimate_terms=tuple(estimate_terms))
 
     # --- filling in ------------------------------------------------------------------------------
     def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status, substep: int = 1,
@@ -210,10 +212,10 @@ class Result:
 
     def record_estimate(self, indicators, fields: Fields) -> None:
         """Add the error estimate (:class:`~vpcontact.estimate.indicators.Indicators`) of the last recorded level to
-        its history row (ESTIMATE_COLUMNS) and its η_K to that level's ``fields``."""
+        its history row (the estimate_columns of its terms) and its η_K to that level's ``fields``."""
         self.rows[-1].update({"error_estimate": indicators.total,
                               **{f"error_estimate_{term}": float(np.sqrt(indicators.terms[term].sum()))
-                                 for term in ESTIMATE_TERMS}})
+                                 for term in self.estimate_terms}})
         fields.error_indicator = np.sqrt(indicators.squared)
 
     def fail(self, message: str) -> None:
@@ -230,8 +232,8 @@ class Result:
     @property
     def columns(self) -> tuple[str, ...]:
         """The history columns (history.csv) of this run's dimension, and with ``output.error_estimate``
-        the ESTIMATE_COLUMNS."""
-        return history_columns(self.dim) + (ESTIMATE_COLUMNS if self.error_estimate else ())
+        the estimate_columns of the estimator's terms."""
+        return history_columns(self.dim) + estimate_columns(self.estimate_terms)
 
     @property
     def steps(self) -> int:
@@ -295,7 +297,7 @@ class Result:
                                                  "penetration_probe", "normal_stress_probe", "nodes_separated",
                                                  "nodes_in_compliance", "nodes_at_limit")}
             final["contact_force"] = [last[f"contact_force_{c}"] for c in coordinates(self.dim)]
-            if self.error_estimate:
+            if self.estimate_terms:
                 final["error_estimate"] = last["error_estimate"]
         return {
             "status": self.status, "message": self.message, "dofs": self.dofs, "elements": self.elements,
@@ -371,8 +373,9 @@ class Result:
 # --- memory ----------------------------------------------------------------------------------------
 #: Bytes of one history row in memory: a dict of the HISTORY_COLUMNS and its time (CPython 3.11, measured).
 HISTORY_ROW_BYTES = 1100
-#: Bytes the ESTIMATE_COLUMNS add to a history row in memory (7 float objects and the larger dict; CPython 3.11, measured).
-ESTIMATE_ROW_BYTES = 900
+#: Bytes the columns of the estimate of output.error_estimate add to a history row in memory, and their number (the
+#: residual estimator's η and six terms: 7 float objects and the larger dict; CPython 3.11, measured).
+ESTIMATE_ROW_BYTES, ESTIMATE_ROW_COLUMNS = 900, 7
 #: Bytes of a NumPy array object besides its data.
 ARRAY_BYTES = 112
 #: Bytes the writers add while they write, whatever the run's length (contact.csv is written in blocks).
@@ -383,10 +386,10 @@ def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, conta
                   history: bool, dim: int = 2, estimate: bool = False) -> dict[str, int]:
     """Bytes a run of ``steps`` steps keeps for its outputs until they are written, by part: the history
     rows, the per-node contact rows and the fields at ``field_steps`` steps (``history``: with the
-    viscoplastic history z; ``estimate``: with the ESTIMATE_COLUMNS in every row and η_K in the fields),
+    viscoplastic history z; ``estimate``: with the estimate's columns in every row and η_K in the fields),
     each with the copy a checkpoint or solution.npz makes of them, and what the writers add. A step cut
     into sub-steps adds rows: this is the least a run needs."""
-    columns = len(history_columns(dim)) + (len(ESTIMATE_COLUMNS) if estimate else 0)
+    columns = len(history_columns(dim)) + (ESTIMATE_ROW_COLUMNS if estimate else 0)
     copies = 8 * columns
     row = HISTORY_ROW_BYTES + (ESTIMATE_ROW_BYTES if estimate else 0)
     contact = len(CONTACT_ARRAYS) * ARRAY_BYTES + 2 * (8 * (len(CONTACT_ARRAYS) - 1) + 1) * contact_nodes

@@ -24,8 +24,9 @@ ordinary step of the same scheme: loads at t, z advanced by h 𝒢 from the last
 by h d⁺ (the same rules with h for k), so a cut step is exactly the same scheme on a finer grid.
 The state carried from level to level is a :class:`LoopState`; it is all a checkpoint needs.
 
-With ``output.error_estimate`` the fields are computed at every level and the residual estimator
-(:mod:`vpcontact.estimate.residual`) adds η(t) and its terms to the level's history row and η_K to its fields.
+With ``output.error_estimate`` the fields are computed at every level and the estimator of every level
+(:data:`~vpcontact.estimate.estimators.EVERY_LEVEL`, the residual one) adds η(t) and its terms to the level's history
+row and η_K to its fields.
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ from ..laws.elasticity import von_mises
 from ..estimate.indicators import Level
 from ..problem.build import Problem, checked_problem
 from ..progress import SILENT, Progress, StepReport, reporting
-from ..estimate.residual import ResidualEstimator
+from ..estimate.estimators import ESTIMATORS, EVERY_LEVEL
 from ..results.output_options import OutputOptions
 from ..results.result import Fields, Result
 from .plan import free_operators, plan_run
@@ -160,8 +161,9 @@ class TimeLoop:
                                   expected_seconds=plan.setup_seconds)
         self.max_cuts = options.max_step_cuts
         self._loads = problem.loads.on(free)  # F(t) at the free dofs
-        self.result = Result.start(problem, self.solver, output)
-        self.estimator = ResidualEstimator(problem) if output.error_estimate else None
+        estimator = ESTIMATORS[EVERY_LEVEL] if output.error_estimate else None
+        self.result = Result.start(problem, self.solver, output, () if estimator is None else estimator.terms)
+        self.estimator = None if estimator is None else estimator.prepare(problem)
         self._created = started
         self.setup_time = clock.perf_counter() - started
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
