@@ -1,5 +1,5 @@
 """Conforming refinement that keeps the model's data (vpcontact.mesh.refinement) and the gmsh file of a mesh
-(vpcontact.mesh.msh)."""
+(vpcontact.mesh.gmsh)."""
 
 import math
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from vpcontact import mesh as meshes
-from vpcontact.mesh.msh import write_mesh
+from vpcontact.mesh.gmsh import write_mesh
 from vpcontact.mesh.refinement import refine, signed_measures
 
 

@@ -34,7 +34,7 @@ import numpy as np
 import skfem
 from pydantic import ValidationError
 
-from ..mesh import core as meshes
+from .. import mesh as meshes
 from .schema import MeshSection, Model, _brief, _check_expressions, _check_tree, _describe, _material_keys, plain, section
 from ..errors import CaseError
 from ..problem.build import Problem, build_problem, make_mesh

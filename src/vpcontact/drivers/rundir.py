@@ -52,7 +52,7 @@ from typing import TYPE_CHECKING
 from ..io import checkpoint, directory
 from ..case.schema import Case
 from ..errors import CaseError
-from ..mesh.msh import write_mesh
+from ..mesh.gmsh import write_mesh
 from ..problem.build import Problem, build_problem
 from ..progress import Progress, reporting
 from ..results.result import Result

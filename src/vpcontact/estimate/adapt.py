@@ -27,7 +27,7 @@ from . import recovery as recovery_estimate
 from ..case.schema import AdaptSection, OutputSection, section
 from ..errors import CaseError
 from .indicators import Indicators, Level
-from ..mesh.core import Mesh
+from ..mesh.mesh import Mesh
 from ..problem.build import Problem, checked_problem
 from ..progress import SILENT, Progress, duration, reporting
 from ..mesh.refinement import refine

@@ -24,7 +24,7 @@ from skfem.assembly.basis import AbstractBasis
 from ..errors import CaseError, quoted
 from ..case.expressions import Expression
 from ..laws.elasticity import Elasticity
-from ..mesh.core import Mesh
+from ..mesh.mesh import Mesh
 from ..mesh.simplex import elastic_stiffness, geometry, strains, stress_work
 from .space import coordinates
 

@@ -21,7 +21,7 @@ from skfem import FacetBasis
 
 from ..errors import CaseError, quoted
 from ..case.expressions import Expression
-from ..mesh.core import Mesh
+from ..mesh.mesh import Mesh
 from ..fem.space import coordinates as coordinates_names
 
 #: Node states reported per contact node and step.

@@ -20,7 +20,7 @@ from ..case.schema import MaterialSection, Model, _material_keys
 from ..errors import CaseError, quoted
 from ..case.expressions import values_at
 from .elasticity import Elasticity, Perzyna, Relaxation
-from ..mesh.core import Mesh
+from ..mesh.mesh import Mesh
 from ..fem.space import coordinates
 
 

@@ -25,9 +25,13 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 
 import numpy as np
+import skfem
 
 from ..errors import CaseError, shown
 
+#: The scikit-fem mesh of each dimension: linear triangles (MeshTri1) and tetrahedra (MeshTet1), what
+#: ``Mesh.mesh`` may be.
+SKFEM_MESH = {2: skfem.MeshTri, 3: skfem.MeshTet}
 #: The elements of a mesh by the dimension of its nodes, and how messages name them.
 ELEMENTS = {2: "triangles", 3: "tetrahedra"}
 
@@ -36,8 +40,6 @@ def check_mesh(mesh) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """CaseError unless ``mesh`` (a :class:`~vpcontact.mesh.Mesh`) holds a linear triangle or tetrahedral mesh
     with well-formed parts, regions, normals and projections (see the module's docstring); its parts and
     regions as sorted distinct int64 indices."""
-    from .core import SKFEM_MESH  # the Mesh's own module, which calls this when a Mesh is made
-
     m = mesh.mesh
     if type(m) not in SKFEM_MESH.values():
         raise CaseError(f"Mesh.mesh = {_kind(m)}: expected a scikit-fem MeshTri1 (linear triangles) or MeshTet1 "

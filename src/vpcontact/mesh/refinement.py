@@ -22,10 +22,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .ball import quiet_bisection
 from ..errors import CaseError
-from .core import SKFEM_MESH, Mesh, find_columns, with_parts
 from ..results.norms import Locator
+from .ball import quiet_bisection
+from .checks_arrays import SKFEM_MESH
+from .locate import find_columns
+from .mesh import Mesh, with_parts
 
 
 def refine(mesh: Mesh, marked) -> Mesh:

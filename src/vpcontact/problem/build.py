@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import Basis
 
-from ..mesh import core as meshes
+from .. import mesh as meshes
 from ..fem.assembly import (Density, ExpressionDensity, LoadVector, displacement_basis, element_strain, stiffness,
                        stress_force)
 from ..case.schema import Case, MeshSection, Model, OutputSection, _brief, _material_keys, section

@@ -33,7 +33,7 @@ from ..laws.contact import ContactLaw, ContactSurface
 from ..errors import CaseError, quoted
 from ..case.expressions import values_at
 from ..case.inputs import check_regular_file
-from ..mesh.core import Mesh
+from ..mesh.mesh import Mesh
 from ..fem.space import CELLS, component, coordinates
 
 #: |u_0| below this fraction of the largest |u_0| is rounding: such values on a Dirichlet component are 0.
