@@ -27,7 +27,7 @@ from ..errors import CaseError, one_line, quoted, shown
 from .expressions import parse_expression
 from .inputs import MAX_TOML_BYTES, check_regular_file
 from ..solvers.factorization import BACKENDS, installed_backends
-from ..fem.space import CELLS
+from ..mesh.cells import SIMPLICES
 
 # --- value types ---------------------------------------------------------------------------------
 #: Most time steps and (estimated) triangles of a built-in shape a case may ask for: beyond, the run
@@ -174,7 +174,7 @@ class MeshSection(_Section):
         if self.shape is not None:
             elements = self._elements(dim)
             if not elements <= MAX_ELEMENTS:
-                raise ValueError(f"mesh.h = {_brief(self.h)}: about {elements:.1e} {CELLS[dim][2]} for this "
+                raise ValueError(f"mesh.h = {_brief(self.h)}: about {elements:.1e} {SIMPLICES[dim].plural} for this "
                                  f"{self.shape}, more than {MAX_ELEMENTS:.0e}")
         return self
 

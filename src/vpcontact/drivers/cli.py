@@ -143,7 +143,9 @@ def _check(args) -> int:
 
 def _check_lines(c) -> list[str]:
     """The description of :class:`~vpcontact.drivers.check.CaseCheck` ``c`` as lines of text."""
-    elements = "triangles" if c.dim == 2 else "tetrahedra"
+    from ..mesh.cells import SIMPLICES
+
+    elements = SIMPLICES[c.dim].plural
     angle = f", smallest angle {c.smallest_angle_degrees:.1f}°" if c.smallest_angle_degrees is not None else ""
     lines = [f"{c.dim}D body: {c.nodes:,} nodes, {c.elements:,} {elements}, {c.dofs:,} dofs ({c.free_dofs:,} free)",
              f"element quality (mean ratio, 1 = equilateral): min {c.quality_min:.3f}, median {c.quality_median:.3f}"

@@ -28,12 +28,11 @@ import numpy as np
 import skfem
 
 from ..errors import CaseError, shown
+from .cells import SIMPLICES
 
 #: The scikit-fem mesh of each dimension: linear triangles (MeshTri1) and tetrahedra (MeshTet1), what
 #: ``Mesh.mesh`` may be.
 SKFEM_MESH = {2: skfem.MeshTri, 3: skfem.MeshTet}
-#: The elements of a mesh by the dimension of its nodes, and how messages name them.
-ELEMENTS = {2: "triangles", 3: "tetrahedra"}
 
 
 def check_mesh(mesh) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
@@ -47,12 +46,12 @@ def check_mesh(mesh) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     dim = {cls: d for d, cls in SKFEM_MESH.items()}[type(m)]
     p, t = np.asarray(m.p), np.asarray(m.t)
     if p.ndim != 2 or p.shape[0] != dim:
-        raise CaseError(f"Mesh.mesh.p has the shape {p.shape} and the mesh is of {ELEMENTS[dim]}: expected {dim} rows "
+        raise CaseError(f"Mesh.mesh.p has the shape {p.shape} and the mesh is of {SIMPLICES[dim].plural}: expected {dim} rows "
                         f"(the coordinates {', '.join('xyz'[:dim])} of each node); for "
-                        f"{ELEMENTS[5 - dim]} use skfem.{SKFEM_MESH[5 - dim].__name__}")
+                        f"{SIMPLICES[5 - dim].plural} use skfem.{SKFEM_MESH[5 - dim].__name__}")
     if t.ndim != 2 or t.shape[0] != dim + 1 or t.shape[1] == 0 or t.dtype.kind not in "iu":
         raise CaseError(f"Mesh.mesh.t is an array of shape {t.shape} of {t.dtype}: expected the nodes of the "
-                        f"{ELEMENTS[dim]}, integers of shape ({dim + 1}, elements), at least one element")
+                        f"{SIMPLICES[dim].plural}, integers of shape ({dim + 1}, elements), at least one element")
     nodes = p.shape[1]
     outside = (t < 0) | (t >= nodes)
     if outside.any():

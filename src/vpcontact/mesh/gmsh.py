@@ -28,13 +28,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .mesh import CELLS, Mesh
+from .cells import SIMPLICES
+from .mesh import Mesh
 
-#: gmsh's element type number -> (meshio's cell type, nodes per cell, dimension).
-ELEMENT_TYPES = {15: ("vertex", 1, 0), 1: ("line", 2, 1), 2: ("triangle", 3, 2), 4: ("tetra", 4, 3)}
+#: The simplices read here (points, lines, triangles, tetrahedra) by gmsh's element type number.
+ELEMENT_TYPES = {simplex.gmsh: simplex for simplex in SIMPLICES}
 #: The nodes of a cell by gmsh's element type number (0: a type not read here).
 NODES_PER_CELL = np.zeros(max(ELEMENT_TYPES) + 1, dtype=np.int64)
-NODES_PER_CELL[list(ELEMENT_TYPES)] = [size for _, size, _ in ELEMENT_TYPES.values()]
+NODES_PER_CELL[list(ELEMENT_TYPES)] = [simplex.dim + 1 for simplex in ELEMENT_TYPES.values()]
 #: Whether each byte separates numbers in a text file (as whitespace).
 BLANK = np.isin(np.arange(256), np.frombuffer(b" \t\n\r\x0b\x0c", dtype=np.uint8))
 #: A line of the $PhysicalNames section of a gmsh file: dimension, tag, "name".
@@ -150,12 +151,12 @@ def _elements(section: bytes, index: np.ndarray) -> list[tuple[CellBlock, np.nda
         return None
     blocks = []
     for start, stop in _runs(kinds):
-        kind, size, dim = ELEMENT_TYPES[int(kinds[start])]
+        simplex = ELEMENT_TYPES[int(kinds[start])]
         rows = first[start:stop]
-        numbers = tokens[rows[:, None] + 5 + np.arange(size)]
+        numbers = tokens[rows[:, None] + 5 + np.arange(simplex.dim + 1)]
         if numbers.min() < 1 or numbers.max() >= index.size or (index[numbers] < 0).any():
             return None
-        blocks.append((CellBlock(kind, index[numbers], dim), tokens[rows + 3].astype(np.int32),
+        blocks.append((CellBlock(simplex.cell_type, index[numbers], simplex.dim), tokens[rows + 3].astype(np.int32),
                        tokens[rows + 4].astype(np.int32)))
     return blocks
 
@@ -195,7 +196,7 @@ def write_mesh(mesh: Mesh, path: str | os.PathLike) -> None:
     import meshio  # only when a mesh is written (the last mesh of an adaptive run)
 
     dim = mesh.dim
-    body, facet = CELLS[dim]
+    body, facet = SIMPLICES[dim].cell_type, SIMPLICES[dim - 1].cell_type
     points = np.vstack((mesh.mesh.p, np.zeros((3 - dim, mesh.mesh.p.shape[1])))).T
     cells, tags, names = [], [], {}
     groups = {dim: _groups(mesh.regions), dim - 1: _groups(mesh.parts)}

@@ -26,17 +26,12 @@ import skfem
 
 from ..errors import CaseError, shown
 from ..memory import available_memory
+from .cells import SIMPLICES
 from .checks_arrays import check_mesh
 
 NormalField = Callable[[np.ndarray], np.ndarray]
 Projection = Callable[[np.ndarray], np.ndarray]
 
-#: The gmsh physical groups of each dimension d: (those of the parts (dimension d − 1), of the body).
-PHYSICAL_GROUPS = {2: ("Curve", "Surface"), 3: ("Surface", "Volume")}
-#: The meshio cell types of each dimension: (the body's, the parts').
-CELLS = {2: ("triangle", "line"), 3: ("tetra", "triangle")}
-#: How messages name the body's cells: (one, several).
-ELEMENT_NAMES = {2: ("triangle", "triangles"), 3: ("tetrahedron", "tetrahedra")}
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,7 +68,7 @@ class Mesh:
         """Facet indices of `part` (an int n means the part named str(n))."""
         name = str(part)
         if name not in self.parts and not self.parts:
-            facet, body = PHYSICAL_GROUPS[self.dim]
+            facet, body = SIMPLICES[self.dim - 1].gmsh_group, SIMPLICES[self.dim].gmsh_group
             raise CaseError(f"unknown part '{name}': mesh file '{self.file}' has no parts; the parts of a mesh file "
                             f"are its physical {facet.lower()}s: in gmsh add Physical {facet}(\"{name}\") = {{...}}; "
                             f"for each part the case names (and a Physical {body} for the body) and mesh again")
@@ -131,7 +126,7 @@ def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
     """Refuse, before allocating, a mesh of about `elements` triangles (dim 2) or tetrahedra (dim 3) whose
     run would need more than the available memory; `what` names the mesh (e.g. "mesh.h = 0.001"), `fix`
     says what to change."""
-    kind, per_element = {2: ("triangles", BYTES_PER_TRIANGLE), 3: ("tetrahedra", BYTES_PER_TETRAHEDRON)}[dim]
+    kind, per_element = SIMPLICES[dim].plural, {2: BYTES_PER_TRIANGLE, 3: BYTES_PER_TETRAHEDRON}[dim]
     needed = per_element * elements
     available = available_memory()
     if not needed <= available:

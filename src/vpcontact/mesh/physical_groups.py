@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import CaseError
+from .cells import SIMPLICES
 from .locate import find_columns
-from .mesh import CELLS, ELEMENT_NAMES, PHYSICAL_GROUPS
 
 if TYPE_CHECKING:
     import meshio
@@ -26,7 +26,7 @@ def check_unique_names(label: str, names: list[tuple[int, int, str]], dim: int) 
     """CaseError if two physical groups of the parts' dimension, or two of the body's, of a `dim`-dimensional
     mesh have one name (meshio would keep only one of them)."""
     for body in (False, True):
-        group = PHYSICAL_GROUPS[dim][body]
+        group = SIMPLICES[dim - 1 + body].gmsh_group
         what = "region" if body else "part"
         tags: dict[str, int] = {}
         for group_dim, tag, name in names:
@@ -48,7 +48,7 @@ def body_elements(data: meshio.Mesh, names: list[tuple[int, int, str]],
     meshio's cell_data keeping its entity's first group and its cell_sets each named group's cells. Cells
     with the same nodes that are not all in distinct physical groups (a cell written twice in one group, or
     without a group) are all kept: the mesh checks refuse them as a region covered twice."""
-    kind = CELLS[dim][0]
+    kind = SIMPLICES[dim].cell_type
     physical = data.cell_data.get("gmsh:physical", [None] * len(data.cells))
     offset = np.cumsum([0] + [len(block.data) if block.type == kind else 0 for block in data.cells])
     cells = [block.data.T for block in data.cells if block.type == kind]
@@ -108,7 +108,7 @@ def parts(label: str, mesh, data: meshio.Mesh, names: list[tuple[int, int, str]]
     mesh's node of each node of the file, -1 for none): the facet cells of each physical group of the parts'
     dimension, by tag number and, if the file names the group, by its name too; CaseError for a cell that is
     not a boundary facet."""
-    facet_nodes, facet_tags = _physical_facets(data, names, CELLS[dim][1], dim - 1)
+    facet_nodes, facet_tags = _physical_facets(data, names, SIMPLICES[dim - 1].cell_type, dim - 1)
     parts: dict[str, np.ndarray] = {}
     if not facet_tags.size:
         return parts
@@ -118,10 +118,10 @@ def parts(label: str, mesh, data: meshio.Mesh, names: list[tuple[int, int, str]]
     found = find_columns(mesh.facets[:, boundary], nodes)
     bad = np.flatnonzero((nodes < 0).any(axis=0) | (found < 0))
     if bad.size:
-        what, kind = {2: ("line", "edge"), 3: ("triangle", "face")}[dim]
-        facet_group, body_group = PHYSICAL_GROUPS[dim]
+        what, kind = SIMPLICES[dim - 1].cell_type, SIMPLICES[dim - 1].facet_name
+        facet_group, body_group = SIMPLICES[dim - 1].gmsh_group, SIMPLICES[dim].gmsh_group
         raise CaseError(f"mesh file '{label}': {what} of physical group {facet_tags[bad[0]]} is not a boundary "
-                        f"{kind} of the {ELEMENT_NAMES[dim][1]} ({bad.size} such {what}s): a part must lie on "
+                        f"{kind} of the {SIMPLICES[dim].plural} ({bad.size} such {what}s): a part must lie on "
                         f"the boundary of the body; remove inner {facet_group.lower()}s from that physical group, "
                         f"or add the {body_group.lower()} they bound to the Physical {body_group}")
     facets = boundary[found]

@@ -18,10 +18,11 @@ import numpy as np
 from ..case.inputs import check_regular_file
 from ..errors import CaseError, shown
 from . import gmsh, physical_groups
+from .cells import SIMPLICES
 from .checks_2d import check_finite, check_triangles
 from .checks_3d import check_tetrahedra
 from .checks_arrays import SKFEM_MESH
-from .mesh import CELLS, ELEMENT_NAMES, Mesh, check_memory, with_parts
+from .mesh import Mesh, check_memory, with_parts
 
 if TYPE_CHECKING:
     import meshio
@@ -70,7 +71,7 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     outside = (t < 0) | (t >= len(data.points))
     if outside.any():
         k = np.flatnonzero(outside.any(axis=0))[0]
-        raise CaseError(f"mesh file '{label}': {ELEMENT_NAMES[dim][0]} {position[k]} refers to node "
+        raise CaseError(f"mesh file '{label}': {SIMPLICES[dim].name} {position[k]} refers to node "
                         f"{t[outside[:, k], k][0] + 1}, but the file has nodes 1 to {len(data.points)}: the file is "
                         f"damaged")
     used, t = np.unique(t, return_inverse=True)
@@ -133,12 +134,12 @@ def _check_cell_types(label: str, cells: list, dim: int) -> None:
     counts: dict[str, int] = {}
     for block in cells:
         counts[block.type] = counts.get(block.type, 0) + len(block.data)
-    allowed = ("vertex", "line", "triangle", "tetra")[:dim + 1]
+    allowed = [simplex.cell_type for simplex in SIMPLICES[:dim + 1]]
     others = {kind: count for kind, count in counts.items() if kind not in allowed}
     if not others:
         return
     listed = ", ".join(f"{count} {kind}" for kind, count in others.items())
-    element, elements = ELEMENT_NAMES[dim]
+    elements = SIMPLICES[dim].plural
     solids = {kind: count for kind, count in others.items() if kind.startswith(("hexahedron", "wedge", "pyramid"))}
     if solids:
         raise CaseError(f"mesh file '{label}' has {', '.join(f'{c} {k}' for k, c in solids.items())} cells and "
@@ -148,7 +149,7 @@ def _check_cell_types(label: str, cells: list, dim: int) -> None:
     quadrilaterals = sum(count for kind, count in others.items() if kind.startswith("quad"))
     if quadrilaterals:
         raise CaseError(f"mesh file '{label}' has {quadrilaterals} quadrilaterals and "
-                        f"{counts.get(CELLS[dim][0], 0)} {elements}: vpcontact uses linear {elements} only; mesh "
+                        f"{counts.get(SIMPLICES[dim].cell_type, 0)} {elements}: vpcontact uses linear {elements} only; mesh "
                         f"without recombination: Mesh.RecombineAll = 0 and no Recombine Surface")
     if any(kind.startswith(("tetra", "triangle", "line")) for kind in others):
         raise CaseError(f"mesh file '{label}' has second-order or higher-order elements ({listed}): use first-order "

@@ -33,7 +33,8 @@ from ..laws.elasticity import Elasticity
 from ..laws.materials import AtCentroids, Materials, body_materials
 from ..progress import SILENT, Progress
 from ..fem.rigid_modes import RigidModes
-from ..fem.space import CELLS, component, coordinates
+from ..fem.space import component, coordinates
+from ..mesh.cells import SIMPLICES
 from .time_grid import TimeGrid
 
 
@@ -204,7 +205,7 @@ def _assembled(model: Model, mesh: meshes.Mesh, p, stiffness_law, tractions, bod
     if not np.all(np.isfinite(A.data)):
         moduli = ", ".join(f"{key}.E = {_brief(entry.E)}" for key, entry in _material_keys(model))
         raise CaseError(f"{moduli}: the stiffness matrix is not finite in float64 (the moduli or the sizes of the "
-                        f"{CELLS[dim][2]} are out of its range); state them in other units")
+                        f"{SIMPLICES[dim].plural} are out of its range); state them in other units")
 
     fixed = np.zeros(basis.N, dtype=bool)
     for item in model.boundary.dirichlet:
@@ -261,7 +262,7 @@ def mesh_words(m: MeshSection) -> str:
 def _mesh_size(mesh: meshes.Mesh) -> str:
     """The sizes of a mesh, in words: nodes, elements, dofs."""
     nodes, elements = mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
-    return f"{nodes:,} nodes, {elements:,} {CELLS[mesh.dim][2]}, {mesh.dim * nodes:,} dofs"
+    return f"{nodes:,} nodes, {elements:,} {SIMPLICES[mesh.dim].plural}, {mesh.dim * nodes:,} dofs"
 
 
 def _api_viscoplastic(G, mesh: meshes.Mesh) -> Callable:

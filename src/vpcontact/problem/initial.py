@@ -34,7 +34,8 @@ from ..errors import CaseError, quoted
 from ..case.expressions import values_at
 from ..case.inputs import check_regular_file
 from ..mesh.mesh import Mesh
-from ..fem.space import CELLS, component, coordinates
+from ..fem.space import component, coordinates
+from ..mesh.cells import SIMPLICES
 
 #: |u_0| below this fraction of the largest |u_0| is rounding: such values on a Dirichlet component are 0.
 ROUNDING = 1e-12
@@ -278,7 +279,7 @@ def read_run_state(model: Model, mesh: Mesh, surface: ContactSurface) -> RunStat
     if not os.path.lexists(path):
         raise CaseError(f"{where}: '{path}' not found: the run kept no fields (output.field_steps) or has not ended")
     check_regular_file(path, f"{where}: the file", MAX_SOLUTION_BYTES)
-    cells = CELLS[mesh.dim][2]
+    cells = SIMPLICES[mesh.dim].plural
     arrays = _read_arrays(where, path, cells, mesh.dim)
     _check_same_mesh(where, arrays["points"], arrays[cells], mesh, cells)
     _check_shapes(where, path, arrays, mesh, cells)
