@@ -21,7 +21,7 @@ import scipy.sparse as sp
 from skfem import Basis, ElementTetP1, ElementTriP1, ElementVector, FacetBasis, MeshTet1
 from skfem.assembly.basis import AbstractBasis
 
-from ..errors import CaseError, quoted
+from ..errors import CaseError, point, quoted
 from ..case.expressions import Expression
 from ..laws.elasticity import Elasticity
 from ..mesh.mesh import Mesh
@@ -167,18 +167,18 @@ class _Term:
                     raise NonFiniteLoad(self.message(component, values[step, point], point if space else None,
                                                      f"t = {t[step]:.10g} (step {start + step + 1})"))
 
-    def message(self, component: int, value: float, point: int | None, when: str) -> str:
-        """``<key> = "<source>": not finite (inf) at (x, y) = (…), t = …``: the one line of NonFiniteLoad."""
+    def message(self, component: int, value: float, index: int | None, when: str) -> str:
+        """``<key> = "<source>": not finite (inf) at (x, y) = (…), t = …``: the one line of NonFiniteLoad, at the
+        quadrature point ``index`` (None: at every point)."""
         if isinstance(self.density, ExpressionDensity):
             f = self.density.components[component]
             what = f"{f.where} = {quoted(f.source)}"
         else:
             what = f"{self.name} (f{self.names[component]})"
-        if point is None:
+        if index is None:
             where = "every point"
         else:
-            at = self.points.reshape(len(self.names), -1)[:, point]
-            where = f"({', '.join(self.names)}) = ({', '.join(f'{c:.6g}' for c in at)})"
+            where = f"({', '.join(self.names)}) = {point(self.points.reshape(len(self.names), -1)[:, index])}"
         return f"{what}: not finite ({value}) at {where}, {when}; a load must be finite wherever it is applied"
 
 

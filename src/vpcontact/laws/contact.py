@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import FacetBasis
 
-from ..errors import CaseError, quoted
+from ..errors import CaseError, point, quoted
 from ..case.expressions import Expression
 from ..mesh.mesh import Mesh
 from ..fem.space import coordinates as coordinates_names
@@ -362,9 +362,9 @@ def _initial_gap(gap: Callable, points: np.ndarray) -> np.ndarray:
     bad = np.flatnonzero(~np.isfinite(gap0))
     if bad.size:
         name = f"{gap.where} = {quoted(gap.source)}" if isinstance(gap, Expression) else "contact.gap"
-        at = ", ".join(f"{c:.6g}" for c in points[:, bad[0]])
         raise CaseError(f"{name}: not finite ({gap0[bad[0]]}) at the contact node ({', '.join(coordinates_names(d))}) "
-                        f"= ({at}); the initial gap must be finite at every node of the contact part")
+                        f"= {point(points[:, bad[0]])}; the initial gap must be finite at every node of the contact "
+                        f"part")
     return gap0
 
 

@@ -37,7 +37,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ..errors import CaseError
+from ..errors import CaseError, point
 
 #: A triangle whose area is at most ZERO_AREA × (its longest edge)² has zero area.
 ZERO_AREA = 1e-12
@@ -66,11 +66,8 @@ class Names:
     def element(self, k: int) -> int:
         return k + 1 if self.element_numbers is None else int(self.element_numbers[k])
 
-    def at(self, point) -> str:
-        return f"({', '.join(f'{x:.6g}' for x in point)})"
-
     def node(self, i: int) -> str:
-        return f"node {self.numbers[i]} at {self.at(self.p[:, i])}"
+        return f"node {self.numbers[i]} at {point(self.p[:, i])}"
 
     def triangle(self, k: int, t: np.ndarray) -> str:
         return f"triangle {self.element(k)} (nodes {', '.join(str(self.numbers[i]) for i in t[:, k])})"
@@ -89,8 +86,7 @@ def check_finite(label: str, points: np.ndarray, node_numbers: np.ndarray) -> No
     bad = np.flatnonzero(~np.isfinite(points).all(axis=0))
     if bad.size:
         i = bad[0]
-        coordinates = ", ".join(f"{x:g}" for x in points[:, i])
-        raise CaseError(f"mesh file '{label}': node {node_numbers[i]} has the coordinates ({coordinates})"
+        raise CaseError(f"mesh file '{label}': node {node_numbers[i]} has the coordinates {point(points[:, i])}"
                         f"{more(bad.size, 'node')}: every coordinate must be a finite number; fix the program or "
                         f"edit that wrote the file")
 
@@ -133,7 +129,7 @@ def _check_areas(names: Names, p: np.ndarray, t: np.ndarray) -> np.ndarray:
     bad = np.flatnonzero(np.abs(twice_area) <= 2.0 * ZERO_AREA * longest)
     if bad.size:
         k = bad[0]
-        corners = ", ".join(names.at(names.p[:, i]) for i in t[:, k])
+        corners = ", ".join(point(names.p[:, i]) for i in t[:, k])
         raise names.error(f"{names.triangle(k, t)} has zero area: its corners {corners} lie on one line"
                           f"{more(bad.size, 'triangle')}; remove it or mesh the geometry again")
     return twice_area
@@ -182,7 +178,7 @@ def check_coincident_nodes(names: Names, p: np.ndarray, boundary_nodes: np.ndarr
     pairs = cKDTree(p[:, nodes].T).query_pairs(tol, output_type="ndarray")
     if pairs.size:
         i, j = nodes[pairs[0]]
-        raise names.error(f"nodes {names.numbers[i]} and {names.numbers[j]} are both at {names.at(names.p[:, i])}"
+        raise names.error(f"nodes {names.numbers[i]} and {names.numbers[j]} are both at {point(names.p[:, i])}"
                           f"{more(len(pairs), 'pair')}: the mesh is cut along a seam there; {fix}")
 
 

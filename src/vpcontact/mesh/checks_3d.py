@@ -25,6 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from ..errors import point
 from .checks_2d import COINCIDENT, Names, check_coincident_nodes, in_unit_box, more
 
 #: A tetrahedron whose volume is at most ZERO_VOLUME × (its longest edge)³ has zero volume.
@@ -71,7 +72,7 @@ def _check_volumes(names: Names, p: np.ndarray, t: np.ndarray) -> np.ndarray:
     bad = np.flatnonzero(np.abs(six_volume) <= 6.0 * ZERO_VOLUME * longest**3)
     if bad.size:
         k = bad[0]
-        corners = ", ".join(names.at(names.p[:, i]) for i in t[:, k])
+        corners = ", ".join(point(names.p[:, i]) for i in t[:, k])
         raise names.error(f"{_tetrahedron(names, k, t)} has zero volume: its corners {corners} lie in one plane"
                           f"{more(bad.size, 'tetrahedron')}; remove it or mesh the geometry again")
     return six_volume

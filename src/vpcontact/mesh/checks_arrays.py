@@ -27,7 +27,7 @@ from collections.abc import Callable, Mapping
 import numpy as np
 import skfem
 
-from ..errors import CaseError, shown
+from ..errors import CaseError, point, shown
 from .cells import SIMPLICES
 
 #: The scikit-fem mesh of each dimension: linear triangles (MeshTri1) and tetrahedra (MeshTet1), what
@@ -46,8 +46,8 @@ def check_mesh(mesh) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     dim = {cls: d for d, cls in SKFEM_MESH.items()}[type(m)]
     p, t = np.asarray(m.p), np.asarray(m.t)
     if p.ndim != 2 or p.shape[0] != dim:
-        raise CaseError(f"Mesh.mesh.p has the shape {p.shape} and the mesh is of {SIMPLICES[dim].plural}: expected {dim} rows "
-                        f"(the coordinates {', '.join('xyz'[:dim])} of each node); for "
+        raise CaseError(f"Mesh.mesh.p has the shape {p.shape} and the mesh is of {SIMPLICES[dim].plural}: expected "
+                        f"{dim} rows (the coordinates {', '.join('xyz'[:dim])} of each node); for "
                         f"{SIMPLICES[5 - dim].plural} use skfem.{SKFEM_MESH[5 - dim].__name__}")
     if t.ndim != 2 or t.shape[0] != dim + 1 or t.shape[1] == 0 or t.dtype.kind not in "iu":
         raise CaseError(f"Mesh.mesh.t is an array of shape {t.shape} of {t.dtype}: expected the nodes of the "
@@ -60,11 +60,11 @@ def check_mesh(mesh) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
                         f"the nodes 0 to {nodes - 1} ({int(outside.any(axis=0).sum())} such elements)")
     bad = np.flatnonzero(~np.isfinite(p).all(axis=0))
     if bad.size:
-        raise CaseError(f"Mesh.mesh.p: node {int(bad[0])} has the coordinates {_point(p[:, bad[0]])} ({bad.size} such "
+        raise CaseError(f"Mesh.mesh.p: node {int(bad[0])} has the coordinates {point(p[:, bad[0]])} ({bad.size} such "
                         f"nodes): every coordinate must be a finite number")
     unused = np.flatnonzero(np.bincount(t.ravel(), minlength=nodes) == 0)
     if unused.size:
-        raise CaseError(f"Mesh.mesh.p: node {int(unused[0])} at {_point(p[:, unused[0]])} is in no element "
+        raise CaseError(f"Mesh.mesh.p: node {int(unused[0])} at {point(p[:, unused[0]])} is in no element "
                         f"({unused.size} such nodes): remove the nodes no element uses")
     boundary = np.zeros(m.facets.shape[1], dtype=bool)
     boundary[m.boundary_facets()] = True
@@ -121,10 +121,6 @@ def _check_functions(attribute: str, functions, known: dict, what: str, pairs: b
         if not isinstance(function, Callable):
             raise CaseError(f"Mesh.{attribute}[{_kind(key)}] = {_kind(function)}: expected a function of the "
                             f"points (d, ...)")
-
-
-def _point(x: np.ndarray) -> str:
-    return f"({', '.join(f'{c:g}' for c in x)})"
 
 
 def _name(name: str) -> str:

@@ -149,8 +149,8 @@ def _check_cell_types(label: str, cells: list, dim: int) -> None:
     quadrilaterals = sum(count for kind, count in others.items() if kind.startswith("quad"))
     if quadrilaterals:
         raise CaseError(f"mesh file '{label}' has {quadrilaterals} quadrilaterals and "
-                        f"{counts.get(SIMPLICES[dim].cell_type, 0)} {elements}: vpcontact uses linear {elements} only; mesh "
-                        f"without recombination: Mesh.RecombineAll = 0 and no Recombine Surface")
+                        f"{counts.get(SIMPLICES[dim].cell_type, 0)} {elements}: vpcontact uses linear {elements} "
+                        f"only; mesh without recombination: Mesh.RecombineAll = 0 and no Recombine Surface")
     if any(kind.startswith(("tetra", "triangle", "line")) for kind in others):
         raise CaseError(f"mesh file '{label}' has second-order or higher-order elements ({listed}): use first-order "
                         f"elements: Mesh.ElementOrder = 1 (gmsh -order 1)")

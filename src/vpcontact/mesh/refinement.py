@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import CaseError
+from ..errors import CaseError, point
 from ..results.norms import Locator
 from .ball import quiet_bisection
 from .checks_arrays import SKFEM_MESH
@@ -105,7 +105,7 @@ def _check_not_folded(fine, p: np.ndarray, moved: np.ndarray) -> None:
     before, after = signed_measures(fine.p, fine.t), signed_measures(p, fine.t)
     folded = np.flatnonzero(~(after * np.sign(before) > 0.0))
     if folded.size:
-        at = ", ".join(f"{x:.6g}" for x in p[:, fine.t[:, folded[0]]].mean(axis=1))
-        raise CaseError(f"refining the mesh turns {folded.size} element(s) inside out near ({at}) when their new "
+        raise CaseError(f"refining the mesh turns {folded.size} element(s) inside out near "
+                        f"{point(p[:, fine.t[:, folded[0]]].mean(axis=1))} when their new "
                         f"nodes are moved onto the curved boundary or interface: the elements there are too large "
                         f"for its curvature; start from a smaller mesh.h")

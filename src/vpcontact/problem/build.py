@@ -26,7 +26,7 @@ from ..fem.assembly import (Density, ExpressionDensity, LoadVector, displacement
 from ..case.schema import Case, MeshSection, Model, OutputSection, _brief, _material_keys, section
 from ..laws.contact import (AtNodes, CallableLaw, ConstantStiffness, ContactLaw, ContactSurface, ExponentialStiffness,
                       PositivePart, Power, PowerStiffness, contact_surface, empty_surface, merged_law, per_node)
-from ..errors import CaseError, quoted
+from ..errors import CaseError, point, quoted
 from ..case.expressions import parse_expression, values_at
 from .initial import InitialState, initial_state
 from ..laws.elasticity import Elasticity
@@ -565,11 +565,10 @@ def _layer_parameter(where: str, value, minimum: float | None = None, *, points:
         wrong = ~np.isfinite(values) | ~(values > minimum if strict else values >= minimum)
     if wrong.any():
         node = np.flatnonzero(wrong)[0]
-        at = ", ".join(f"{c:.6g}" for c in points[:, node])
         expected = "finite" if minimum is None else f"a finite number {'>' if strict else '>='} {minimum:g}"
         raise CaseError(f"{where} = {quoted(value)} is {values[node]:g} at the contact node ({', '.join(names)}) = "
-                        f"({at}) ({wrong.sum()} of {count} nodes): expected {expected} at every node of the "
-                        f"contact part")
+                        f"{point(points[:, node])} ({wrong.sum()} of {count} nodes): expected {expected} at every "
+                        f"node of the contact part")
     return values.copy()
 
 
@@ -639,16 +638,16 @@ def _rigid_motion(combination: np.ndarray, centroid: np.ndarray, size: float) ->
     combination = combination * np.sign(combination[np.argmax(np.abs(combination))])
     translation, rotation = combination[:d], combination[d:]
     if np.linalg.norm(rotation) < 1e-9:
-        return f"a translation along {_point(translation / np.linalg.norm(translation), '.3g')}"
+        return f"a translation along {_point(translation / np.linalg.norm(translation), 3)}"
     if d == 2:  # u = t + ω e_z × (x − c)/size vanishes at x = c + size (−t_y, t_x)/ω
         center = centroid + size * np.array([-translation[1], translation[0]]) / rotation[0]
         return f"a rotation about {_point(np.round(center / size, 9) * size)}"
     axis = rotation[[1, 2, 0]]  # rotations in the planes yz, zx, xy: the axis components x, y, z
     point = centroid + size * np.cross(axis, translation) / (axis @ axis)
     return (f"a rotation about the axis through {_point(np.round(point / size, 9) * size)} along "
-            f"{_point(axis / np.linalg.norm(axis), '.3g')}")
+            f"{_point(axis / np.linalg.norm(axis), 3)}")
 
 
-def _point(x: np.ndarray, style: str = ".6g") -> str:
-    """(x, y[, z]) with the given format, without signed zeros."""
-    return f"({', '.join(format(c + 0.0, style) for c in np.round(x, 12))})"
+def _point(x: np.ndarray, digits: int = 6) -> str:
+    """The point x as a message shows it (:func:`~vpcontact.errors.point`), without its round-off below 1e-12."""
+    return point(np.round(x, 12), digits)

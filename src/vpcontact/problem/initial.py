@@ -30,7 +30,7 @@ from skfem import Basis
 
 from ..case.schema import Model, _brief, check_time_span
 from ..laws.contact import ContactLaw, ContactSurface
-from ..errors import CaseError, quoted
+from ..errors import CaseError, point, quoted
 from ..case.expressions import values_at
 from ..case.inputs import check_regular_file
 from ..mesh.mesh import Mesh
@@ -197,10 +197,6 @@ def _check_symmetric(sigma: np.ndarray) -> None:
 
 
 # --- the checks --------------------------------------------------------------------------------------
-def _point(x: np.ndarray) -> str:
-    return f"({', '.join(f'{c + 0.0:.6g}' for c in x)})"
-
-
 def _check_finite(state: InitialState, mesh: Mesh, surface: ContactSurface) -> None:
     for key, values, points, where in (
             ("displacement", state.displacement.T, mesh.mesh.p, "node"),
@@ -210,7 +206,7 @@ def _check_finite(state: InitialState, mesh: Mesh, surface: ContactSurface) -> N
         if wrong.any():
             _, index = np.argwhere(wrong)[0]
             raise CaseError(f"{state.names[key]} is not finite ({values[:, index][wrong[:, index]][0]}) at the {where} "
-                            f"{_point(points[:, index])} ({int(wrong.any(axis=0).sum())} of {values.shape[1]}): "
+                            f"{point(points[:, index])} ({int(wrong.any(axis=0).sum())} of {values.shape[1]}): "
                             f"expected finite values")
 
 
@@ -228,7 +224,7 @@ def _check_dirichlet(state: InitialState, model: Model, mesh: Mesh) -> None:
         if np.any(size > rounding):
             node, c = np.unravel_index(np.argmax(size), size.shape)
             raise CaseError(f"{state.names['displacement']}: u_{names[c]} = {values[node, c]:g} at the node "
-                            f"{_point(p[:, nodes[node]])} of the Dirichlet part '{item.part}' (boundary.dirichlet[{i}], "
+                            f"{point(p[:, nodes[node]])} of the Dirichlet part '{item.part}' (boundary.dirichlet[{i}], "
                             f"{int(np.sum(size.max(axis=1) > rounding))} of {nodes.size} nodes): u_0 must be 0 there "
                             f"(u_0 in V)")
         u[np.ix_(nodes, columns)] = 0.0
@@ -246,7 +242,7 @@ def _check_admissible(state: InitialState, model: Model, mesh: Mesh, basis: Basi
     if wrong.any():
         node = int(np.argmax(excess))
         raise CaseError(f"{state.names['displacement']} penetrates the foundation beyond the layer: u_0.nu - gap = "
-                        f"{d0[node]:.6g} > g = {g[node]:.6g} at the contact node {_point(surface.coordinates[:, node])} "
+                        f"{d0[node]:.6g} > g = {g[node]:.6g} at the contact node {point(surface.coordinates[:, node])} "
                         f"({int(wrong.sum())} of {surface.size} nodes): u_0 must be admissible, u_0.nu - gap <= g on "
                         f"the contact part")
 
@@ -257,7 +253,7 @@ def _check_history(state: InitialState, surface: ContactSurface) -> None:
     if wrong.any():
         node = int(np.argmin(state.xi))
         raise CaseError(f"{state.names['xi']} = {state.xi[node]:g} at the contact node "
-                        f"{_point(surface.coordinates[:, node])} ({int(wrong.sum())} of {surface.size} nodes): the "
+                        f"{point(surface.coordinates[:, node])} ({int(wrong.sum())} of {surface.size} nodes): the "
                         f"history of penetration xi_0 must be >= 0")
 
 
