@@ -19,7 +19,8 @@ import numpy as np
 
 from ..case.schema import Case, _material_keys
 from ..memory import available_memory
-from ..mesh.quality import edge_lengths, mean_ratio, smallest_angles
+from ..mesh.quality import mean_ratio, smallest_angles
+from ..mesh.simplex import longest_edges
 from ..problem.build import build_problem
 from ..results.result import check_memory, field_step_numbers, memory_needed
 from ..solvers import augmentation_parameter
@@ -121,7 +122,7 @@ def check_case(case: Case) -> CaseCheck:
 
     points, cells = mesh.mesh.p, mesh.mesh.t
     quality = mean_ratio(points, cells)
-    sizes = edge_lengths(points, cells).max(axis=0)
+    sizes = longest_edges(points, cells)
     history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
     times = problem.times
     check_memory(len(times), case.output, points.shape[1], cells.shape[1], surface.size, history, mesh.dim)

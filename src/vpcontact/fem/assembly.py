@@ -6,7 +6,7 @@
 
 Triangles in 2D, tetrahedra in 3D: the element comes from the mesh, everything else is the same.
 scikit-fem gives the basis (the dof numbering) and the quadrature of the loads; the bulk operators
-are the vectorized kernels of simplex.py (the same matrices as scikit-fem's forms, to rounding, in a
+are the vectorized kernels of kernels.py (the same matrices as scikit-fem's forms, to rounding, in a
 fraction of the time and memory), and each load term is one sparse map, built once, from the density
 at its quadrature points to the nodal loads.
 """
@@ -25,7 +25,7 @@ from ..errors import CaseError, point, quoted
 from ..case.expressions import Expression
 from ..laws.elasticity import Elasticity
 from ..mesh.mesh import Mesh
-from ..mesh.simplex import elastic_stiffness, geometry, strains, stress_work
+from .kernels import elastic_stiffness, geometry, strains, stress_work
 from .space import coordinates
 
 #: A load density: f(x, y, t) -> (fx, fy) in 2D, f(x, y, z, t) -> (fx, fy, fz) in 3D, each an array

@@ -38,6 +38,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..errors import CaseError, point
+from .simplex import determinants, squared_edge_lengths
 
 #: A triangle whose area is at most ZERO_AREA × (its longest edge)² has zero area.
 ZERO_AREA = 1e-12
@@ -121,11 +122,8 @@ def in_unit_box(names: Names, p: np.ndarray) -> np.ndarray:
 
 def _check_areas(names: Names, p: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Twice the signed area of each triangle; CaseError if one is (relatively) zero."""
-    x, y = p
-    ax, bx, cx, ay, by, cy = x[t[0]], x[t[1]], x[t[2]], y[t[0]], y[t[1]], y[t[2]]
-    twice_area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-    longest = np.maximum(np.maximum((bx - ax) ** 2 + (by - ay) ** 2, (cx - bx) ** 2 + (cy - by) ** 2),
-                         (ax - cx) ** 2 + (ay - cy) ** 2)
+    twice_area = determinants(p, t)
+    longest = squared_edge_lengths(p, t).max(axis=0)
     bad = np.flatnonzero(np.abs(twice_area) <= 2.0 * ZERO_AREA * longest)
     if bad.size:
         k = bad[0]

@@ -27,6 +27,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ..errors import point
 from .checks_2d import COINCIDENT, Names, check_coincident_nodes, in_unit_box, more
+from .simplex import determinants, longest_edges
 
 #: A tetrahedron whose volume is at most ZERO_VOLUME × (its longest edge)³ has zero volume.
 ZERO_VOLUME = 1e-12
@@ -64,12 +65,8 @@ def _tetrahedron(names: Names, k: int, t: np.ndarray) -> str:
 
 def _check_volumes(names: Names, p: np.ndarray, t: np.ndarray) -> np.ndarray:
     """Six times the signed volume of each tetrahedron; CaseError if one is (relatively) zero."""
-    a = p[:, t[0]]
-    b, c, d = p[:, t[1]] - a, p[:, t[2]] - a, p[:, t[3]] - a
-    six_volume = np.einsum("ij,ij->j", np.cross(b, c, axis=0), d)
-    squares = [((p[:, t[i]] - p[:, t[j]]) ** 2).sum(axis=0) for i in range(4) for j in range(i + 1, 4)]
-    longest = np.sqrt(np.max(squares, axis=0))
-    bad = np.flatnonzero(np.abs(six_volume) <= 6.0 * ZERO_VOLUME * longest**3)
+    six_volume = determinants(p, t)
+    bad = np.flatnonzero(np.abs(six_volume) <= 6.0 * ZERO_VOLUME * longest_edges(p, t) ** 3)
     if bad.size:
         k = bad[0]
         corners = ", ".join(point(names.p[:, i]) for i in t[:, k])

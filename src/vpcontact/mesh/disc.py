@@ -14,6 +14,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import Delaunay
 
+from .simplex import determinants
+
 
 def unit_half_disc(h: float, n_arc: int, n_axis: int) -> tuple[np.ndarray, np.ndarray]:
     """Nodes (2, n) and counter-clockwise triangles (3, m) of `half_disc` for R = 1 and h (relative to R), with
@@ -80,7 +82,7 @@ def unit_half_disc(h: float, n_arc: int, n_axis: int) -> tuple[np.ndarray, np.nd
     i0 = np.clip(i0 - i_min + 1, 0, lower.shape[1] + 1)
     in_core = np.where(in_upper, np.pad(upper, 1)[k0, i0], np.pad(lower, 1)[k0, i0])
     t = t[:, ~in_core]
-    flip = _signed_areas(p, t) < 0
+    flip = determinants(p, t) < 0
     t[1:, flip] = t[2:0:-1, flip]
     t = np.hstack((core_t, t))
     p = smooth(p, t, np.arange(p.shape[1]) >= n_boundary, sweeps=6)
@@ -126,7 +128,7 @@ def coated_half_disc(h: float, c: float, n_arc: int) -> tuple[np.ndarray, np.nda
     nodes = np.concatenate((interface, np.arange(core_p.shape[1], p.shape[1])))
     t = nodes[Delaunay(p[:, nodes].T).simplices.T]
     t = t[:, ~(t < interface.size).all(axis=0)]
-    flip = _signed_areas(p, t) < 0
+    flip = determinants(p, t) < 0
     t[1:, flip] = t[2:0:-1, flip]
     regions = {"core": np.arange(core_t.shape[1], dtype=np.int64),
                "coating": np.arange(core_t.shape[1], core_t.shape[1] + t.shape[1], dtype=np.int64)}
@@ -136,25 +138,20 @@ def coated_half_disc(h: float, c: float, n_arc: int) -> tuple[np.ndarray, np.nda
 def smooth(p: np.ndarray, t: np.ndarray, movable: np.ndarray, sweeps: int) -> np.ndarray:
     """Laplacian smoothing: each sweep moves the `movable` nodes to the mean of their
     neighbours; a sweep that would make a triangle's signed area drop below a tenth of
-    its previous value (or invert it) is discarded and smoothing stops."""
+    its previous value (or invert it) is discarded and smoothing stops (the areas as twice their values, the
+    determinants of `vpcontact.mesh.simplex`)."""
     n = p.shape[1]
     i = np.concatenate((t[0], t[1], t[2]))
     j = np.concatenate((t[1], t[2], t[0]))
     adjacency = sp.coo_matrix((np.ones(i.size), (i, j)), shape=(n, n)).tocsr()
     adjacency = ((adjacency + adjacency.T) > 0).astype(float)
     averaging = sp.diags(1.0 / np.asarray(adjacency.sum(axis=1)).ravel()) @ adjacency
-    area = _signed_areas(p, t)
+    area = determinants(p, t)
     for _ in range(sweeps):
         q = p.copy()
         q[:, movable] = (averaging @ p.T).T[:, movable]
-        new_area = _signed_areas(q, t)
+        new_area = determinants(q, t)
         if np.any(new_area < 0.1 * area):
             break
         p, area = q, new_area
     return p
-
-
-def _signed_areas(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Signed areas of triangles `t` (positive when counter-clockwise)."""
-    a, b, c = p[:, t[0]], p[:, t[1]], p[:, t[2]]
-    return 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))

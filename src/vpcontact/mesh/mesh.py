@@ -15,7 +15,6 @@ normals do not depend on it.
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -28,6 +27,7 @@ from ..errors import CaseError, shown
 from ..memory import available_memory
 from .cells import SIMPLICES
 from .checks_arrays import check_mesh
+from .simplex import longest_edges
 
 NormalField = Callable[[np.ndarray], np.ndarray]
 Projection = Callable[[np.ndarray], np.ndarray]
@@ -93,9 +93,7 @@ class Mesh:
     @cached_property
     def h(self) -> float:
         """The longest edge length."""
-        p, t = self.mesh.p, self.mesh.t
-        return float(max(np.sqrt(((p[:, t[i]] - p[:, t[j]]) ** 2).sum(axis=0)).max()
-                         for i, j in itertools.combinations(range(t.shape[0]), 2)))
+        return float(longest_edges(self.mesh.p, self.mesh.t).max())
 
     @cached_property
     def centroids(self) -> np.ndarray:

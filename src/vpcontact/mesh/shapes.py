@@ -20,6 +20,7 @@ from ..errors import CaseError, shown
 from . import ball, disc
 from .checks_arrays import SKFEM_MESH
 from .mesh import ConstantNormal, Mesh, NormalField, Projection, RadialNormal, check_memory, onto_sphere, with_parts
+from .simplex import determinants
 
 
 def _positive(name: str, value: float) -> float:
@@ -219,9 +220,9 @@ def quarter_ball(h: float, radius: float = 1.0, h_bottom: float | None = None, c
             p, t = ball.graded_towards_bottom(p, t, h, h_bottom)
     else:
         p, t, side = ball.coated_tetrahedra(n, coating, h, h_bottom)
-        if not np.all(ball.signed_volumes(p, t) > 0.0):
+        if not np.all(determinants(p, t) > 0.0):
             raise _too_thin(coating * radius, h * radius, radius, "sphere")
-    if not np.all(ball.signed_volumes(p, t) > 0.0):
+    if not np.all(determinants(p, t) > 0.0):
         raise RuntimeError("quarter_ball: a tetrahedron is flat or inverted")
     if coating is not None:
         inside, outside = (side[t] < 0).any(axis=0), (side[t] > 0).any(axis=0)
