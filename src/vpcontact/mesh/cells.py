@@ -23,6 +23,10 @@ class Simplex:
     """Several of them in a message: "triangles", "tetrahedra"; also the key of the elements in solution.npz."""
     facet_name: str | None
     """How a message names one as a facet of a body of one dimension more: "edge", "face"."""
+    measure: str | None
+    """Its measure in a message: "length", "area", "volume"."""
+    flat: str | None
+    """Where the corners of one of zero measure lie, in a message: "on one line", "in one plane"."""
     vtk: int
     """VTK's cell type number."""
     xdmf: str
@@ -35,10 +39,14 @@ class Simplex:
 
 #: The simplices by dimension: SIMPLICES[d] is the simplex of dimension d = 0, 1, 2, 3.
 SIMPLICES = (
-    Simplex(0, "vertex", "vertex", "vertices", "point", vtk=1, xdmf="Polyvertex", gmsh=15, gmsh_group="Point"),
-    Simplex(1, "line", "line", "lines", "edge", vtk=3, xdmf="Polyline", gmsh=1, gmsh_group="Curve"),
-    Simplex(2, "triangle", "triangle", "triangles", "face", vtk=5, xdmf="Triangle", gmsh=2, gmsh_group="Surface"),
-    Simplex(3, "tetra", "tetrahedron", "tetrahedra", None, vtk=10, xdmf="Tetrahedron", gmsh=4, gmsh_group="Volume"),
+    Simplex(0, "vertex", "vertex", "vertices", "point", measure=None, flat=None, vtk=1, xdmf="Polyvertex", gmsh=15,
+            gmsh_group="Point"),
+    Simplex(1, "line", "line", "lines", "edge", measure="length", flat="at one point", vtk=3, xdmf="Polyline",
+            gmsh=1, gmsh_group="Curve"),
+    Simplex(2, "triangle", "triangle", "triangles", "face", measure="area", flat="on one line", vtk=5,
+            xdmf="Triangle", gmsh=2, gmsh_group="Surface"),
+    Simplex(3, "tetra", "tetrahedron", "tetrahedra", None, measure="volume", flat="in one plane", vtk=10,
+            xdmf="Tetrahedron", gmsh=4, gmsh_group="Volume"),
 )
 #: The simplices by meshio's cell type.
 CELL_TYPES = {simplex.cell_type: simplex for simplex in SIMPLICES}

@@ -3,7 +3,7 @@
 A gmsh 2.2 text file is read with NumPy (`vpcontact.mesh.gmsh.read_msh22`), any other file with meshio,
 imported then. The file's cells are checked (linear triangles or tetrahedra only, a plane 2D body), its
 physical groups become the parts and regions (`vpcontact.mesh.physical_groups`), and the mesh must cover a
-body once (`vpcontact.mesh.checks_2d`, `vpcontact.mesh.checks_3d`).
+body once (`vpcontact.mesh.checks`).
 """
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ from ..case.inputs import check_regular_file
 from ..errors import CaseError, shown
 from . import gmsh, physical_groups
 from .cells import SIMPLICES
-from .checks_2d import check_finite, check_triangles
+from .checks import check_finite
+from .checks_2d import check_triangles
 from .checks_3d import check_tetrahedra
 from .checks_arrays import SKFEM_MESH
 from .mesh import Mesh, check_memory, with_parts
@@ -37,10 +38,9 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     body the "triangle" cells and its parts the "line" cells of physical curves (its z coordinates
     must be zero and are dropped). Lines and vertices (and in 3D triangles of no physical group) may
     be there too; other cells are refused: quadrilaterals and hexahedra, prisms and pyramids,
-    second-order cells. So are meshes that do not cover a body once (`vpcontact.mesh.checks_2d`,
-    `vpcontact.mesh.checks_3d`: non-finite coordinates, zero areas or volumes, duplicate nodes,
-    folds, overlaps, hinges). Nodes that no triangle (2D) or tetrahedron (3D) uses are dropped and the
-    rest renumbered in their file order. Every facet cell of a physical group (tag > 0) joins the part
+    second-order cells. So are meshes that do not cover a body once (`vpcontact.mesh.checks`:
+    non-finite coordinates, zero areas or volumes, duplicate nodes, folds, overlaps, hinges). Nodes that
+    no triangle (2D) or tetrahedron (3D) uses are dropped and the rest renumbered in their file order. Every facet cell of a physical group (tag > 0) joins the part
     named by the tag number (str) and, if the file names that physical group, by its name too (a facet
     may be in several named groups); each such facet must be a boundary facet of the mesh. Two physical
     groups of the parts' dimension with one name are refused. Facet cells without a physical tag (or
