@@ -35,10 +35,10 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
-from vpcontact.estimate.adapt import adapt
+from vpcontact import adapt
 from vpcontact.estimate.indicators import Level
 from vpcontact.results.norms import differences
-from vpcontact.problem.build import build_problem
+from vpcontact import build_problem
 from vpcontact.reproduction.records import dofs_reaching
 from vpcontact.estimate.residual import ResidualEstimator
 

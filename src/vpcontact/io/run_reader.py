@@ -1,6 +1,6 @@
-"""Reading a run directory (the files :mod:`vpcontact.io.writers` writes): its summary, its resolved case,
-its tables and its solution arrays, parsed in this one place for the studies, resume
-(:mod:`vpcontact.drivers.rundir`) and the figures of the reproduction.
+"""Reading a run directory (the files :mod:`vpcontact.io.writers` writes): its summary, its tables and its
+solution arrays, parsed in this one place for the studies, resume (:mod:`vpcontact.drivers.rundir`) and the
+figures of the reproduction (its resolved case is read by :func:`vpcontact.case.load.read_case`).
 
 Which rows of contact.csv are the steps t_n is the rule of :func:`vpcontact.results.result.step_ends`, the
 one a run in memory follows too. A file that is missing or damaged reads as nothing (None, an empty
@@ -19,7 +19,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..case.schema import Case, load_case
 from ..laws.contact import STATUS_NAMES
 from ..results.result import CONTACT_ARRAYS, step_ends
 from ..fem.space import coordinates
@@ -41,11 +40,6 @@ def read_summary(folder: str | os.PathLike) -> dict | None:
     except (OSError, ValueError):
         return None
     return summary if isinstance(summary, dict) else None
-
-
-def read_case(folder: str | os.PathLike) -> Case:
-    """case.resolved.toml of the run in ``folder`` (CaseError when it is missing or not a case)."""
-    return load_case(Path(folder) / "case.resolved.toml")
 
 
 def read_table(path: str | os.PathLike) -> list[dict[str, str]]:

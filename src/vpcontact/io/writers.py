@@ -239,7 +239,7 @@ def write_run(result: Result, out: str | os.PathLike, *, overwrite: bool = False
 
 def write_resolved_case(resolved: str, out: Path) -> None:
     """case.resolved.toml: ``resolved``, the case with every value used and defaults included
-    (:meth:`~vpcontact.case.schema.Case.to_toml`), the versions in its header."""
+    (:meth:`~vpcontact.case.model.Case.to_toml`), the versions in its header."""
     header = "".join(f"# {name} {version}\n" for name, version in versions().items())
     write_text(Path(out) / "case.resolved.toml", header + resolved)
 

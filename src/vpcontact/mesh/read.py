@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..case.inputs import check_regular_file
+from ..inputs import check_regular_file
 from ..errors import CaseError, shown
 from . import gmsh, physical_groups
 from .cells import SIMPLICES

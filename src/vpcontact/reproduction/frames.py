@@ -14,7 +14,8 @@ import numpy as np
 
 from ..errors import CaseError
 from ..results.plots import along_curve
-from ..io.run_reader import read_case, read_contact, read_solution
+from ..case.load import read_case
+from ..io.run_reader import read_contact, read_solution
 from .paper import CONTACT_CONDITIONS, FIGURE_TIMES, SHORT_LABELS
 from .plan import Plan, figure_step
 from .study_files import rho_id

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..case.schema import load_case
+from ..case.load import load_case
 from ..results.norms import differences
 from ..progress import SILENT, Progress
 from ..io.run_reader import read_summary, read_table, snapshots_at
-from ..drivers.studies import norm_column
+from ..drivers.studies.table import norm_column
 from .paper import T
 from .plan import Plan, level_overrides, level_step
 from .runs import ReproduceError

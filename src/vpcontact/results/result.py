@@ -154,11 +154,11 @@ class Result:
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
     error_estimate: bool = False  # output.error_estimate: the rows have the ESTIMATE_COLUMNS
-    output: object = None  # the OutputSection the run was made with (what the writers write)
+    output: object = None  # the OutputOptions the run was made with (what the writers write)
 
     @classmethod
     def start(cls, problem, solver, output) -> "Result":
-        """The empty result of a run of ``problem`` by ``solver`` with the options ``output`` (OutputSection)."""
+        """The empty result of a run of ``problem`` by ``solver`` with the options ``output`` (OutputOptions)."""
         wanted = field_step_numbers(output.field_steps, len(problem.times))
         return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
                    contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
@@ -403,8 +403,8 @@ def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, conta
 def check_memory(steps: int, output, nodes: int, elements: int, contact_nodes: int, history: bool,
                  dim: int = 2) -> None:
     """Refuse, before anything per step is allocated, a run of ``steps`` steps whose outputs (``output``, the
-    :class:`~vpcontact.case.schema.OutputSection`) would not fit in the memory available now: one line naming
-    time.steps (and output.field_steps when the fields are the most)."""
+    :class:`~vpcontact.results.output_options.OutputOptions`) would not fit in the memory available now: one line
+    naming time.steps (and output.field_steps when the fields are the most)."""
     field_steps = len(field_step_numbers(output.field_steps, steps))
     parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim,
                           estimate=output.error_estimate)

@@ -37,7 +37,6 @@ from typing import Callable
 import numpy as np
 
 from ..fem.assembly import NonFiniteLoad, element_strain, stress_force
-from ..case.schema import OutputSection, section
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from ..laws.elasticity import von_mises
 from ..estimate.indicators import Level
@@ -45,13 +44,14 @@ from ..problem.build import Problem, checked_problem
 from ..errors import point
 from ..progress import SILENT, Progress, StepReport, reporting
 from ..estimate.residual import ResidualEstimator
-from ..results.result import Fields, Result, check_memory
+from ..results.output_options import OutputOptions
+from ..results.result import Fields, Result
+from .plan import free_operators, plan_run
 from .resting import least_shift, unbalanced
 from ..fem.rigid_modes import RigidModes
 from ..solvers import DofLayout, StepData, StepSolution, make_solver
 from ..solvers.errors import NotConvergedError, SingularMatrixError
 from ..fem.space import coordinates
-from ..solvers.time_estimate import estimate_seconds
 
 #: The solver's counters of work in the time loop that summary.json reports (summed over the sessions of a
 #: resumed run): solves with a factored matrix, Krylov iterations, Newton matrices factored.
@@ -124,9 +124,10 @@ class _Attempt:
 
 class TimeLoop:
     """The time loop of a problem: ``TimeLoop(problem, output).run()`` returns the :class:`Result`;
-    ``output`` (:class:`~vpcontact.case.schema.OutputSection`, default: its defaults) says which steps keep their
-    fields and whether the error is estimated at every step. A run whose outputs would not fit in memory
-    is refused here, before its first step.
+    ``output`` (:class:`~vpcontact.results.output_options.OutputOptions`, default: its defaults) says which steps
+    keep their fields and whether the error is estimated at every step. The run's plan
+    (:mod:`vpcontact.timeloop.plan`, ``self.plan``) is made here: what cannot run is refused before its first
+    step, and the step solver is the plan's.
 
     ``run`` takes two hooks: ``after_step(loop)``, called after every completed time step (the
     checkpoints of :mod:`vpcontact.drivers.rundir`), and ``stop()``, asked before every step (a signal
@@ -136,15 +137,14 @@ class TimeLoop:
     the time steps in ``run``.
     """
 
-    def __init__(self, problem: Problem, output: OutputSection | None = None, progress: Progress = SILENT):
+    def __init__(self, problem: Problem, output: OutputOptions | None = None, progress: Progress = SILENT):
         started = clock.perf_counter()
         self.problem, self.progress = checked_problem(problem), progress
-        output = section(OutputSection, output, "output")  # a dict is the [output] table
+        output = OutputOptions() if output is None else output
         free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
-        history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
-        check_memory(problem.times.steps, output, mesh.p.shape[1], mesh.t.shape[1], surface.size, history,
-                     mesh.dim())
+        A, N = free_operators(problem)
+        self.plan = plan = plan_run(problem, output, A, N)  # the refusals before the first step
         modes = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs)
         layout = DofLayout(free, mesh.dim(), mesh.nvertices, modes.matrix[free].toarray())
         rigid = modes.free_basis(free)
@@ -154,12 +154,11 @@ class TimeLoop:
         # the largest contact pressure, and resultant ‖Zᵀb‖ of the loads, of the levels so far (see _resting)
         self._largest_pressure = self._largest_resultant = None
         self._tolerance = options.tolerance
-        self.solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
-                                  surface.weights, surface.gap0, rigid=rigid,
-                                  augmentation=options.augmentation, tolerance=options.tolerance,
+        self.solver = make_solver(plan.method, A, N, surface.weights, surface.gap0, r=plan.augmentation,
+                                  reason=plan.method_reason, rigid=rigid, tolerance=options.tolerance,
                                   max_iterations=options.max_iterations, length_scale=problem.mesh.diameter,
                                   factorization=options.factorization, layout=layout, progress=progress,
-                                  setup_estimate=self._setup_estimate(history))
+                                  expected_seconds=plan.setup_seconds)
         self.max_cuts = options.max_step_cuts
         self._loads = problem.loads.on(free)  # F(t) at the free dofs
         self.result = Result.start(problem, self.solver, output)
@@ -173,16 +172,6 @@ class TimeLoop:
         # computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
         self._level_without_fields: tuple | None = None
         self._u = np.zeros(problem.basis.N)
-
-    def _setup_estimate(self, history: bool) -> Callable[[str], float] | None:
-        """The seconds the set-up of a method is expected to take (:mod:`vpcontact.solvers.time_estimate`, from the
-        problem's build time), for the progress lines; None for a problem without a build time."""
-        problem = self.problem
-        build = problem.timings.get("build")
-        if build is None:
-            return None
-        return lambda method: estimate_seconds(method, problem.mesh.dim, problem.free.size, len(problem.times), history,
-                                               build)["solver setup"]
 
     def _initial_state(self) -> LoopState:
         """The level t_0: ξ_0, z_0 = σ_0 − ℰε(u_0) and 𝒢(σ_0, ε(u_0)) (the j = 0 term of z), and u_0 with
@@ -549,12 +538,12 @@ class TimeLoop:
                 f"complementarity {s.complementarity:.3e}{counts}{advice}")
 
 
-def solve_problem(problem: Problem, *, output: OutputSection | None = None,
+def solve_problem(problem: Problem, *, output: OutputOptions | None = None,
                   progress: bool | Progress = False) -> Result:
     """Run the time loop of ``problem`` and return the result (status "failed" if a step fails); ``output``:
-    the fields kept and the error estimate (:class:`~vpcontact.case.schema.OutputSection`, default: its defaults);
-    ``progress``: True for the solver's set-up and the steps reported on stderr (:mod:`vpcontact.progress`),
-    or a reporter."""
+    the fields kept and the error estimate (:class:`~vpcontact.results.output_options.OutputOptions`, default:
+    its defaults); ``progress``: True for the solver's set-up and the steps reported on stderr
+    (:mod:`vpcontact.progress`), or a reporter."""
     with reporting(progress) as reporter:
         return TimeLoop(problem, output, reporter).run()
 
