@@ -43,7 +43,7 @@ from vpcontact.case.translate import adapt_options, output_options
 from vpcontact.estimate.adapt import solve_and_estimate
 from vpcontact.results.norms import differences, element_energies, transfer
 from vpcontact import build_problem
-from vpcontact.mesh.refinement import signed_measures
+from vpcontact.mesh.simplex import determinants
 from vpcontact.reproduction.plan import level_overrides
 from vpcontact.reproduction.records import dofs_reaching
 
@@ -113,7 +113,7 @@ def rate(dofs: list[int], errors: list[float], least: int) -> float | None:
 
 def where_fine(mesh) -> dict:
     """The median and least element size (√(2|K|), about the edge) in bands of height and near (1, 1)."""
-    size = np.sqrt(2.0 * np.abs(signed_measures(mesh.mesh.p, mesh.mesh.t)))
+    size = np.sqrt(2.0 * np.abs(determinants(mesh.mesh.p, mesh.mesh.t)))
     x, y = mesh.centroids
     bands = {f"y in [{low}, {high})": (y >= low) & (y < high)
              for low, high in ((0.0, 0.1), (0.1, 0.3), (0.3, 0.6), (0.6, 1.0), (1.0, 2.0))}

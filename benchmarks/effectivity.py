@@ -38,7 +38,8 @@ import numpy as np
 
 import vpcontact
 from vpcontact.estimate.indicators import Level
-from vpcontact.results.norms import containing_elements, element_energies, transfer
+from vpcontact.mesh.locate import containing_elements
+from vpcontact.results.norms import element_energies, transfer
 from vpcontact.estimate.residual import ResidualEstimator, TERMS
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"

@@ -64,7 +64,7 @@ def make_mesh(level: int, folder: Path, mesher: str) -> tuple[Path, str]:
     import meshio
 
     from vpcontact.mesh import half_disc
-    from vpcontact.mesh.msh import write_mesh
+    from vpcontact.mesh.gmsh import write_mesh
 
     write_mesh(half_disc(h), path)
     data = meshio.read(path)

@@ -4,7 +4,7 @@
   11 steps), whole processes: the median wall time of ``--repeat`` runs (and of ``python -c pass``, the
   interpreter alone);
 - the paper's example at about 30,000 DOFs (mesh.h = 0.011, 141 steps, β = 0, the example's four field
-  steps), built in and read from a gmsh 2.2 file (written once by ``vpcontact.mesh.msh.write_mesh``):
+  steps), built in and read from a gmsh 2.2 file (written once by ``vpcontact.mesh.gmsh.write_mesh``):
   the median wall time of whole ``vpcontact run`` processes, and of each phase of such a run in a
   child process: importing what ``run`` imports, the case, the mesh, the assembly, the factorization
   and condensation, the time loop, then each output (case.resolved.toml, history.csv, contact.csv, the
@@ -136,7 +136,7 @@ def gmsh_case(folder: Path, overrides: dict) -> tuple[Path, dict]:
     import tomli_w
 
     from vpcontact.mesh import half_disc
-    from vpcontact.mesh.msh import write_mesh
+    from vpcontact.mesh.gmsh import write_mesh
 
     write_mesh(half_disc(overrides["mesh.h"]), folder / "half_disc.msh")
     case = tomllib.loads(EXAMPLE.read_text())

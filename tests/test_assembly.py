@@ -1,4 +1,4 @@
-"""The NumPy assembly (simplex.py behind assembly.py) gives scikit-fem's matrices and vectors to rounding.
+"""The NumPy assembly (fem/kernels.py behind assembly.py) gives scikit-fem's matrices and vectors to rounding.
 
 The reference is scikit-fem's forms as vpcontact assembled with them before (kept in
 benchmarks/assembly.py, which times the two): the stiffness for one material and for E, ν per
@@ -17,6 +17,7 @@ import pytest
 import scipy.sparse as sp
 from skfem import Basis, FacetBasis
 
+from vpcontact.fem import kernels
 from vpcontact.mesh import simplex
 from vpcontact.fem.assembly import LoadVector, displacement_basis, element_strain, stiffness, stress_force
 from vpcontact.laws.elasticity import Elasticity
@@ -87,7 +88,7 @@ def test_the_nodal_force_is_the_work_of_the_stress_on_the_strain(mesh_and_basis)
     rng = np.random.default_rng(3)
     v = rng.standard_normal(basis.N)
     z = rng.standard_normal((mesh.dim, mesh.dim, basis.nelems))
-    volumes = simplex.geometry(basis).volumes
+    volumes = kernels.geometry(basis).volumes
     work = np.einsum("ijn,ijn,n->", z, element_strain(basis, v), volumes)
     assert stress_force(basis, z) @ v == pytest.approx(work, rel=1e-12)
     elasticity = Elasticity(700.0, 0.25, "plane_strain" if mesh.dim == 2 else None)
@@ -140,8 +141,8 @@ def test_a_chunk_of_seven_elements_gives_the_same_matrix(make, monkeypatch):
     basis = displacement_basis(make())
     elasticity = Elasticity(per_element(basis, 100.0, 200.0), 0.3, "plane_stress" if basis.mesh.dim() == 2 else None)
     whole = stiffness(basis, elasticity)
-    monkeypatch.setattr(simplex, "CHUNK", 7)
-    monkeypatch.setattr(simplex, "PATTERN_CHUNK", 5)
+    monkeypatch.setattr(kernels, "CHUNK", 7)
+    monkeypatch.setattr(kernels, "PATTERN_CHUNK", 5)
     assert relative(stiffness(basis, elasticity), whole) <= 1e-14
 
 
@@ -149,11 +150,11 @@ def test_the_stiffness_takes_the_bases_dof_numbering():
     """A basis whose dofs are not numbered d·node + c gets its matrix renumbered the same way."""
     mesh = quarter_ball(0.5)
     basis = displacement_basis(mesh)
-    g = simplex.geometry(basis)
+    g = kernels.geometry(basis)
     nodes = mesh.mesh.p.shape[1]
-    interleaved = simplex.elastic_stiffness(g, 2.0, 3.0, nodes, basis.nodal_dofs)
+    interleaved = kernels.elastic_stiffness(g, 2.0, 3.0, nodes, basis.nodal_dofs)
     blocked = np.arange(3 * nodes).reshape(3, nodes)  # dof c·nodes + node
-    renumbered = simplex.elastic_stiffness(g, 2.0, 3.0, nodes, blocked)
+    renumbered = kernels.elastic_stiffness(g, 2.0, 3.0, nodes, blocked)
     order = blocked.T.ravel()  # the interleaved dof k is the blocked dof order[k]
     assert abs(renumbered[order][:, order] - interleaved).max() == 0.0
 
@@ -163,12 +164,12 @@ def test_the_stiffness_of_many_elements_is_summed_in_bounded_memory(monkeypatch)
     and the CSR made of them), well below the 144 values, rows and columns per element that an assembly of
     all elements at once holds."""
     basis = displacement_basis(quarter_ball(0.15))  # 12 · 10³ tetrahedra
-    g = simplex.geometry(basis)
-    monkeypatch.setattr(simplex, "CHUNK", 1000)
-    monkeypatch.setattr(simplex, "PATTERN_CHUNK", 1000)
+    g = kernels.geometry(basis)
+    monkeypatch.setattr(kernels, "CHUNK", 1000)
+    monkeypatch.setattr(kernels, "PATTERN_CHUNK", 1000)
     tracemalloc.start()
     try:
-        A = simplex.elastic_stiffness(g, 2.0, 3.0, basis.mesh.p.shape[1], basis.nodal_dofs)
+        A = kernels.elastic_stiffness(g, 2.0, 3.0, basis.mesh.p.shape[1], basis.nodal_dofs)
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()

@@ -90,7 +90,7 @@ def test_the_docs_build_without_warnings_and_run_the_gallery(tmp_path):
     public = [f"vpcontact.{vpcontact.API[name]}.{name}" if name in vpcontact.API else f"vpcontact.{name}"
               for name in vpcontact.__all__]
     modules = [f"module-vpcontact.{name}" for name in ("results.plots", "results.norms", "drivers.studies",
-                                                        "laws.contact", "mesh.core", "laws.materials",
+                                                        "laws.contact", "mesh.shapes", "laws.materials",
                                                         "estimate.indicators", "estimate.residual", "estimate.adapt",
                                                         "io.writers")]
     for name in (*public, *modules, "vpcontact.results.plots.contact_pressure", "vpcontact.results.norms.differences"):

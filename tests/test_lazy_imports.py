@@ -43,7 +43,7 @@ def test_a_run_of_a_built_in_shape_imports_no_mesh_io_and_no_plotting(tmp_path):
 
 def test_a_run_of_a_gmsh_2_2_text_file_does_without_meshio(tmp_path):
     from vpcontact.mesh import half_disc
-    from vpcontact.mesh.msh import write_mesh
+    from vpcontact.mesh.gmsh import write_mesh
 
     write_mesh(half_disc(0.25), tmp_path / "disc.msh")
     case = half_disc_case(h=0.25)

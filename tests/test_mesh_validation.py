@@ -344,12 +344,12 @@ def test_a_mesh_too_fine_for_the_memory_is_refused_before_it_is_built(tmp_path, 
     del case["contact"], case["boundary"]["traction"]
     stderr = refused(tmp_path, case, *words, "GiB", "of memory available here: use a larger mesh.h")
     needed = float(stderr.split("need about ")[1].split(" GiB")[0])
-    assert needed == pytest.approx(float(words[1].split()[1]) * vpcontact.mesh.core.BYTES_PER_TRIANGLE / 2**30, rel=0.01)
+    assert needed == pytest.approx(float(words[1].split()[1]) * vpcontact.mesh.mesh.BYTES_PER_TRIANGLE / 2**30, rel=0.01)
 
 
 def test_memory_estimate_refuses_only_what_does_not_fit(monkeypatch):
     """With 3 GiB available: 500k triangles (2 GB estimated) are built, 890k (3.6 GB) refused."""
-    monkeypatch.setattr(vpcontact.mesh.core, "available_memory", lambda: 3 * 2**30)
+    monkeypatch.setattr(vpcontact.mesh.mesh, "available_memory", lambda: 3 * 2**30)
     assert rectangle(1.0, 1.0, 0.002).mesh.t.shape[1] == 500_000
     with pytest.raises(CaseError, match=r"mesh.h = 0.0015 on a 1 x 1 rectangle: about 8.9e\+05 triangles, .* need "
                                         r"about 3.31 GiB, more than the 3 GiB of memory available here: use a larger "
@@ -358,11 +358,11 @@ def test_memory_estimate_refuses_only_what_does_not_fit(monkeypatch):
     with pytest.raises(CaseError, match="about 1.6e.06 triangles"):
         half_disc(0.0015)
     # the paper's example at h = 0.0025 (580k triangles, peak 1.8 GB measured) fits a machine with 3 GiB free
-    vpcontact.mesh.core.check_memory(0.5 * math.pi / (math.sqrt(3) / 4 * 0.0025**2), "x", "y")
+    vpcontact.mesh.mesh.check_memory(0.5 * math.pi / (math.sqrt(3) / 4 * 0.0025**2), "x", "y")
 
 
 def test_a_mesh_file_too_large_for_the_memory_is_refused(tmp_path, monkeypatch):
-    monkeypatch.setattr(vpcontact.mesh.core, "available_memory", lambda: 10_000)
+    monkeypatch.setattr(vpcontact.mesh.mesh, "available_memory", lambda: 10_000)
     with pytest.raises(CaseError, match=r"mesh file '.*square.msh': about 14 triangles, .* use a coarser mesh"):
         read_mesh(MESHES / "square.msh")
 

@@ -1,5 +1,5 @@
-"""gmsh 2.2 text files read with NumPy (vpcontact.mesh.msh22): what meshio reads from them, array for array,
-for every 2.2 file of the tests (gmsh's own and meshio's); the files it leaves to meshio; and a mesh file
+"""gmsh 2.2 text files read with NumPy (vpcontact.mesh.gmsh.read_msh22): what meshio reads from them, array for
+array, for every 2.2 file of the tests (gmsh's own and meshio's); the files it leaves to meshio; and a mesh file
 read either way gives the same Mesh."""
 
 from pathlib import Path
@@ -8,9 +8,9 @@ import meshio
 import numpy as np
 import pytest
 
-from vpcontact.mesh import msh22
+from vpcontact.mesh import gmsh
 from vpcontact.mesh import half_disc, read_mesh
-from vpcontact.mesh.msh import write_mesh
+from vpcontact.mesh.gmsh import write_mesh
 
 MESHES = Path(__file__).parent / "meshes"
 TEXT_22 = sorted(path for path in [*MESHES.glob("*.msh"), *MESHES.glob("3d/*.msh")]
@@ -18,7 +18,7 @@ TEXT_22 = sorted(path for path in [*MESHES.glob("*.msh"), *MESHES.glob("3d/*.msh
 
 
 def assert_as_meshio_reads(path):
-    mine, theirs = msh22.read(path), meshio.read(path)
+    mine, theirs = gmsh.read_msh22(path), meshio.read(path)
     assert mine is not None
     assert np.array_equal(mine.points, theirs.points, equal_nan=True)
     assert [(block.type, block.dim) for block in mine.cells] == [(block.type, block.dim) for block in theirs.cells]
@@ -46,7 +46,7 @@ def test_a_written_mesh_reads_back_the_same_either_way(tmp_path):
     assert_as_meshio_reads(tmp_path / "disc.msh")
     fast = read_mesh(tmp_path / "disc.msh")
     meshio.write(tmp_path / "binary.msh", meshio.read(tmp_path / "disc.msh"), file_format="gmsh22", binary=True)
-    assert msh22.read(tmp_path / "binary.msh") is None  # read by meshio
+    assert gmsh.read_msh22(tmp_path / "binary.msh") is None  # read by meshio
     slow = read_mesh(tmp_path / "binary.msh")
     assert np.array_equal(fast.mesh.p, slow.mesh.p) and np.array_equal(fast.mesh.t, slow.mesh.t)
     assert fast.parts.keys() == slow.parts.keys()
@@ -88,4 +88,4 @@ def test_what_is_not_a_plain_2_2_text_file_is_left_to_meshio(tmp_path, change):
     text = (MESHES / "square_msh22.msh").read_text()
     assert change(text) != text
     (tmp_path / "odd.msh").write_text(change(text))
-    assert msh22.read(tmp_path / "odd.msh") is None
+    assert gmsh.read_msh22(tmp_path / "odd.msh") is None

@@ -217,7 +217,7 @@ def test_points_outside_a_graded_mesh_take_the_nearest_element():
     finer mesh outside its inscribed polyhedron take the element nearest to them, as a search over every
     element finds it (the candidates are bounded per element size, not by the largest element)."""
     from vpcontact.mesh import quarter_ball
-    from vpcontact.results.norms import Locator
+    from vpcontact.mesh.locate import Locator
 
     coarse, fine = quarter_ball(0.6, h_bottom=0.1).mesh, quarter_ball(0.3).mesh
     locator = Locator(coarse.p, coarse.t)

@@ -1,5 +1,5 @@
 """Conforming refinement that keeps the model's data (vpcontact.mesh.refinement) and the gmsh file of a mesh
-(vpcontact.mesh.msh)."""
+(vpcontact.mesh.gmsh)."""
 
 import math
 
@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 from vpcontact import mesh as meshes
-from vpcontact.mesh.msh import write_mesh
-from vpcontact.mesh.refinement import refine, signed_measures
+from vpcontact.mesh.gmsh import write_mesh
+from vpcontact.mesh.refinement import refine
+from vpcontact.mesh.simplex import determinants
 
 
 def facet_measures(mesh, part):
@@ -21,7 +22,7 @@ def facet_measures(mesh, part):
 
 def volumes(mesh, elements=None):
     t = mesh.mesh.t if elements is None else mesh.mesh.t[:, elements]
-    return np.abs(signed_measures(mesh.mesh.p, t)) / math.factorial(mesh.dim)
+    return np.abs(determinants(mesh.mesh.p, t)) / math.factorial(mesh.dim)
 
 
 def random_elements(mesh, fraction, seed=0):
@@ -47,7 +48,7 @@ def test_flat_parts_and_the_volume_are_kept_exactly(make):
     boundary = np.sort(np.concatenate(list(refined.parts.values())))
     np.testing.assert_array_equal(boundary, refined.mesh.boundary_facets())  # the parts still cover the boundary
     assert volumes(refined).sum() == pytest.approx(volumes(mesh).sum(), rel=1e-13)
-    assert np.all(signed_measures(refined.mesh.p, refined.mesh.t) != 0.0)
+    assert np.all(determinants(refined.mesh.p, refined.mesh.t) != 0.0)
     assert refined.exact_normals is mesh.exact_normals
 
 

@@ -171,7 +171,7 @@ def test_the_effectivity_on_the_paper_example_stays_in_the_measured_band(beta):
 def test_the_local_indicators_follow_the_local_error():
     """log η_K against log e_K (the reference's error energy in K) on the paper's example at h = 1/8 against
     1/32: correlated (measured 0.93–0.98 over h = 1/8 … 1/64 against 1/256)."""
-    from vpcontact.results.norms import containing_elements
+    from vpcontact.mesh.locate import containing_elements
 
     def run(n):
         return vpcontact.solve(vpcontact.load_case("examples/paper_ball.toml", {"mesh.h": 1 / n,

@@ -55,6 +55,12 @@ def quoted(text: str) -> str:
     return f'"{escaped[:SHOWN]}…" ({len(text)} characters)'
 
 
+def point(coordinates, digits: int = 6) -> str:
+    """A point as a message shows it: its coordinates in parentheses, ``digits`` significant digits each, e.g.
+    ``(0.5, 1.00001e-07)``; a coordinate -0.0 is shown as 0, a non-finite one as nan, inf or -inf."""
+    return f"({', '.join(f'{c + 0.0:.{digits}g}' for c in coordinates)})"
+
+
 def flag(name: str, value) -> bool:
     """``value`` of the API's switch ``name`` (overwrite, progress, ...) as a bool: True or False (a NumPy bool
     too), else CaseError: a string such as "no" is not read as true."""

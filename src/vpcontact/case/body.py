@@ -9,7 +9,7 @@ from typing import Annotated, Any, Literal, Optional
 from pydantic import AfterValidator, Field, field_validator, model_validator
 
 from ..errors import brief
-from ..fem.space import CELLS
+from ..mesh.cells import SIMPLICES
 from .values import MAX_ELEMENTS, Expression, Part, PositiveFloat, Section, finite
 
 
@@ -60,7 +60,7 @@ class MeshSection(Section):
         if self.shape is not None:
             elements = self._elements(dim)
             if not elements <= MAX_ELEMENTS:
-                raise ValueError(f"mesh.h = {brief(self.h)}: about {elements:.1e} {CELLS[dim][2]} for this "
+                raise ValueError(f"mesh.h = {brief(self.h)}: about {elements:.1e} {SIMPLICES[dim].plural} for this "
                                  f"{self.shape}, more than {MAX_ELEMENTS:.0e}")
         return self
 

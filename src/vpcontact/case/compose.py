@@ -35,7 +35,7 @@ import numpy as np
 import skfem
 from pydantic import ValidationError
 
-from ..mesh import core as meshes
+from .. import mesh as meshes
 from .body import MeshSection
 from .load import check_expressions, check_tree, plain, section
 from .messages import describe

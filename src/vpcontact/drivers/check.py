@@ -19,7 +19,9 @@ import numpy as np
 
 from ..case.model import Case
 from ..case.translate import translate
-from ..mesh.quality import edge_lengths, mean_ratio, smallest_angles
+from ..mesh.cells import SIMPLICES
+from ..mesh.quality import mean_ratio, smallest_angles
+from ..mesh.simplex import longest_edges
 from ..problem.build import build_problem
 from ..progress import size
 from ..timeloop.plan import RunPlan, free_operators, plan_run
@@ -66,7 +68,7 @@ class CaseCheck(RunPlan):
 
     def lines(self) -> list[str]:
         """The description as lines of text (``vpcontact check``)."""
-        elements = "triangles" if self.dim == 2 else "tetrahedra"
+        elements = SIMPLICES[self.dim].plural
         angle = f", smallest angle {self.smallest_angle_degrees:.1f}°" if self.smallest_angle_degrees is not None else ""
         lines = [f"{self.dim}D body: {self.nodes:,} nodes, {self.elements:,} {elements}, {self.dofs:,} dofs "
                  f"({self.free_dofs:,} free)",
@@ -113,7 +115,7 @@ def check_case(case: Case) -> CaseCheck:
     mesh, surface = problem.mesh, problem.surface
     points, cells = mesh.mesh.p, mesh.mesh.t
     quality = mean_ratio(points, cells)
-    sizes = edge_lengths(points, cells).max(axis=0)
+    sizes = longest_edges(points, cells)
     counts = np.bincount(surface.owner, minlength=len(surface.parts)) if surface.size else []
     return CaseCheck(
         **vars(plan), quality_min=float(quality.min()), quality_median=float(np.median(quality)),

@@ -55,7 +55,7 @@ from ..io import checkpoint, directory
 from ..io.run_reader import read_summary
 from ..io.writers import (check_room, json_safe, remove_files, remove_outputs, remove_temporaries, replacing,
                           versions, write_outputs, write_resolved_case, write_text)
-from ..mesh.msh import write_mesh
+from ..mesh.gmsh import write_mesh
 from ..problem.build import Problem, build_problem
 from ..progress import Progress, reporting
 from ..results.result import Result

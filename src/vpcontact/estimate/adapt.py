@@ -27,7 +27,7 @@ from ..errors import CaseError
 from .adapt_options import AdaptOptions
 from .estimators import ESTIMATORS
 from .indicators import Level
-from ..mesh.core import Mesh
+from ..mesh.mesh import Mesh
 from ..problem.build import Problem, checked_problem
 from ..progress import SILENT, Progress, duration, reporting
 from ..mesh.refinement import refine

@@ -31,7 +31,6 @@ vertices); f0 and f2 use the degree-4 rule of the load vector.
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,6 +39,7 @@ from skfem import Basis, ElementTetP1, ElementTriP1, FacetBasis, MeshTet1
 from .estimators import Estimator
 from .indicators import Indicators, Level
 from ..fem.space import component, coordinates
+from ..mesh.simplex import facet_normals, longest_edges
 
 #: The terms of the estimate, in the order of the outputs.
 TERMS = ("body_force", "jump", "neumann", "contact_tangential", "contact_normal", "complementarity")
@@ -67,35 +67,12 @@ class _Geometry:
     body_dx: np.ndarray | None  # (nelements, q)
 
 
-def _longest_edge(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
-    """The longest edge of each simplex ``cells`` (k, n) of ``points`` (d, nnodes)."""
-    return np.max([np.linalg.norm(points[:, cells[a]] - points[:, cells[b]], axis=0)
-                   for a, b in itertools.combinations(range(cells.shape[0]), 2)], axis=0)
-
-
-def _facet_normals(points: np.ndarray, facets: np.ndarray, inner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit normals (d, nf) of the facets (d, nf), pointing away from the points ``inner`` (d, nf) (the
-    centroids of their first elements), and their measures (nf,)."""
-    d = points.shape[0]
-    x = points[:, facets]  # (d, vertices, nf)
-    if d == 2:
-        edge = x[:, 1] - x[:, 0]
-        normal = np.stack([edge[1], -edge[0]])
-        measure = np.linalg.norm(normal, axis=0)
-    else:
-        normal = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0], axis=0)
-        measure = 0.5 * np.linalg.norm(normal, axis=0)
-    normal = normal / np.linalg.norm(normal, axis=0)
-    outward = np.sign(np.einsum("dn,dn->n", normal, x.mean(axis=1) - inner))
-    return normal * outward, measure
-
-
 def _build_geometry(problem) -> _Geometry:
     mesh = problem.mesh
     skmesh, d = mesh.mesh, mesh.dim
     p, t, f2t = skmesh.p, skmesh.t, skmesh.f2t
     centroids = p[:, t].mean(axis=1)
-    normal, measure = _facet_normals(p, skmesh.facets, centroids[:, f2t[0]])
+    normal, measure = facet_normals(p, skmesh.facets, centroids[:, f2t[0]])  # outward of the elements f2t[0]
     mu = np.broadcast_to(np.asarray(problem.elasticity.lame[1], dtype=float), (t.shape[1],))
     boundary = np.flatnonzero(f2t[1] < 0)
     surface = problem.surface
@@ -117,7 +94,7 @@ def _build_geometry(problem) -> _Geometry:
     if loads.body_forces:
         element_basis = Basis(skmesh, scalar, intorder=LOAD_ORDER)
         body_points, body_dx = np.asarray(element_basis.global_coordinates()), element_basis.dx
-    return _Geometry(_longest_edge(p, t), 1.0 / (2.0 * mu), normal, measure, _longest_edge(p, skmesh.facets),
+    return _Geometry(longest_edges(p, t), 1.0 / (2.0 * mu), normal, measure, longest_edges(p, skmesh.facets),
                      np.flatnonzero(f2t[1] >= 0), contact, neumann, free, neumann_points, neumann_dx, tractions,
                      body_points, body_dx)
 

@@ -6,7 +6,7 @@
 
 Triangles in 2D, tetrahedra in 3D: the element comes from the mesh, everything else is the same.
 scikit-fem gives the basis (the dof numbering) and the quadrature of the loads; the bulk operators
-are the vectorized kernels of simplex.py (the same matrices as scikit-fem's forms, to rounding, in a
+are the vectorized kernels of kernels.py (the same matrices as scikit-fem's forms, to rounding, in a
 fraction of the time and memory), and each load term is one sparse map, built once, from the density
 at its quadrature points to the nodal loads.
 """
@@ -21,11 +21,11 @@ import scipy.sparse as sp
 from skfem import Basis, ElementTetP1, ElementTriP1, ElementVector, FacetBasis, MeshTet1
 from skfem.assembly.basis import AbstractBasis
 
-from ..errors import CaseError, quoted
+from ..errors import CaseError, point, quoted
 from ..expressions.parse import Expression
 from ..laws.elasticity import Elasticity
-from ..mesh.core import Mesh
-from ..mesh.simplex import elastic_stiffness, geometry, strains, stress_work
+from ..mesh.mesh import Mesh
+from .kernels import elastic_stiffness, geometry, strains, stress_work
 from .space import coordinates
 
 #: A load density: f(x, y, t) -> (fx, fy) in 2D, f(x, y, z, t) -> (fx, fy, fz) in 3D, each an array
@@ -167,18 +167,18 @@ class _Term:
                     raise NonFiniteLoad(self.message(component, values[step, point], point if space else None,
                                                      f"t = {t[step]:.10g} (step {start + step + 1})"))
 
-    def message(self, component: int, value: float, point: int | None, when: str) -> str:
-        """``<key> = "<source>": not finite (inf) at (x, y) = (…), t = …``: the one line of NonFiniteLoad."""
+    def message(self, component: int, value: float, index: int | None, when: str) -> str:
+        """``<key> = "<source>": not finite (inf) at (x, y) = (…), t = …``: the one line of NonFiniteLoad, at the
+        quadrature point ``index`` (None: at every point)."""
         if isinstance(self.density, ExpressionDensity):
             f = self.density.components[component]
             what = f"{f.where} = {quoted(f.source)}"
         else:
             what = f"{self.name} (f{self.names[component]})"
-        if point is None:
+        if index is None:
             where = "every point"
         else:
-            at = self.points.reshape(len(self.names), -1)[:, point]
-            where = f"({', '.join(self.names)}) = ({', '.join(f'{c:.6g}' for c in at)})"
+            where = f"({', '.join(self.names)}) = {point(self.points.reshape(len(self.names), -1)[:, index])}"
         return f"{what}: not finite ({value}) at {where}, {when}; a load must be finite wherever it is applied"
 
 

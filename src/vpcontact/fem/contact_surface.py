@@ -15,8 +15,8 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import FacetBasis
 
-from ..errors import CaseError, quoted
-from ..mesh.core import Mesh
+from ..errors import CaseError, point, quoted
+from ..mesh.mesh import Mesh
 from .space import coordinates as coordinates_names
 
 
@@ -125,9 +125,9 @@ def _initial_gap(gap: Callable, points: np.ndarray) -> np.ndarray:
     if bad.size:
         where = getattr(gap, "where", None)  # an expression of the case knows its key
         name = f"{where} = {quoted(gap.source)}" if where is not None else "contact.gap"
-        at = ", ".join(f"{c:.6g}" for c in points[:, bad[0]])
         raise CaseError(f"{name}: not finite ({gap0[bad[0]]}) at the contact node ({', '.join(coordinates_names(d))}) "
-                        f"= ({at}); the initial gap must be finite at every node of the contact part")
+                        f"= {point(points[:, bad[0]])}; the initial gap must be finite at every node of the contact "
+                        f"part")
     return gap0
 
 

@@ -18,7 +18,3 @@ def component(name: str) -> int:
     """The index of a coordinate by name: "x" → 0, "y" → 1, "z" → 2."""
     return COORDINATES.index(name)
 
-
-#: How files name the cells of a d-dimensional body: (meshio cell type of its elements, meshio cell
-#: type of its boundary facets, the key of its elements in solution.npz).
-CELLS = {2: ("triangle", "line", "triangles"), 3: ("tetra", "triangle", "tetrahedra")}

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from ..errors import CaseError
 from ..results.plots import fields_at
-from ..fem.space import CELLS
-from .vtu import CELL_TYPES, in_space
+from ..mesh.cells import SIMPLICES
+from .vtu import in_space
 from .writers import body_data
 
 
@@ -29,7 +29,7 @@ def body_grid(result, step=None):
         raise CaseError("to_pyvista needs pyvista, which is not installed: pip install pyvista") from None
     step, fields = fields_at(result, step, "no body to convert to pyvista")
     mesh = result.discretization.mesh.mesh
-    grid = pyvista.UnstructuredGrid({CELL_TYPES[CELLS[result.dim][0]]: mesh.t.T}, in_space(mesh.p.T))
+    grid = pyvista.UnstructuredGrid({SIMPLICES[result.dim].vtk: mesh.t.T}, in_space(mesh.p.T))
     point_data, cell_data = body_data(result.discretization, fields)
     grid.point_data.update(point_data)
     grid.cell_data.update(cell_data)

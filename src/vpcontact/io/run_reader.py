@@ -21,7 +21,8 @@ import numpy as np
 
 from ..laws.contact import STATUS_NAMES
 from ..results.result import CONTACT_ARRAYS, step_ends
-from ..fem.space import CELLS, coordinates
+from ..fem.space import coordinates
+from ..mesh.cells import SIMPLICES
 
 if TYPE_CHECKING:
     from ..results.norms import Snapshot
@@ -81,7 +82,7 @@ def read_solution(folder: str | os.PathLike) -> dict[str, np.ndarray] | None:
     try:
         with np.load(Path(folder) / "solution.npz") as solution:
             data = {key: solution[key] for key in SOLUTION_ARRAYS}
-            data["elements"] = solution[CELLS[data["points"].shape[0]][2]]
+            data["elements"] = solution[SIMPLICES[data["points"].shape[0]].plural]
             data["lame"] = solution["lame"] if "lame" in solution else None
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):
         return None

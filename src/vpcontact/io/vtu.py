@@ -24,8 +24,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-#: VTK's number of each cell type (named as meshio and ``space.CELLS`` name them).
-CELL_TYPES = {"line": 3, "triangle": 5, "tetra": 10}
+from ..mesh.cells import CELL_TYPES
+
 #: VTK's name of each NumPy type written.
 VTK_TYPES = {np.dtype("<f8"): "Float64", np.dtype("<i8"): "Int64", np.dtype("<i4"): "Int32", np.dtype("u1"): "UInt8"}
 #: The names of the components of a 3 × 3 tensor, written row by row (``tensors_in_space``).
@@ -43,7 +43,7 @@ class Grid:
         index = np.int32 if fits else np.int64  # connectivity and offsets in 4 bytes if they fit
         cells = np.asarray(cells, dtype=index)
         offsets = np.arange(1, self.cells + 1, dtype=index) * cells.shape[1]
-        types = np.full(self.cells, CELL_TYPES[cell_type], dtype=np.uint8)
+        types = np.full(self.cells, CELL_TYPES[cell_type].vtk, dtype=np.uint8)
         self.xml = "\n".join(["<Points>", _data_array("Points", points), "</Points>", "<Cells>",
                               _data_array("connectivity", cells.ravel()), _data_array("offsets", offsets),
                               _data_array("types", types), "</Cells>"])

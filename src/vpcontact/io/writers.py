@@ -47,7 +47,8 @@ from ..laws.contact import STATUS_NAMES
 from ..errors import CaseError
 from ..results.plots import DPI, FIGURES
 from ..results.result import CONTACT_ARRAYS, Result
-from ..fem.space import CELLS, coordinates
+from ..fem.space import coordinates
+from ..mesh.cells import SIMPLICES
 from .vtu import Grid, in_space, tensors_in_space, write_vtu
 
 PACKAGES = ("vpcontact", "numpy", "scipy", "scikit-fem", "meshio", "pydantic")
@@ -371,7 +372,8 @@ def field_meshes(discretization) -> tuple[tuple[np.ndarray, str, np.ndarray],
                                           tuple[np.ndarray, str, np.ndarray] | None]:
     """(points (n, 3), cell type, cells (k, nodes per cell)) of the body and of the contact part (None
     without contact): the meshes of the field files, 2D points with z = 0."""
-    element_cells, facet_cells, _ = CELLS[discretization.mesh.dim]
+    dim = discretization.mesh.dim
+    element_cells, facet_cells = SIMPLICES[dim].cell_type, SIMPLICES[dim - 1].cell_type
     body = (in_space(discretization.mesh.mesh.p.T), element_cells, discretization.mesh.mesh.t.T)
     surface = discretization.surface
     return body, (in_space(surface.coordinates.T), facet_cells, surface.facets.T) if surface.size else None
@@ -458,7 +460,7 @@ def write_solution(result: Result, path: Path) -> None:
     history ξ there. A run restarts from one of these steps with ``initial.from_run``."""
     steps = sorted(result.fields)
     mesh = result.discretization.mesh.mesh
-    arrays = dict(points=mesh.p, steps=np.array(steps), **{CELLS[result.dim][2]: mesh.t},
+    arrays = dict(points=mesh.p, steps=np.array(steps), **{SIMPLICES[result.dim].plural: mesh.t},
                   times=np.array([result.discretization.times[s - 1] for s in steps]),
                   displacement=np.array([result.fields[s].displacement for s in steps]),
                   stress=np.array([result.fields[s].stress for s in steps]),

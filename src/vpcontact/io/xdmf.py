@@ -25,11 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..mesh.cells import CELL_TYPES
 from ..results.result import Result
 from .writers import field_frames, field_meshes, replacing
 
-#: XDMF's name of each cell type (as ``space.CELLS`` names them).
-TOPOLOGY_TYPES = {"line": "Polyline", "triangle": "Triangle", "tetra": "Tetrahedron"}
 #: XDMF's attribute type of an array by its number of components per point or cell.
 ATTRIBUTE_TYPES = {1: "Scalar", 3: "Vector", 9: "Tensor"}
 #: XDMF's number type of each NumPy kind.
@@ -80,7 +79,7 @@ def _write_description(path: Path, mesh: tuple, steps: list[tuple]) -> None:
     for step, t, data in steps:
         grid = ET.SubElement(collection, "Grid", Name=f"step {step}", GridType="Uniform")
         ET.SubElement(grid, "Time", Value=repr(float(t)))
-        topology = ET.SubElement(grid, "Topology", TopologyType=TOPOLOGY_TYPES[cell_type],
+        topology = ET.SubElement(grid, "Topology", TopologyType=CELL_TYPES[cell_type].xdmf,
                                  NumberOfElements=str(cells[0]))
         if cell_type == "line":
             topology.set("NodesPerElement", str(cells[1]))

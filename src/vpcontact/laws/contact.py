@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import CaseError, quoted
+from ..errors import CaseError, point, quoted
 from ..expressions.parse import values_at
 from ..fem.space import coordinates as coordinates_names
 from .compliance import COMPLIANCE
@@ -109,11 +109,10 @@ def layer_parameter(where: str, value, minimum: float | None = None, *, points: 
         wrong = ~np.isfinite(values) | ~(values > minimum if strict else values >= minimum)
     if wrong.any():
         node = np.flatnonzero(wrong)[0]
-        at = ", ".join(f"{c:.6g}" for c in points[:, node])
         expected = "finite" if minimum is None else f"a finite number {'>' if strict else '>='} {minimum:g}"
         raise CaseError(f"{where} = {quoted(value)} is {values[node]:g} at the contact node ({', '.join(names)}) = "
-                        f"({at}) ({wrong.sum()} of {count} nodes): expected {expected} at every node of the "
-                        f"contact part")
+                        f"{point(points[:, node])} ({wrong.sum()} of {count} nodes): expected {expected} at every "
+                        f"node of the contact part")
     return values.copy()
 
 

@@ -16,11 +16,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import CaseError, quoted
+from ..errors import CaseError, point, quoted
 from ..expressions.parse import values_at
 from .elasticity import Elasticity
 from .viscoplastic import VISCOPLASTIC
-from ..mesh.core import Mesh
+from ..mesh.mesh import Mesh
 from ..fem.space import coordinates
 
 
@@ -126,9 +126,9 @@ def _owners(entries: list[tuple[str, object]], mesh: Mesh) -> np.ndarray:
             owner[claimed] = i
     orphans = np.flatnonzero(owner < 0)
     if orphans.size:
-        at = ", ".join(f"{c:.6g}" for c in mesh.centroids[:, orphans[0]])
         raise CaseError(f"material: {orphans.size} of {elements} elements have no material ({_where(owner, mesh)}; "
-                        f"one is at ({', '.join(coordinates(mesh.dim))}) = ({at})): add a material entry for them")
+                        f"one is at ({', '.join(coordinates(mesh.dim))}) = {point(mesh.centroids[:, orphans[0]])}): "
+                        f"add a material entry for them")
     return owner
 
 
@@ -170,8 +170,7 @@ def _coefficient(key: str, value, centroids: np.ndarray, *, minimum: float | Non
     wrong |= ~np.isfinite(values)
     if wrong.any():
         element = np.flatnonzero(wrong)[0]
-        at = ", ".join(f"{c:.6g}" for c in centroids[:, element])
         raise CaseError(f"{key} = {quoted(str(value))} is {values[element]:g} at the element centroid "
-                        f"({', '.join(names)}) = ({at}) ({wrong.sum()} elements): expected {expected} in every "
-                        f"element of the material")
+                        f"({', '.join(names)}) = {point(centroids[:, element])} ({wrong.sum()} elements): expected "
+                        f"{expected} in every element of the material")
     return values

@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import CaseError, brief
-from ..mesh.core import Mesh
+from ..mesh.mesh import Mesh
 from .contact import AtNodes, CallableLaw
 from .materials import AtCentroids
 

@@ -1,18 +1,33 @@
-"""Meshes: the body's shapes, mesh files, checks, refinement, simplex geometry.
+"""Meshes: the body's shapes, mesh files, checks, refinement, simplex geometry and point location.
 
 The public face: a :class:`Mesh` (scikit-fem's mesh with named parts and regions), the built-in shapes and the
 reader of mesh files::
 
     from vpcontact import mesh
     body = mesh.half_disc(h=0.05)            # or rectangle, quarter_ball, block, read_mesh("part.msh")
+
+They and the submodules (``vpcontact.mesh.<module>``) are imported on first use.
 """
 
+import importlib
+
 from .. import submodule
-from .core import Mesh, block, half_disc, quarter_ball, read_mesh, rectangle
+
+#: The public names, by the module that defines them.
+PUBLIC = {"Mesh": "mesh", "block": "shapes", "half_disc": "shapes", "quarter_ball": "shapes", "read_mesh": "read",
+          "rectangle": "shapes"}
 
 __all__ = ["Mesh", "block", "half_disc", "quarter_ball", "read_mesh", "rectangle"]
 
 
 def __getattr__(name: str):
-    """The submodules, imported on first use (``vpcontact.mesh.<module>`` after ``import vpcontact.mesh``)."""
+    """The public names and the submodules, imported on first use."""
+    if name in PUBLIC:
+        value = getattr(importlib.import_module(f".{PUBLIC[name]}", __name__), name)
+        globals()[name] = value  # once
+        return value
     return submodule(__name__, name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(PUBLIC))

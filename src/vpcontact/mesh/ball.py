@@ -34,6 +34,8 @@ from itertools import permutations
 import numpy as np
 import skfem
 
+from .simplex import determinants, longest_edges
+
 #: n = ceil(CELLS_PER_RADIUS / h) cells along a radius give a longest edge ≤ h: the longest edge of the
 #: structured octants is 1.24/n (n = 2) to 1.49/n (n → ∞), a cell's diagonal near the sphere.
 CELLS_PER_RADIUS = 1.5
@@ -141,17 +143,10 @@ def _equiangular(q: np.ndarray) -> np.ndarray:
     return s * direction / np.where(s > 0.0, np.linalg.norm(direction, axis=0), 1.0)
 
 
-def signed_volumes(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Signed volumes of the tetrahedra t (4, m) on the nodes p (3, n) (positive: t[1] − t[0],
-    t[2] − t[0], t[3] − t[0] right-handed)."""
-    a = p[:, t[0]]
-    return np.einsum("ij,ij->j", np.cross(p[:, t[1]] - a, p[:, t[2]] - a, axis=0), p[:, t[3]] - a) / 6.0
-
-
 def positively_oriented(p: np.ndarray, t: np.ndarray) -> np.ndarray:
     """The tetrahedra t with the first two nodes of each negatively oriented one swapped."""
     t = t.copy()
-    negative = signed_volumes(p, t) < 0.0
+    negative = determinants(p, t) < 0.0
     t[:2, negative] = t[1::-1, negative]
     return t
 
@@ -199,10 +194,8 @@ def graded_towards_bottom(p: np.ndarray, t: np.ndarray, h: float, h_bottom: floa
 def _too_long(p: np.ndarray, t: np.ndarray, h: float, h_bottom: float) -> np.ndarray:
     """The tetrahedra t on the nodes p whose longest edge exceeds target_edge(distance of their centroid
     from the bottom point (0, 0, 0))."""
-    pairs = np.array([(i, j) for i in range(4) for j in range(i + 1, 4)]).T
-    corners = p[:, t]  # (3, 4, m)
-    longest = np.linalg.norm(corners[:, pairs[0]] - corners[:, pairs[1]], axis=0).max(axis=0)
-    return np.flatnonzero(longest > target_edge(np.linalg.norm(corners.mean(axis=1), axis=0), h, h_bottom))
+    centroids = p[:, t].mean(axis=1)
+    return np.flatnonzero(longest_edges(p, t) > target_edge(np.linalg.norm(centroids, axis=0), h, h_bottom))
 
 
 @contextmanager

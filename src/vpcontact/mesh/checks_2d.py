@@ -1,51 +1,24 @@
-"""Refusal of triangle meshes that do not describe a plane body covered once by its triangles.
+"""The checks of a triangle mesh (what they refuse and in which order: `vpcontact.mesh.checks`):
+`check_triangles`.
 
-`check_triangles` raises CaseError, naming the mesh file, a node or triangle and the fix, for (in
-this order)
-
-- a triangle of zero area;
-- an edge of more than two triangles, or two triangles on the same side of their common edge (a
-  fold): the mesh covers a region twice;
-- two distinct boundary nodes at one place: the mesh is cut along a seam there (a gmsh model whose
-  surfaces do not share their common curves);
-- boundary edges that cross (parts lying on top of each other), or that overlap along a line (the
-  meshes of two surfaces that do not match on their common curve);
-- a node where parts of the body touch only at that node (a hinge);
-- a boundary loop next to which the mesh covers the plane more than once.
-
-Why this is enough: skfem sorts each triangle's nodes, so the file's orientation is not used; each
+Why they are enough: skfem sorts each triangle's nodes, so the file's orientation is not used; each
 triangle is turned counter-clockwise by the sign of its area instead. Without folds, the two
 triangles of an inner edge then run through it in opposite directions, so the number of triangles
 over a point (the degree) is the winding number of the boundary edges around it. Without crossing
 or touching boundary edges and hinges, the boundary is a set of disjoint simple loops; the degree
 only changes across a loop, and a region of the largest degree lies on the body's side of each loop
 around it, so the degree is at most 1 everywhere once it is 1 next to each loop.
-
-Every check is vectorized. Measured on the half disc with 580,000 triangles: 0.4 s, against 2.5–3 s
-to read the same mesh from a gmsh file and 3–6 s to build it (`mesh.half_disc`).
-
-The message pieces (`Names`, `more`), `check_finite`, `in_unit_box` and `check_coincident_nodes`
-serve the checks of tetrahedral meshes too (`vpcontact.mesh.checks_3d`).
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from ..errors import CaseError
+from .checks import Names, check_coincident_nodes, check_measures, in_unit_box, match_facets, more, touching_distance
 
-#: A triangle whose area is at most ZERO_AREA × (its longest edge)² has zero area.
-ZERO_AREA = 1e-12
-#: Nodes or boundary edges closer than COINCIDENT × (the diagonal of the nodes' bounding box) touch.
-COINCIDENT = 1e-9
-#: Smallest and largest mesh size (diagonal of the bounding box) accepted: squares and products of
-#: lengths must stay far from underflow and overflow in double precision.
-LENGTHS = (1e-100, 1e100)
 #: Winding numbers are computed for at most this many (point, edge) pairs at once.
 CHUNK = 2**22
 
@@ -56,45 +29,6 @@ FIX_OVERLAP = ("each region must be meshed once: in gmsh, the curves bounding a 
                "surface may be listed twice")
 
 
-class Names:
-    """Message pieces: nodes by their number in the file and coordinates, elements by their position among
-    the file's elements (`element_numbers`, from 1; default: their column in t plus 1)."""
-
-    def __init__(self, label: str, p: np.ndarray, node_numbers: np.ndarray, element_numbers: np.ndarray | None = None):
-        self.label, self.p, self.numbers, self.element_numbers = label, p, node_numbers, element_numbers
-
-    def element(self, k: int) -> int:
-        return k + 1 if self.element_numbers is None else int(self.element_numbers[k])
-
-    def at(self, point) -> str:
-        return f"({', '.join(f'{x:.6g}' for x in point)})"
-
-    def node(self, i: int) -> str:
-        return f"node {self.numbers[i]} at {self.at(self.p[:, i])}"
-
-    def triangle(self, k: int, t: np.ndarray) -> str:
-        return f"triangle {self.element(k)} (nodes {', '.join(str(self.numbers[i]) for i in t[:, k])})"
-
-    def error(self, text: str) -> CaseError:
-        return CaseError(f"mesh file '{self.label}': {text}")
-
-
-def more(count: int, what: str) -> str:
-    """" (and 2 more nodes)" for count = 3 of what = "node"; "" for count = 1."""
-    return f" (and {count - 1} more {what}{'s' if count > 2 else ''})" if count > 1 else ""
-
-
-def check_finite(label: str, points: np.ndarray, node_numbers: np.ndarray) -> None:
-    """Refuse nodes (columns of `points`) with a coordinate that is NaN or infinite."""
-    bad = np.flatnonzero(~np.isfinite(points).all(axis=0))
-    if bad.size:
-        i = bad[0]
-        coordinates = ", ".join(f"{x:g}" for x in points[:, i])
-        raise CaseError(f"mesh file '{label}': node {node_numbers[i]} has the coordinates ({coordinates})"
-                        f"{more(bad.size, 'node')}: every coordinate must be a finite number; fix the program or "
-                        f"edit that wrote the file")
-
-
 def check_triangles(label: str, p: np.ndarray, t: np.ndarray, node_numbers: np.ndarray,
                     element_numbers: np.ndarray | None = None) -> None:
     """Raise CaseError unless the triangles `t` (3, m) on the finite nodes `p` (2, n), every node
@@ -103,40 +37,11 @@ def check_triangles(label: str, p: np.ndarray, t: np.ndarray, node_numbers: np.n
     `element_numbers` (m,), default: their column in t plus 1)."""
     names = Names(label, p, node_numbers, element_numbers)
     p = in_unit_box(names, p)
-    twice_area = _check_areas(names, p, t)
-    start, end = _boundary_edges(names, p, t, twice_area)
-    tol = COINCIDENT * float(np.linalg.norm(p.max(axis=1) - p.min(axis=1)))
-    check_coincident_nodes(names, p, start, tol, FIX_SEAM)
-    _check_boundary_crossings(names, p, start, end, tol)
+    start, end = _boundary_edges(names, p, t, check_measures(names, p, t))
+    check_coincident_nodes(names, p, start, FIX_SEAM)
+    _check_boundary_crossings(names, p, start, end, touching_distance(p))
     _check_hinges(names, start, end)
     _check_covered_once(names, p, start, end)
-
-
-def in_unit_box(names: Names, p: np.ndarray) -> np.ndarray:
-    """The nodes p (d, n) moved and scaled so that their bounding box is centred at 0 with diagonal 1:
-    the checks then neither overflow nor underflow. CaseError if the mesh's size is outside LENGTHS."""
-    low, high = p.min(axis=1), p.max(axis=1)
-    diameter = math.hypot(*(0.5 * high - 0.5 * low)) * 2.0  # halves: no overflow near the largest float
-    if diameter > 0.0 and not LENGTHS[0] <= diameter <= LENGTHS[1]:  # (0: all nodes at one place, zero areas)
-        raise names.error(f"the mesh is {diameter:.3g} long: element computations need a size between "
-                          f"{LENGTHS[0]:g} and {LENGTHS[1]:g}; write it in another length unit")
-    return (p - 0.5 * (low + high)[:, None]) / (diameter or 1.0)
-
-
-def _check_areas(names: Names, p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Twice the signed area of each triangle; CaseError if one is (relatively) zero."""
-    x, y = p
-    ax, bx, cx, ay, by, cy = x[t[0]], x[t[1]], x[t[2]], y[t[0]], y[t[1]], y[t[2]]
-    twice_area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-    longest = np.maximum(np.maximum((bx - ax) ** 2 + (by - ay) ** 2, (cx - bx) ** 2 + (cy - by) ** 2),
-                         (ax - cx) ** 2 + (ay - cy) ** 2)
-    bad = np.flatnonzero(np.abs(twice_area) <= 2.0 * ZERO_AREA * longest)
-    if bad.size:
-        k = bad[0]
-        corners = ", ".join(names.at(names.p[:, i]) for i in t[:, k])
-        raise names.error(f"{names.triangle(k, t)} has zero area: its corners {corners} lie on one line"
-                          f"{more(bad.size, 'triangle')}; remove it or mesh the geometry again")
-    return twice_area
 
 
 def _boundary_edges(names: Names, p: np.ndarray, t: np.ndarray, twice_area: np.ndarray):
@@ -148,42 +53,25 @@ def _boundary_edges(names: Names, p: np.ndarray, t: np.ndarray, twice_area: np.n
     keys = np.minimum(first, second).astype(np.int64) * n + np.maximum(first, second)
     order = np.argsort(keys)
     same = keys[order[1:]] == keys[order[:-1]]  # same[i]: occurrences order[i] and order[i + 1] share their edge
-    bad = np.flatnonzero(same[1:] & same[:-1])
-    if bad.size:
-        a, b = first[order[bad[0]]], second[order[bad[0]]]
-        many = np.count_nonzero(keys == keys[order[bad[0]]])
-        raise names.error(f"the edge from {names.node(a)} to {names.node(b)} belongs to {many} triangles "
-                          f"(at most 2 can share an edge): the mesh covers a region twice; {FIX_OVERLAP}")
     # The triangle lies on side s of its edge directed from the lower to the higher node number; the two
     # triangles of an inner edge must lie on opposite sides.
     side = np.sign(np.tile(twice_area, 3)) * np.where(first < second, 1.0, -1.0)
-    inner = np.flatnonzero(same)
-    folded = np.flatnonzero(side[order[inner]] == side[order[inner + 1]])
+    crowded, folded, single = match_facets(order, same, side)
+    if crowded.size:
+        a, b = first[order[crowded[0]]], second[order[crowded[0]]]
+        many = np.count_nonzero(keys == keys[order[crowded[0]]])
+        raise names.error(f"the edge from {names.node(a)} to {names.node(b)} belongs to {many} triangles "
+                          f"(at most 2 can share an edge): the mesh covers a region twice; {FIX_OVERLAP}")
     if folded.size:
-        one, other = order[inner[folded[0]]], order[inner[folded[0]] + 1]
+        one, other = order[folded[0]], order[folded[0] + 1]
         a, b = first[one], second[one]
-        raise names.error(f"{names.triangle(one % m, t)} and {names.triangle(other % m, t)} lie on the same side of "
+        raise names.error(f"{names.element(one % m, t)} and {names.element(other % m, t)} lie on the same side of "
                           f"their common edge from {names.node(a)} to {names.node(b)}{more(folded.size, 'pair')}: "
                           f"the mesh is folded (tangled) there; {FIX_OVERLAP}")
-    alone = np.ones(keys.size, dtype=bool)
-    alone[1:] &= ~same
-    alone[:-1] &= ~same
-    single = order[alone]
     counter_clockwise = twice_area[single % m] > 0
     start = np.where(counter_clockwise, first[single], second[single])
     end = np.where(counter_clockwise, second[single], first[single])
     return start, end
-
-
-def check_coincident_nodes(names: Names, p: np.ndarray, boundary_nodes: np.ndarray, tol: float, fix: str) -> None:
-    """No two of the boundary nodes within `tol`: they cut the mesh along a seam. (Nodes inside the body
-    at one place make a region covered twice, refused by the later checks.)"""
-    nodes = np.unique(boundary_nodes)
-    pairs = cKDTree(p[:, nodes].T).query_pairs(tol, output_type="ndarray")
-    if pairs.size:
-        i, j = nodes[pairs[0]]
-        raise names.error(f"nodes {names.numbers[i]} and {names.numbers[j]} are both at {names.at(names.p[:, i])}"
-                          f"{more(len(pairs), 'pair')}: the mesh is cut along a seam there; {fix}")
 
 
 def _check_hinges(names: Names, start: np.ndarray, end: np.ndarray) -> None:

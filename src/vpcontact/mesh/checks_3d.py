@@ -1,22 +1,5 @@
-"""Refusal of tetrahedral meshes that do not describe a body covered once by its tetrahedra.
-
-`check_tetrahedra` raises CaseError, naming the mesh file, a node or tetrahedron and the fix, for (in
-this order)
-
-- a tetrahedron of zero volume;
-- a face of more than two tetrahedra, or two tetrahedra on the same side of their common face (a
-  fold): the mesh covers a region twice;
-- two distinct boundary nodes at one place: the mesh is cut along a seam there (a gmsh model whose
-  volumes do not share their common surfaces);
-- an edge of more than two boundary faces, or a node around which the boundary faces form more than
-  one fan: parts of the body touch only along that edge or at that node (a hinge), about which they
-  could turn freely.
-
-The orientation of the tetrahedra in the file is not used: each one's side of a face follows from the
-sign of its volume. A mesh of several pieces passes (a piece is then one more body to hold).
-
-Every check is vectorized. Measured on the quarter ball with 514,500 tetrahedra (`mesh.quarter_ball`):
-0.8 s, against 4.1 s for meshio to read the same mesh from a gmsh 2.2 file.
+"""The checks of a tetrahedral mesh (what they refuse and in which order: `vpcontact.mesh.checks`):
+`check_tetrahedra`. A mesh of several pieces passes (a piece is then one more body to hold).
 """
 
 from __future__ import annotations
@@ -25,10 +8,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from .checks_2d import COINCIDENT, Names, check_coincident_nodes, in_unit_box, more
-
-#: A tetrahedron whose volume is at most ZERO_VOLUME × (its longest edge)³ has zero volume.
-ZERO_VOLUME = 1e-12
+from .checks import Names, check_coincident_nodes, check_measures, in_unit_box, match_facets, more
 
 FIX_SEAM = ("merge the duplicate nodes: in gmsh build the volumes on shared points, curves and surfaces, or use "
             "Coherence (Geometry.AutoCoherence = 1, or BooleanFragments on all volumes), then mesh again")
@@ -50,31 +30,9 @@ def check_tetrahedra(label: str, p: np.ndarray, t: np.ndarray, node_numbers: np.
     default: their column in t plus 1)."""
     names = Names(label, p, node_numbers, element_numbers)
     p = in_unit_box(names, p)
-    six_volume = _check_volumes(names, p, t)
-    faces = _boundary_faces(names, t, six_volume)
-    tol = COINCIDENT * float(np.linalg.norm(p.max(axis=1) - p.min(axis=1)))
-    check_coincident_nodes(names, p, faces.ravel(), tol, FIX_SEAM)
+    faces = _boundary_faces(names, t, check_measures(names, p, t))
+    check_coincident_nodes(names, p, faces.ravel(), FIX_SEAM)
     _check_hinges(names, faces)
-
-
-def _tetrahedron(names: Names, k: int, t: np.ndarray) -> str:
-    return f"tetrahedron {names.element(k)} (nodes {', '.join(str(names.numbers[i]) for i in t[:, k])})"
-
-
-def _check_volumes(names: Names, p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Six times the signed volume of each tetrahedron; CaseError if one is (relatively) zero."""
-    a = p[:, t[0]]
-    b, c, d = p[:, t[1]] - a, p[:, t[2]] - a, p[:, t[3]] - a
-    six_volume = np.einsum("ij,ij->j", np.cross(b, c, axis=0), d)
-    squares = [((p[:, t[i]] - p[:, t[j]]) ** 2).sum(axis=0) for i in range(4) for j in range(i + 1, 4)]
-    longest = np.sqrt(np.max(squares, axis=0))
-    bad = np.flatnonzero(np.abs(six_volume) <= 6.0 * ZERO_VOLUME * longest**3)
-    if bad.size:
-        k = bad[0]
-        corners = ", ".join(names.at(names.p[:, i]) for i in t[:, k])
-        raise names.error(f"{_tetrahedron(names, k, t)} has zero volume: its corners {corners} lie in one plane"
-                          f"{more(bad.size, 'tetrahedron')}; remove it or mesh the geometry again")
-    return six_volume
 
 
 def _boundary_faces(names: Names, t: np.ndarray, six_volume: np.ndarray) -> np.ndarray:
@@ -96,23 +54,17 @@ def _boundary_faces(names: Names, t: np.ndarray, six_volume: np.ndarray) -> np.n
     def face(occurrence: int) -> str:
         return ", ".join(str(names.numbers[i]) for i in nodes[:, occurrence])
 
-    bad = np.flatnonzero(same[1:] & same[:-1])
-    if bad.size:
-        first = order[bad[0]]
+    crowded, folded, single = match_facets(order, same, side)
+    if crowded.size:
+        first = order[crowded[0]]
         many = np.count_nonzero((nodes == nodes[:, [first]]).all(axis=0))
         raise names.error(f"the face with nodes {face(first)} belongs to {many} tetrahedra (at most 2 can share a "
                           f"face): the mesh covers a region twice; {FIX_OVERLAP}")
-    inner = np.flatnonzero(same)
-    folded = np.flatnonzero(side[order[inner]] == side[order[inner + 1]])
     if folded.size:
-        one, other = order[inner[folded[0]]], order[inner[folded[0]] + 1]
-        raise names.error(f"{_tetrahedron(names, one % m, t)} and {_tetrahedron(names, other % m, t)} lie on the "
+        one, other = order[folded[0]], order[folded[0] + 1]
+        raise names.error(f"{names.element(one % m, t)} and {names.element(other % m, t)} lie on the "
                           f"same side of their common face with nodes {face(one)}{more(folded.size, 'pair')}: the "
                           f"mesh is folded (tangled) there; {FIX_OVERLAP}")
-    alone = np.ones(order.size, dtype=bool)
-    alone[1:] &= ~same
-    alone[:-1] &= ~same
-    single = order[alone]
     faces = nodes[:, single]
     inward = side[single] > 0  # the tetrahedron on the positive side: swap two nodes
     faces[1:, inward] = faces[2:0:-1, inward]

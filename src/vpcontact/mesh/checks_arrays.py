@@ -25,19 +25,20 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 
 import numpy as np
+import skfem
 
-from ..errors import CaseError, shown
+from ..errors import CaseError, point, shown
+from .cells import SIMPLICES
 
-#: The elements of a mesh by the dimension of its nodes, and how messages name them.
-ELEMENTS = {2: "triangles", 3: "tetrahedra"}
+#: The scikit-fem mesh of each dimension: linear triangles (MeshTri1) and tetrahedra (MeshTet1), what
+#: ``Mesh.mesh`` may be.
+SKFEM_MESH = {2: skfem.MeshTri, 3: skfem.MeshTet}
 
 
 def check_mesh(mesh) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """CaseError unless ``mesh`` (a :class:`~vpcontact.mesh.Mesh`) holds a linear triangle or tetrahedral mesh
     with well-formed parts, regions, normals and projections (see the module's docstring); its parts and
     regions as sorted distinct int64 indices."""
-    from .core import SKFEM_MESH  # the Mesh's own module, which calls this when a Mesh is made
-
     m = mesh.mesh
     if type(m) not in SKFEM_MESH.values():
         raise CaseError(f"Mesh.mesh = {_kind(m)}: expected a scikit-fem MeshTri1 (linear triangles) or MeshTet1 "
@@ -45,12 +46,12 @@ def check_mesh(mesh) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     dim = {cls: d for d, cls in SKFEM_MESH.items()}[type(m)]
     p, t = np.asarray(m.p), np.asarray(m.t)
     if p.ndim != 2 or p.shape[0] != dim:
-        raise CaseError(f"Mesh.mesh.p has the shape {p.shape} and the mesh is of {ELEMENTS[dim]}: expected {dim} rows "
-                        f"(the coordinates {', '.join('xyz'[:dim])} of each node); for "
-                        f"{ELEMENTS[5 - dim]} use skfem.{SKFEM_MESH[5 - dim].__name__}")
+        raise CaseError(f"Mesh.mesh.p has the shape {p.shape} and the mesh is of {SIMPLICES[dim].plural}: expected "
+                        f"{dim} rows (the coordinates {', '.join('xyz'[:dim])} of each node); for "
+                        f"{SIMPLICES[5 - dim].plural} use skfem.{SKFEM_MESH[5 - dim].__name__}")
     if t.ndim != 2 or t.shape[0] != dim + 1 or t.shape[1] == 0 or t.dtype.kind not in "iu":
         raise CaseError(f"Mesh.mesh.t is an array of shape {t.shape} of {t.dtype}: expected the nodes of the "
-                        f"{ELEMENTS[dim]}, integers of shape ({dim + 1}, elements), at least one element")
+                        f"{SIMPLICES[dim].plural}, integers of shape ({dim + 1}, elements), at least one element")
     nodes = p.shape[1]
     outside = (t < 0) | (t >= nodes)
     if outside.any():
@@ -59,11 +60,11 @@ def check_mesh(mesh) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
                         f"the nodes 0 to {nodes - 1} ({int(outside.any(axis=0).sum())} such elements)")
     bad = np.flatnonzero(~np.isfinite(p).all(axis=0))
     if bad.size:
-        raise CaseError(f"Mesh.mesh.p: node {int(bad[0])} has the coordinates {_point(p[:, bad[0]])} ({bad.size} such "
+        raise CaseError(f"Mesh.mesh.p: node {int(bad[0])} has the coordinates {point(p[:, bad[0]])} ({bad.size} such "
                         f"nodes): every coordinate must be a finite number")
     unused = np.flatnonzero(np.bincount(t.ravel(), minlength=nodes) == 0)
     if unused.size:
-        raise CaseError(f"Mesh.mesh.p: node {int(unused[0])} at {_point(p[:, unused[0]])} is in no element "
+        raise CaseError(f"Mesh.mesh.p: node {int(unused[0])} at {point(p[:, unused[0]])} is in no element "
                         f"({unused.size} such nodes): remove the nodes no element uses")
     boundary = np.zeros(m.facets.shape[1], dtype=bool)
     boundary[m.boundary_facets()] = True
@@ -120,10 +121,6 @@ def _check_functions(attribute: str, functions, known: dict, what: str, pairs: b
         if not isinstance(function, Callable):
             raise CaseError(f"Mesh.{attribute}[{_kind(key)}] = {_kind(function)}: expected a function of the "
                             f"points (d, ...)")
-
-
-def _point(x: np.ndarray) -> str:
-    return f"({', '.join(f'{c:g}' for c in x)})"
 
 
 def _name(name: str) -> str:

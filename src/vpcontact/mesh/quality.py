@@ -8,36 +8,22 @@ The quality of a simplex T of dimension d is its mean ratio, from its measure |T
 1 for the equilateral triangle and the regular tetrahedron, → 0 as the element flattens (Liu and Joe,
 "Relationship between tetrahedron shape measures", BIT 34, 1994: the mean ratio is equivalent to the
 other usual measures, the radius ratio and the minimum solid angle). The size of an element is its
-longest edge (the h of ``Mesh.h``, here per element).
+longest edge (the h of ``Mesh.h``, here per element: `vpcontact.mesh.simplex.longest_edges`).
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
 
-
-def edge_lengths(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
-    """The lengths (edges, elements) of the d(d + 1)/2 edges of the simplices ``cells`` (d + 1, elements) of
-    the nodes ``points`` (d, nodes)."""
-    pairs = list(itertools.combinations(range(cells.shape[0]), 2))
-    first, second = (np.array(side) for side in zip(*pairs))
-    return np.sqrt(((points[:, cells[second]] - points[:, cells[first]]) ** 2).sum(axis=0))
-
-
-def measures(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
-    """|T| of each simplex: |det J| / d! with J = [x_1 − x_0, …, x_d − x_0]."""
-    d = points.shape[0]
-    J = points[:, cells[1:]] - points[:, cells[:1]]  # (d, d, elements): coordinate, edge, element
-    return np.abs(np.linalg.det(np.moveaxis(J, -1, 0))) / math.factorial(d)
+from .simplex import measures, squared_edge_lengths
 
 
 def mean_ratio(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
     """The quality q in [0, 1] of each simplex (see the module's docstring)."""
     d = points.shape[0]
-    squares = (edge_lengths(points, cells) ** 2).sum(axis=0)
+    squares = squared_edge_lengths(points, cells).sum(axis=0)
     volume = measures(points, cells)
     if d == 2:
         return 4.0 * math.sqrt(3.0) * volume / squares

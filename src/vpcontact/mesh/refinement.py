@@ -22,10 +22,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import CaseError, point
 from .ball import quiet_bisection
-from ..errors import CaseError
-from .core import SKFEM_MESH, Mesh, find_columns, with_parts
-from ..results.norms import Locator
+from .checks_arrays import SKFEM_MESH
+from .locate import Locator, find_columns
+from .mesh import Mesh, with_parts
+from .simplex import determinants
 
 
 def refine(mesh: Mesh, marked) -> Mesh:
@@ -92,18 +94,12 @@ def _mask(indices: np.ndarray, size: int) -> np.ndarray:
     return mask
 
 
-def signed_measures(p: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """det [x_1 − x_0, …, x_d − x_0] of each simplex of t (d + 1, m) on the nodes p (d, n): d! times its
-    signed area or volume."""
-    return np.linalg.det((p[:, t[1:]] - p[:, t[:1]]).transpose(2, 0, 1))
-
-
 def _check_not_folded(fine, p: np.ndarray, moved: np.ndarray) -> None:
     """CaseError if moving the `moved` nodes of `fine` to `p` turns one of its elements inside out or flat."""
-    before, after = signed_measures(fine.p, fine.t), signed_measures(p, fine.t)
+    before, after = determinants(fine.p, fine.t), determinants(p, fine.t)
     folded = np.flatnonzero(~(after * np.sign(before) > 0.0))
     if folded.size:
-        at = ", ".join(f"{x:.6g}" for x in p[:, fine.t[:, folded[0]]].mean(axis=1))
-        raise CaseError(f"refining the mesh turns {folded.size} element(s) inside out near ({at}) when their new "
+        raise CaseError(f"refining the mesh turns {folded.size} element(s) inside out near "
+                        f"{point(p[:, fine.t[:, folded[0]]].mean(axis=1))} when their new "
                         f"nodes are moved onto the curved boundary or interface: the elements there are too large "
                         f"for its curvature; start from a smaller mesh.h")

@@ -1,68 +1,44 @@
-"""P1 elasticity on triangles and tetrahedra in vectorized NumPy: the kernels behind assembly.py.
+"""The geometry of simplices (triangles and tetrahedra, their facets), vectorized over the simplices: the one
+place that computes it.
 
-On a simplex T with vertices x_0, …, x_d the barycentric coordinates are affine, so their gradients
-∇λ_a are constant on T: with the Jacobian J = [x_1 − x_0, …, x_d − x_0], ∇λ_a (a ≥ 1) is row a of
-J⁻¹ and ∇λ_0 = −Σ_a ∇λ_a; |T| = |det J| / d!. The displacement dof (a, c) of T is
-``nodal_dofs[c, t[a]]`` of the basis, its shape function φ_(a,c) = λ_a e_c, and
+A simplex T of dimension d has the vertices x_0, …, x_d (columns of ``points`` named by a column of ``cells``)
+and the affine map of the reference simplex, with J = [x_1 − x_0, …, x_d − x_0]:
 
-    ε(u)|_T = sym(Σ_a u_(a,·) ⊗ ∇λ_a),        (Bᵀz)_(a,c) = Σ_T |T| Σ_j z_cj^sym ∂_j λ_a,
-    K_T[(a,c), (b,e)] = |T| (λ ∂_c λ_a ∂_e λ_b + μ ∂_e λ_a ∂_c λ_b + μ δ_ce ∇λ_a·∇λ_b).
+- det J is d! times the signed measure of T (area, volume): positive when x_1 − x_0, x_2 − x_0 turn
+  counter-clockwise (2D) or x_1 − x_0, x_2 − x_0, x_3 − x_0 are right-handed (3D); |T| = |det J| / d!;
+- the barycentric coordinates are affine, (λ_1, …, λ_d) = J⁻¹(x − x_0) and λ_0 = 1 − Σ_a λ_a, so their
+  gradients are constant on T: ∇λ_a (a ≥ 1) is row a of J⁻¹ and ∇λ_0 = −Σ_a ∇λ_a.
 
-The stiffness is summed in chunks of elements into a pattern of d × d node blocks built once, so the
-memory it needs beyond the matrix itself is bounded by the chunk, not by the 144 entries of every
-tetrahedron at once.
+J⁻¹ and det J come from explicit formulas (the 2 × 2 adjugate; in 3D the cross products of J's columns),
+about ten times faster than LAPACK's batched inverse. The simplices are the last axis of every array (the
+long, contiguous one every vectorized operation runs along).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
-import weakref
-from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-
-#: Elements whose stiffness blocks are computed at once (about 40 MB of blocks per chunk in 3D).
-CHUNK = 2**15
-#: Elements whose node pairs are added to the pattern at once (about 70 MB of pairs in 3D): each
-#: addition costs the size of the pattern, so fewer, larger chunks.
-PATTERN_CHUNK = 8 * CHUNK
 
 
-@dataclass(frozen=True)
-class SimplexGeometry:
-    """The constant gradients of the P1 shape functions and the volumes of a mesh's simplices, with the
-    dofs of each element in the numbering of the displacement basis; the elements are the last axis
-    (the long, contiguous one every vectorized operation runs along)."""
+def determinants(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """det J (elements,) of the simplices ``cells`` (d + 1, elements) of the nodes ``points`` (d, nodes): d!
+    times their signed measures (see the module docstring)."""
+    return _adjugate(points, cells)[1]
 
-    gradients: np.ndarray  # (d + 1, d, elements): ∂_j λ_a on each element
-    volumes: np.ndarray  # (elements,): |T|
-    cells: np.ndarray  # (d + 1, elements): the nodes of each element
-    dofs: np.ndarray  # (d + 1, d, elements): nodal_dofs[c, cells[a]]
-    ndofs: int
 
-    @property
-    def dim(self) -> int:
-        return self.gradients.shape[1]
+def measures(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """|T| (elements,): the areas (2D) or volumes (3D) of the simplices ``cells`` (d + 1, elements)."""
+    return np.abs(determinants(points, cells)) / math.factorial(points.shape[0])
 
 
 def affine_inverse(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """J⁻¹ (d, d, elements) and det J (elements,) of J = [x_1 − x_0, …, x_d − x_0] of the simplices
-    ``cells`` (d + 1, elements) of the nodes ``points`` (d, nodes), by the explicit formulas (2 × 2
-    adjugate; in 3D the rows of J⁻¹ are the cross products of the other two columns over det J): row k
-    of J⁻¹ is ∇λ_(k+1), so (λ_1, …, λ_d) = J⁻¹(x − x_0). A degenerate element (det J = 0) gets
-    infinite or NaN entries."""
-    d = points.shape[0]
-    x = points[:, cells]  # (d, d + 1, elements)
-    J = x[:, 1:] - x[:, :1]  # J[i, k]: coordinate i of the edge x_(k+1) − x_0
+    """J⁻¹ (d, d, elements) and det J (elements,) of the simplices ``cells`` (d + 1, elements) of the nodes
+    ``points`` (d, nodes): row k of J⁻¹ is ∇λ_(k+1), so (λ_1, …, λ_d) = J⁻¹(x − x_0). A degenerate element
+    (det J = 0) gets infinite or NaN entries."""
+    rows, det = _adjugate(points, cells)
     with np.errstate(divide="ignore", invalid="ignore"):
-        if d == 2:
-            det = J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
-            rows = np.stack([np.stack([J[1, 1], -J[0, 1]]), np.stack([-J[1, 0], J[0, 0]])])
-        else:
-            a, b, c = J[:, 0], J[:, 1], J[:, 2]
-            rows = np.stack([_cross(b, c), _cross(c, a), _cross(a, b)])
-            det = (a * rows[0]).sum(axis=0)
         return rows / det, det
 
 
@@ -75,97 +51,57 @@ def barycentric_gradients(points: np.ndarray, cells: np.ndarray) -> tuple[np.nda
     return gradients, np.abs(det) / math.factorial(points.shape[0])
 
 
+def squared_edge_lengths(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """The squared lengths (edges, elements) of the d(d + 1)/2 edges of the simplices ``cells`` (d + 1,
+    elements) of the nodes ``points`` (d, nodes), edge (a, b) for the vertices a < b in lexicographic order."""
+    return np.stack([((points[:, cells[b]] - points[:, cells[a]]) ** 2).sum(axis=0)
+                     for a, b in itertools.combinations(range(cells.shape[0]), 2)])
+
+
+def edge_lengths(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """The lengths (edges, elements) of the edges of the simplices ``cells`` (as `squared_edge_lengths`)."""
+    return np.sqrt(squared_edge_lengths(points, cells))
+
+
+def longest_edges(points: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """The longest edge (elements,) of each simplex ``cells`` (k, elements) of ``points`` (d, nodes): the h_K
+    of an element, or the h_E of a facet."""
+    return edge_lengths(points, cells).max(axis=0)
+
+
+def facet_normals(points: np.ndarray, facets: np.ndarray, inner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals (d, nf) of the facets (d, nf) (edges in 2D, triangles in 3D) of the nodes ``points`` (d,
+    nodes), pointing away from the points ``inner`` (d, nf) (e.g. the centroids of their elements), and
+    their measures (nf,): lengths or areas."""
+    d = points.shape[0]
+    x = points[:, facets]  # (d, vertices, nf)
+    if d == 2:
+        edge = x[:, 1] - x[:, 0]
+        normal = np.stack([edge[1], -edge[0]])
+        measure = np.linalg.norm(normal, axis=0)
+    else:
+        normal = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0], axis=0)
+        measure = 0.5 * np.linalg.norm(normal, axis=0)
+    normal = normal / np.linalg.norm(normal, axis=0)
+    outward = np.sign(np.einsum("dn,dn->n", normal, x.mean(axis=1) - inner))
+    return normal * outward, measure
+
+
+def _adjugate(points: np.ndarray, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """det J · J⁻¹ (d, d, elements) and det J (elements,) of the simplices ``cells`` (d + 1, elements): the
+    2 × 2 adjugate; in 3D the rows of det J · J⁻¹ are the cross products of the other two columns of J."""
+    x = points[:, cells]  # (d, d + 1, elements)
+    J = x[:, 1:] - x[:, :1]  # J[i, k]: coordinate i of the edge x_(k+1) − x_0
+    if points.shape[0] == 2:
+        det = J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
+        rows = np.stack([np.stack([J[1, 1], -J[0, 1]]), np.stack([-J[1, 0], J[0, 0]])])
+    else:
+        a, b, c = J[:, 0], J[:, 1], J[:, 2]
+        rows = np.stack([_cross(b, c), _cross(c, a), _cross(a, b)])
+        det = (a * rows[0]).sum(axis=0)
+    return rows, det
+
+
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     """u × v of vectors (3, elements)."""
     return np.stack([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
-
-
-_GEOMETRIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def geometry(basis) -> SimplexGeometry:
-    """The SimplexGeometry of a P1 vector basis (scikit-fem's), computed once per basis."""
-    found = _GEOMETRIES.get(basis)
-    if found is None:
-        mesh = basis.mesh
-        cells = np.ascontiguousarray(mesh.t, dtype=np.int64)
-        d, elements = mesh.p.shape[0], cells.shape[1]
-        gradients, volumes = np.empty((d + 1, d, elements)), np.empty(elements)
-        for start in range(0, elements, CHUNK):  # chunks: the temporaries stay small
-            part = slice(start, start + CHUNK)
-            gradients[:, :, part], volumes[part] = barycentric_gradients(mesh.p, cells[:, part])
-        dofs = np.ascontiguousarray(basis.nodal_dofs[:, cells].transpose(1, 0, 2), dtype=np.int64)
-        found = _GEOMETRIES[basis] = SimplexGeometry(gradients, volumes, cells, dofs, int(basis.N))
-    return found
-
-
-def strains(g: SimplexGeometry, u: np.ndarray) -> np.ndarray:
-    """ε(u) on each element, shape (d, d, elements)."""
-    nodal = u[g.dofs]  # (d + 1, d, elements): u_c at the nodes of each element
-    gradient = nodal[0][:, None] * g.gradients[0][None]  # [c, j]: ∂_j u_c = Σ_a u_(a,c) ∂_j λ_a
-    for a in range(1, g.dim + 1):
-        gradient += nodal[a][:, None] * g.gradients[a][None]
-    return 0.5 * (gradient + gradient.transpose(1, 0, 2))
-
-
-def stress_work(g: SimplexGeometry, z: np.ndarray) -> np.ndarray:
-    """Bᵀz = ∫_Ω z : ε(v) dx for a stress z (d, d, elements) constant on each element."""
-    weighted = 0.5 * (z + z.transpose(1, 0, 2)) * g.volumes
-    forces = np.einsum("cjn,ajn->acn", weighted, g.gradients)
-    return np.bincount(g.dofs.ravel(), forces.ravel(), minlength=g.ndofs)
-
-
-def node_pattern(cells: np.ndarray, nodes: int) -> sp.csr_matrix:
-    """The pattern (sorted, no duplicates) of node pairs sharing an element of ``cells`` (d + 1,
-    elements), summed over chunks."""
-    pattern = sp.csr_matrix((nodes, nodes), dtype=np.int8)
-    for start in range(0, cells.shape[1], PATTERN_CHUNK):
-        chunk = cells[:, start:start + PATTERN_CHUNK]
-        rows, cols = np.broadcast_arrays(chunk[:, None], chunk[None, :])
-        rows, cols = rows.ravel(), cols.ravel()
-        ones = np.ones(rows.size, dtype=np.int8)
-        pattern = pattern + sp.csr_matrix((ones, (rows, cols)), shape=(nodes, nodes))
-        pattern.data[:] = 1
-    pattern.sort_indices()
-    return pattern
-
-
-def elastic_stiffness(g: SimplexGeometry, lam, mu, nodes: int, nodal_dofs: np.ndarray) -> sp.csr_matrix:
-    """The stiffness A = Σ_T K_T of Lamé parameters λ, μ (numbers, or one value per element), in the
-    dof numbering ``nodal_dofs`` (d, nodes)."""
-    d = g.dim
-    pattern = node_pattern(g.cells, nodes)
-    keys = np.repeat(np.arange(nodes, dtype=np.int64), np.diff(pattern.indptr)) * nodes + pattern.indices
-    blocks = np.zeros((pattern.nnz, d, d))
-    lam = np.broadcast_to(np.asarray(lam, dtype=float), g.volumes.shape)
-    mu = np.broadcast_to(np.asarray(mu, dtype=float), g.volumes.shape)
-    # chunks of elements in the order of their lowest node: each chunk adds to a short range of blocks
-    order = np.argsort(g.cells.min(axis=0), kind="stable")
-    shape = (d, d, d + 1, d + 1)
-    buffers = np.empty((2, *shape, min(CHUNK, order.size)))  # K and a term of it, reused by every chunk
-    for start in range(0, order.size, CHUNK):  # arrays (…, elements): the long axis last is the fast one
-        part = order[start:start + CHUNK]
-        K, term = buffers[:, ..., :part.size]
-        G = np.ascontiguousarray(g.gradients[:, :, part].transpose(1, 0, 2))  # (c, a, elements): ∂_c λ_a
-        lam_G, mu_G = lam[part] * g.volumes[part] * G, mu[part] * g.volumes[part] * G
-        np.multiply(lam_G[:, None, :, None], G[None, :, None, :], out=K)  # [c, e, a, b]: λ|T| ∂_c λ_a ∂_e λ_b
-        K += np.multiply(mu_G[None, :, :, None], G[:, None, None, :], out=term)  # μ|T| ∂_e λ_a ∂_c λ_b
-        dot = np.einsum("ian,ibn->abn", mu_G, G)
-        for c in range(d):
-            K[c, c] += dot  # μ|T| δ_ce ∇λ_a·∇λ_b
-        cells = g.cells[:, part]
-        low, high = pattern.indptr[cells.min()], pattern.indptr[cells.max() + 1]  # the node rows it adds to
-        where = np.searchsorted(keys[low:high], (cells[:, None] * nodes + cells[None, :]).ravel())  # [a, b, elements]
-        first, last = where.min(), where.max() + 1
-        where -= first
-        for c, e in np.ndindex(d, d):
-            blocks[low + first:low + last, c, e] += np.bincount(where, K[c, e].ravel(), minlength=last - first)
-    A = sp.bsr_matrix((blocks, pattern.indices, pattern.indptr),
-                      shape=(d * nodes, d * nodes)).tocsr()
-    A.eliminate_zeros()  # as scikit-fem did: entries that cancel exactly (e.g. on axis-aligned elements)
-    interleaved = np.arange(d * nodes).reshape(nodes, d).T
-    if not np.array_equal(nodal_dofs, interleaved):  # A is numbered d·node + c: renumber it as the basis
-        position = np.empty(d * nodes, dtype=np.int64)
-        position[nodal_dofs.ravel()] = interleaved.ravel()
-        A = A[position][:, position]
-    return A

@@ -16,18 +16,19 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import Basis
 
+from .. import mesh as meshes
 from ..errors import CaseError, brief
 from ..expressions.parse import parse_expression
 from ..fem.assembly import Density, LoadVector, displacement_basis, element_strain, stiffness
 from ..fem.contact_surface import ContactSurface, contact_surface, empty_surface
-from ..fem.space import CELLS, component, coordinates
+from ..fem.space import component, coordinates
 from ..laws.compliance.positive_part import PositivePart
 from ..laws.contact import ContactLaw
 from ..laws.stiffness.constant import ConstantStiffness
 from ..laws.elasticity import Elasticity
 from ..laws.materials import Materials, body_materials
 from ..laws.python_laws import api_law, api_viscoplastic
-from ..mesh import core as meshes
+from ..mesh.cells import SIMPLICES
 from ..progress import SILENT, Progress
 from ..solvers.factorization import check_installed
 from .checks import check_contact_can_move, check_dimension, check_first_history, check_rigid_motions
@@ -192,7 +193,7 @@ def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tra
     if not np.all(np.isfinite(A.data)):
         moduli = ", ".join(f"{entry.key}.E = {brief(entry.E)}" for entry in options.materials)
         raise CaseError(f"{moduli}: the stiffness matrix is not finite in float64 (the moduli or the sizes of the "
-                        f"{CELLS[dim][2]} are out of its range); state them in other units")
+                        f"{SIMPLICES[dim].plural} are out of its range); state them in other units")
 
     fixed = np.zeros(basis.N, dtype=bool)
     for item in options.boundary.dirichlet:
@@ -248,7 +249,7 @@ def mesh_words(m: MeshSource) -> str:
 def _mesh_size(mesh: meshes.Mesh) -> str:
     """The sizes of a mesh, in words: nodes, elements, dofs."""
     nodes, elements = mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
-    return f"{nodes:,} nodes, {elements:,} {CELLS[mesh.dim][2]}, {mesh.dim * nodes:,} dofs"
+    return f"{nodes:,} nodes, {elements:,} {SIMPLICES[mesh.dim].plural}, {mesh.dim * nodes:,} dofs"
 
 
 def make_mesh(m: MeshSource) -> meshes.Mesh:

@@ -10,14 +10,14 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import Basis
 
-from ..errors import CaseError, brief, quoted
+from ..errors import CaseError, brief, point, quoted
 from ..expressions.parse import parse_expression
 from ..fem.assembly import stress_force
 from ..fem.rigid_modes import RigidModes
 from ..fem.space import component, coordinates
 from ..fem.contact_surface import ContactSurface
 from ..laws.python_laws import check_returned, tried
-from ..mesh import core as meshes
+from ..mesh.mesh import Mesh
 from .initial import InitialState
 from .options import ProblemOptions
 
@@ -68,7 +68,7 @@ def check_dimension(options: ProblemOptions, dim: int) -> None:
                             f"are {', '.join(names)}")
 
 
-def check_contact_can_move(options: ProblemOptions, mesh: meshes.Mesh, basis: Basis, free: np.ndarray,
+def check_contact_can_move(options: ProblemOptions, mesh: Mesh, basis: Basis, free: np.ndarray,
                            surface: ContactSurface):
     """Refuse a contact part on which the Dirichlet conditions leave no node free to move along its
     normal: its contact force would be 0 (or fixed) whatever the load. (A few clamped nodes, such as
@@ -94,7 +94,7 @@ def check_contact_can_move(options: ProblemOptions, mesh: meshes.Mesh, basis: Ba
                     f"from boundary.dirichlet or fix only components along the contact surface")
 
 
-def check_rigid_motions(mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
+def check_rigid_motions(mesh: Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
     """Refuse a body, or a separate part of the mesh, whose rigid motions are held neither by
     Dirichlet conditions nor by contact: the motions of each connected part (the d translations and
     the rotations about its centroid scaled by its size, :mod:`vpcontact.fem.rigid_modes`) must stay
@@ -135,19 +135,19 @@ def _rigid_motion(combination: np.ndarray, centroid: np.ndarray, size: float) ->
     combination = combination * np.sign(combination[np.argmax(np.abs(combination))])
     translation, rotation = combination[:d], combination[d:]
     if np.linalg.norm(rotation) < 1e-9:
-        return f"a translation along {_point(translation / np.linalg.norm(translation), '.3g')}"
+        return f"a translation along {_point(translation / np.linalg.norm(translation), 3)}"
     if d == 2:  # u = t + ω e_z × (x − c)/size vanishes at x = c + size (−t_y, t_x)/ω
         center = centroid + size * np.array([-translation[1], translation[0]]) / rotation[0]
         return f"a rotation about {_point(np.round(center / size, 9) * size)}"
     axis = rotation[[1, 2, 0]]  # rotations in the planes yz, zx, xy: the axis components x, y, z
     point = centroid + size * np.cross(axis, translation) / (axis @ axis)
     return (f"a rotation about the axis through {_point(np.round(point / size, 9) * size)} along "
-            f"{_point(axis / np.linalg.norm(axis), '.3g')}")
+            f"{_point(axis / np.linalg.norm(axis), 3)}")
 
 
-def _point(x: np.ndarray, style: str = ".6g") -> str:
-    """(x, y[, z]) with the given format, without signed zeros."""
-    return f"({', '.join(format(c + 0.0, style) for c in np.round(x, 12))})"
+def _point(x: np.ndarray, digits: int = 6) -> str:
+    """The point x as a message shows it (:func:`~vpcontact.errors.point`), without its round-off below 1e-12."""
+    return point(np.round(x, 12), digits)
 
 
 def check_first_history(basis: Basis, initial: InitialState, written, strain0: np.ndarray, z0: np.ndarray,

@@ -17,7 +17,7 @@ import numpy as np
 from ..fem.contact_surface import ContactSurface
 from ..laws.elasticity import Elasticity
 from ..laws.materials import Materials
-from ..mesh.core import Mesh
+from ..mesh.mesh import Mesh
 from .time_grid import TimeGrid
 
 

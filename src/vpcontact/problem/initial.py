@@ -28,13 +28,14 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import Basis
 
-from ..errors import CaseError, brief, quoted
+from ..errors import CaseError, brief, point, quoted
 from ..expressions.parse import values_at
 from ..fem.contact_surface import ContactSurface
 from ..inputs import check_regular_file
 from ..laws.contact import ContactLaw
-from ..mesh.core import Mesh
-from ..fem.space import CELLS, component, coordinates
+from ..mesh.mesh import Mesh
+from ..fem.space import component, coordinates
+from ..mesh.cells import SIMPLICES
 from .options import ProblemOptions
 from .time_grid import check_time_span
 
@@ -200,10 +201,6 @@ def _check_symmetric(sigma: np.ndarray) -> None:
 
 
 # --- the checks --------------------------------------------------------------------------------------
-def _point(x: np.ndarray) -> str:
-    return f"({', '.join(f'{c + 0.0:.6g}' for c in x)})"
-
-
 def _check_finite(state: InitialState, mesh: Mesh, surface: ContactSurface) -> None:
     for key, values, points, where in (
             ("displacement", state.displacement.T, mesh.mesh.p, "node"),
@@ -213,7 +210,7 @@ def _check_finite(state: InitialState, mesh: Mesh, surface: ContactSurface) -> N
         if wrong.any():
             _, index = np.argwhere(wrong)[0]
             raise CaseError(f"{state.names[key]} is not finite ({values[:, index][wrong[:, index]][0]}) at the {where} "
-                            f"{_point(points[:, index])} ({int(wrong.any(axis=0).sum())} of {values.shape[1]}): "
+                            f"{point(points[:, index])} ({int(wrong.any(axis=0).sum())} of {values.shape[1]}): "
                             f"expected finite values")
 
 
@@ -231,7 +228,7 @@ def _check_dirichlet(state: InitialState, options: ProblemOptions, mesh: Mesh) -
         if np.any(size > rounding):
             node, c = np.unravel_index(np.argmax(size), size.shape)
             raise CaseError(f"{state.names['displacement']}: u_{names[c]} = {values[node, c]:g} at the node "
-                            f"{_point(p[:, nodes[node]])} of the Dirichlet part '{item.part}' (boundary.dirichlet[{i}], "
+                            f"{point(p[:, nodes[node]])} of the Dirichlet part '{item.part}' (boundary.dirichlet[{i}], "
                             f"{int(np.sum(size.max(axis=1) > rounding))} of {nodes.size} nodes): u_0 must be 0 there "
                             f"(u_0 in V)")
         u[np.ix_(nodes, columns)] = 0.0
@@ -249,7 +246,7 @@ def _check_admissible(state: InitialState, options: ProblemOptions, mesh: Mesh, 
     if wrong.any():
         node = int(np.argmax(excess))
         raise CaseError(f"{state.names['displacement']} penetrates the foundation beyond the layer: u_0.nu - gap = "
-                        f"{d0[node]:.6g} > g = {g[node]:.6g} at the contact node {_point(surface.coordinates[:, node])} "
+                        f"{d0[node]:.6g} > g = {g[node]:.6g} at the contact node {point(surface.coordinates[:, node])} "
                         f"({int(wrong.sum())} of {surface.size} nodes): u_0 must be admissible, u_0.nu - gap <= g on "
                         f"the contact part")
 
@@ -260,7 +257,7 @@ def _check_history(state: InitialState, surface: ContactSurface) -> None:
     if wrong.any():
         node = int(np.argmin(state.xi))
         raise CaseError(f"{state.names['xi']} = {state.xi[node]:g} at the contact node "
-                        f"{_point(surface.coordinates[:, node])} ({int(wrong.sum())} of {surface.size} nodes): the "
+                        f"{point(surface.coordinates[:, node])} ({int(wrong.sum())} of {surface.size} nodes): the "
                         f"history of penetration xi_0 must be >= 0")
 
 
@@ -282,7 +279,7 @@ def read_run_state(options: ProblemOptions, mesh: Mesh, surface: ContactSurface)
     if not os.path.lexists(path):
         raise CaseError(f"{where}: '{path}' not found: the run kept no fields (output.field_steps) or has not ended")
     check_regular_file(path, f"{where}: the file", MAX_SOLUTION_BYTES)
-    cells = CELLS[mesh.dim][2]
+    cells = SIMPLICES[mesh.dim].plural
     arrays = _read_arrays(where, path, cells, mesh.dim)
     _check_same_mesh(where, arrays["points"], arrays[cells], mesh, cells)
     _check_shapes(where, path, arrays, mesh, cells)

@@ -12,7 +12,7 @@ from ..expressions.parse import parse_expression
 from ..fem.assembly import Density, ExpressionDensity
 from ..fem.space import coordinates
 from ..laws.python_laws import accepts, parameters_in_words
-from ..mesh import core as meshes
+from ..mesh.mesh import Mesh
 from .options import ProblemOptions
 
 
@@ -23,7 +23,7 @@ def expression_density(values, where: str) -> ExpressionDensity:
                                for i, v in enumerate(values)))
 
 
-def traction_terms(options: ProblemOptions, mesh: meshes.Mesh,
+def traction_terms(options: ProblemOptions, mesh: Mesh,
                    tractions: Mapping | None) -> list[tuple[str, object, Density]]:
     """(name, part, density) of the case's tractions, those of ``tractions`` replacing the case's on their part."""
     terms = [(f"boundary.traction[{i}].value", t.part, expression_density(t.value, f"boundary.traction[{i}].value"))

@@ -13,31 +13,20 @@ element centroids (`transfer`). The norms are exact for these fields: ε(v) of a
 P0 stress are constant on each element, so ‖·‖² is Σ_T :math:`|T|` · (the tensor's Frobenius norm)²; a
 P1 field's square is integrated exactly by its element mass matrix.
 
-Point location in `transfer` is vectorized: a k-d tree of the source element centroids gives
-candidate elements, barycentric coordinates decide which contains a point. A point in no
-source element (a finer mesh's nodes near a curved boundary lie outside a coarser mesh's
-inscribed polygon or polyhedron) takes the nearest source element (Euclidean distance from the
-point to the simplex), and the P1 field is extrapolated linearly from it (its barycentric
-coordinates, some negative).
+`transfer` locates the target points in the source elements with `vpcontact.mesh.locate.Locator`: a point in
+no source element (a finer mesh's nodes near a curved boundary lie outside a coarser mesh's inscribed
+polygon or polyhedron) takes the nearest source element, and the P1 field is extrapolated linearly from it
+(its barycentric coordinates, some negative).
 """
 
 from __future__ import annotations
 
-import itertools
-import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
-from ..mesh.simplex import affine_inverse
-
-_INSIDE = 1e-12
-"""A point is in an element when its barycentric coordinates are all ≥ −_INSIDE."""
-_CANDIDATES = 8
-"""Nearest element centroids tried first for each point."""
-_CHUNK = 100_000
-"""Points located at once (bounds the (points, candidates, ...) work arrays)."""
+from ..mesh.locate import Locator
+from ..mesh.simplex import affine_inverse, measures
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,128 +55,6 @@ class Snapshot:
         for name, shape in expected.items():
             if np.shape(getattr(self, name)) != shape:
                 raise ValueError(f"Snapshot.{name} has shape {np.shape(getattr(self, name))}, expected {shape}")
-
-
-def _affine(points: np.ndarray, elements: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per element with vertices v0, …, vd: v0 (m, d), the inverse (m, d, d) of J = [v1 − v0, …, vd − v0]
-    (so the barycentric coordinates (λ_1, …, λ_d) of x are J⁻¹(x − v0)) and det J (m,), whose
-    absolute value is d! times the element's measure."""
-    inverse, det = affine_inverse(points, elements)  # explicit formulas: ~10 times LAPACK's batched inv
-    return points[:, elements[0]].T, np.ascontiguousarray(inverse.transpose(2, 0, 1)), det
-
-
-def _measures(points: np.ndarray, elements: np.ndarray) -> np.ndarray:
-    """The elements' areas (2D) or volumes (3D)."""
-    return np.abs(_affine(points, elements)[2]) / math.factorial(points.shape[0])
-
-
-def _distance_to_simplices(x: np.ndarray, vertices: np.ndarray) -> np.ndarray:
-    """Euclidean distance (q, k) from points x (q, d) to simplices with ``vertices`` (q, k, d + 1, d):
-    the least distance to the orthogonal projections of x on the affine hulls of the simplex's faces
-    (vertices, edges, …) that fall inside their face. Exact in any dimension."""
-    best = np.full(vertices.shape[:2], np.inf)
-    corners = vertices.shape[2]
-    point = x[:, None, :]
-    for size in range(1, corners + 1):
-        for face in itertools.combinations(range(corners), size):
-            base = vertices[:, :, face[0], :]
-            if size == 1:
-                best = np.minimum(best, np.linalg.norm(point - base, axis=-1))
-                continue
-            E = vertices[:, :, face[1:], :] - base[:, :, None, :]  # (q, k, s − 1, d)
-            gram = np.einsum("qkid,qkjd->qkij", E, E)
-            mu = np.linalg.solve(gram, np.einsum("qkid,qkd->qki", E, point - base)[..., None])[..., 0]
-            inside = (mu >= 0.0).all(axis=-1) & (mu.sum(axis=-1) <= 1.0)
-            foot = base + np.einsum("qki,qkid->qkd", mu, E)
-            best = np.where(inside, np.minimum(best, np.linalg.norm(point - foot, axis=-1)), best)
-    return best
-
-
-class Locator:
-    """Finds, for query points, a source element containing each (or the nearest one) and the
-    barycentric coordinates of the point in it."""
-
-    def __init__(self, points: np.ndarray, elements: np.ndarray):
-        self.points = np.asarray(points, dtype=float)
-        self.elements = np.asarray(elements, dtype=np.int64)
-        origin, inverse, _ = _affine(self.points, self.elements)
-        self.origin = np.ascontiguousarray(origin.T)  # (d, m)
-        self.inverse = np.ascontiguousarray(inverse.transpose(1, 2, 0))  # (d, d, m)
-        centroids = self.points[:, self.elements].mean(axis=1).T
-        self.tree = cKDTree(centroids)
-        vertices = self.points[:, self.elements].transpose(2, 1, 0)  # (m, d + 1, d)
-        # each element's reach: the largest distance from its centroid to one of its vertices; the
-        # elements grouped by reach within a factor 2, each group with its own tree (see `_nearest`)
-        reach = np.linalg.norm(vertices - centroids[:, None, :], axis=2).max(axis=1)
-        group = np.floor(np.log2(np.maximum(reach, np.finfo(float).tiny))).astype(np.int64)
-        self.groups = [(members, cKDTree(centroids[members]), float(reach[members].max()))
-                       for members in (np.flatnonzero(group == g) for g in np.unique(group))]
-
-    def barycentric(self, x: np.ndarray, elements: np.ndarray) -> np.ndarray:
-        """Barycentric coordinates ``(d + 1, *elements.shape)`` of points x (q, d) in elements (q,) or
-        (q, k), in the order of the elements' vertices (rows of `elements`)."""
-        d = x.shape[1]
-        shape = (-1,) + (1,) * (elements.ndim - 1)
-        offset = [x[:, c].reshape(shape) - self.origin[c, elements] for c in range(d)]
-        inverse = self.inverse[:, :, elements]
-        rest = [sum(inverse[i, c] * offset[c] for c in range(d)) for i in range(d)]
-        return np.stack([1.0 - sum(rest), *rest])
-
-    def worst(self, x: np.ndarray, elements: np.ndarray) -> np.ndarray:
-        """The smallest barycentric coordinate of each point x (q, d) in elements (q,) or (q, k)."""
-        return self.barycentric(x, elements).min(axis=0)
-
-    def distance(self, x: np.ndarray, elements: np.ndarray) -> np.ndarray:
-        """Euclidean distance (q, k) from x (q, d) to elements (q, k) (0 for points inside)."""
-        vertices = self.points[:, self.elements[:, elements]].transpose(2, 3, 1, 0)  # (q, k, d + 1, d)
-        return _distance_to_simplices(x, vertices)
-
-    def locate(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Element (q,) and barycentric coordinates (q, d + 1) for points x (q, d), in chunks."""
-        element = np.concatenate([self._locate(x[s:s + _CHUNK]) for s in range(0, x.shape[0], _CHUNK)]
-                                 or [np.zeros(0, dtype=np.int64)])
-        return element, self.barycentric(x, element).T
-
-    def _locate(self, x: np.ndarray) -> np.ndarray:
-        """`locate`'s element for one chunk: the element of the nearest centroid if it contains the
-        point; else, of the elements of the _CANDIDATES nearest centroids, the one containing it
-        (where its smallest barycentric coordinate is largest); else `_nearest`."""
-        m = self.elements.shape[1]
-        radius, element = self.tree.query(x)
-        missed = np.flatnonzero(self.worst(x, element) < -_INSIDE)
-        candidates = self.tree.query(x[missed], np.arange(1, min(_CANDIDATES, m) + 1))[1]
-        worst = self.worst(x[missed], candidates)
-        best = worst.argmax(axis=1)
-        element[missed] = candidates[np.arange(missed.size), best]
-        missed = missed[worst[np.arange(missed.size), best] < -_INSIDE]
-        element[missed] = self._nearest(x[missed], radius[missed])
-        return element
-
-    def _nearest(self, x: np.ndarray, radius: np.ndarray) -> np.ndarray:
-        """For points x (q, d) whose nearest element centroid is at distance `radius` (q,): an
-        element containing the point if any (largest smallest barycentric coordinate), else the
-        element nearest to it. Both are at most `radius` away (as is the element of the nearest
-        centroid), so an element of reach r among them has its centroid within radius + r: the
-        candidates are, in each group of elements, those with a centroid within radius + the group's
-        largest reach (on a graded mesh the small elements' groups search small balls)."""
-        q = x.shape[0]
-        found = []
-        for members, tree, reach in self.groups:
-            m = members.size
-            bound = (radius + reach) * (1.0 + 1e-12)
-            k = min(4 * _CANDIDATES, m)
-            while True:
-                gap, nearest = tree.query(x, np.arange(1, k + 1))  # always (q, k)
-                if k == m or np.all(gap[:, -1] > bound):
-                    break
-                k = min(2 * k, m)
-            found.append(np.where(gap <= bound[:, None], members[nearest], -1))
-        candidates = np.concatenate(found, axis=1)
-        candidates = np.where(candidates < 0, candidates.max(axis=1, keepdims=True), candidates)  # a real one
-        worst = self.worst(x, candidates)
-        # inside candidates rank by −1 − worst (< 0), the others by their distance (≥ 0)
-        key = np.where(worst >= -_INSIDE, -1.0 - worst, self.distance(x, candidates))
-        return candidates[np.arange(q), key.argmin(axis=1)]
 
 
 def transfer(source: Snapshot, target_points, target_elements) -> Snapshot:
@@ -226,13 +93,13 @@ def _strains(points, elements, *displacements) -> tuple[list[np.ndarray], np.nda
     points = np.asarray(points, dtype=float)
     elements = np.asarray(elements, dtype=np.int64)
     d = points.shape[0]
-    _, inverse, det = _affine(points, elements)
+    inverse = affine_inverse(points, elements)[0].transpose(2, 0, 1)  # (m, d, d)
     strains = []
     for displacement in displacements:
         u = np.asarray(displacement, dtype=float)[elements]  # (d + 1, m, d)
         gradient = sum((u[k + 1] - u[0])[:, :, None] * inverse[:, k, None, :] for k in range(d))  # ∂u_i/∂x_j
         strains.append(0.5 * (gradient + gradient.transpose(0, 2, 1)))
-    return strains, np.abs(det) / math.factorial(d)
+    return strains, measures(points, elements)
 
 
 def _energies(strain: np.ndarray, measure: np.ndarray, lame) -> np.ndarray:
@@ -260,17 +127,10 @@ def energy_norm(points, elements, displacement, lame) -> float:
     return float(np.sqrt(element_energies(points, elements, displacement, lame).sum()))
 
 
-def containing_elements(points, elements, x) -> np.ndarray:
-    """For points x (d, q): the element (columns of ``elements``) of the mesh that contains each (the
-    nearest one for a point outside the mesh), as :func:`transfer` locates them."""
-    locator = Locator(np.asarray(points, dtype=float), np.asarray(elements, dtype=np.int64))
-    return locator.locate(np.asarray(x, dtype=float).T)[0]
-
-
 def stress_norm(points, elements, stress) -> float:
     """‖σ‖_{L²(Ω_h)} = (Σ_T :math:`|T|` σ_T : σ_T)^½ for the P0 stress `stress` (nelements, d, d) on the mesh
     (points (d, nnodes), elements (d + 1, nelements)); σ : σ = σ_ij σ_ij."""
-    measure = _measures(np.asarray(points, dtype=float), np.asarray(elements, dtype=np.int64))
+    measure = measures(np.asarray(points, dtype=float), np.asarray(elements, dtype=np.int64))
     return float(np.sqrt(_squares(measure, np.asarray(stress, dtype=float))))
 
 
@@ -279,7 +139,7 @@ def displacement_norm(points, elements, displacement) -> float:
     (points (d, nnodes), elements (d + 1, nelements)); exact (``_mean_squares``)."""
     points = np.asarray(points, dtype=float)
     elements = np.asarray(elements, dtype=np.int64)
-    return float(np.sqrt(np.sum(_measures(points, elements) * _mean_squares(elements, displacement))))
+    return float(np.sqrt(np.sum(measures(points, elements) * _mean_squares(elements, displacement))))
 
 
 def _mean_squares(elements: np.ndarray, displacement) -> np.ndarray:

@@ -42,6 +42,7 @@ from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from ..laws.elasticity import von_mises
 from ..estimate.indicators import Level
 from ..problem.build import Problem, checked_problem
+from ..errors import point
 from ..progress import SILENT, Progress, StepReport, reporting
 from ..estimate.estimators import ESTIMATORS, EVERY_LEVEL
 from ..results.output_options import OutputOptions
@@ -502,10 +503,10 @@ class TimeLoop:
         law, i, value, argument, at = violation
         surface = self.problem.surface
         names = ", ".join(coordinates(surface.coordinates.shape[0]))
-        where = ", ".join(f"{c:.6g}" for c in surface.coordinates[:, i])
         key = "contact.stiffness" if law.startswith("K") else "contact.p"
-        return (f"the contact law {law} is {value:.6g} at contact node {i} ({names}) = ({where}), where {argument} = "
-                f"{at:.6g}; it must be a finite number >= 0 (a layer cannot pull): check {key} at this {argument}")
+        return (f"the contact law {law} is {value:.6g} at contact node {i} ({names}) = "
+                f"{point(surface.coordinates[:, i])}, where {argument} = {at:.6g}; it must be a finite number >= 0 (a "
+                f"layer cannot pull): check {key} at this {argument}")
 
     def _fields(self, u_free: np.ndarray, strain: np.ndarray, sigma: np.ndarray, z: np.ndarray | None) -> Fields:
         """The Fields of a level from its displacement at the free dofs, ε, σ and z (elements last)."""
