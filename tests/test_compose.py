@@ -19,7 +19,8 @@ REPO = pathlib.Path(__file__).resolve().parents[1]
 SOURCE = REPO / "src" / "vpcontact"
 #: The modules after the problem in the flow case -> problem -> time loop -> result -> writers.
 DOWNSTREAM = ("timeloop/loop", "results/result", "io/writers", "io/checkpoint", "estimate/adapt", "estimate/indicators",
-              "estimate/residual", "estimate/recovery", "results/plots", "results/norms")
+              "estimate/residual", "estimate/recovery", "results/plots/contact", "results/plots/body",
+              "results/plots/history", "results/norms")
 
 
 def composed(h=0.1, **changes):

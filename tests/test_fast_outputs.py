@@ -14,7 +14,7 @@ import vpcontact
 from conftest import half_disc_case
 from test_contact_parts import LAYERS, split_case, two_parts_form
 from vpcontact.laws.contact import STATUS_NAMES
-from vpcontact.results.result import CONTACT_ARRAYS
+from vpcontact.results.columns import CONTACT_ARRAYS
 from vpcontact.io.vtu import Grid, write_vtu
 from vpcontact.io.writers import write_run
 

@@ -11,7 +11,7 @@ import tomli_w
 
 import vpcontact
 from vpcontact.problem.time_grid import TimeGrid
-from vpcontact.results.result import memory_needed
+from vpcontact.results.footprint import memory_needed
 from vpcontact.memory import available_memory
 from conftest import assert_refused, rectangle_case, run_cli, snapshot_tree
 

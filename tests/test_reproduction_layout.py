@@ -10,7 +10,8 @@ import pytest
 
 import vpcontact
 from conftest import half_disc_case
-from vpcontact.results.result import CONTACT_ARRAYS, step_ends
+from vpcontact.results.columns import CONTACT_ARRAYS
+from vpcontact.results.steps import step_ends
 from vpcontact.io.run_reader import read_contact, read_summary, snapshots_at
 
 PACKAGE = Path(vpcontact.__file__).parent

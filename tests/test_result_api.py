@@ -17,7 +17,8 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 import vpcontact
 from vpcontact.results import plots
 from vpcontact.laws.contact import STATUS_NAMES
-from vpcontact.results.result import INTEGER_COLUMNS, REPR_MESSAGE
+from vpcontact.results.columns import INTEGER_COLUMNS
+from vpcontact.results.result import REPR_MESSAGE
 from conftest import block_3d_case, half_disc_case, snapshot_tree
 
 
@@ -376,7 +377,7 @@ def test_write_refuses_what_stands_in_the_way_before_writing(run_2d, tmp_path, m
 
 # --- imports ---------------------------------------------------------------------------------------
 def test_the_modules_of_the_tables_figures_and_grids_load_pandas_matplotlib_pyvista_only_when_used():
-    code = ("import sys, vpcontact.results.tables, vpcontact.results.result_plots, vpcontact.io.pyvista_grid\n"
+    code = ("import sys, vpcontact.results.tables, vpcontact.results.result_plots, vpcontact.results.pyvista_grid\n"
             "print(sorted({'pandas', 'pyvista', 'matplotlib'} & set(sys.modules)))")
     process = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert process.returncode == 0, process.stderr

@@ -19,7 +19,7 @@ import vpcontact.timeloop.loop
 from vpcontact.io import directory
 from vpcontact.drivers import rundir
 from vpcontact.drivers.cli import main
-from vpcontact.results.result import INTEGER_COLUMNS
+from vpcontact.results.columns import INTEGER_COLUMNS
 from vpcontact.solvers import StepSolution
 from conftest import half_disc_case
 

@@ -43,7 +43,7 @@ from conftest import block_3d_case, half_disc_case, run_cli
 from test_3d_runs import ball_case
 from test_contact_parts import LAYERS, split_case, two_parts_form
 from vpcontact.laws.contact import STATUS_NAMES
-from vpcontact.results.result import CONTACT_ARRAYS
+from vpcontact.results.columns import CONTACT_ARRAYS
 from vpcontact.io.vtu import Grid as VtuGrid, write_vtu
 
 #: VTK's cell types of the body and of the contact part, by dimension.

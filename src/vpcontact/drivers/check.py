@@ -21,7 +21,8 @@ from ..case.schema import Case, _material_keys
 from ..memory import available_memory
 from ..mesh.quality import edge_lengths, mean_ratio, smallest_angles
 from ..problem.build import build_problem
-from ..results.result import check_memory, field_step_numbers, memory_needed
+from ..results.footprint import check_memory, memory_needed
+from ..results.steps import field_step_numbers
 from ..solvers import augmentation_parameter
 from ..solvers.choice import check_iterative_memory, chosen_method, iterative_memory
 from ..solvers.condensed import check_condensed_memory, condensed_memory
@@ -62,7 +63,7 @@ class Region:
 class CaseCheck:
     """What a run of the case would be (see the module's docstring). Sizes are counts; ``quality_*`` the mean
     ratio of :mod:`vpcontact.mesh.quality`; ``h_*`` the smallest and largest longest edge of an element;
-    ``memory_bytes``: the outputs kept until written, by part (:func:`~vpcontact.results.result.memory_needed`:
+    ``memory_bytes``: the outputs kept until written, by part (:func:`~vpcontact.results.footprint.memory_needed`:
     "history rows", "contact rows", "fields", "writing"), and the step method's own algebra ("solver": the
     condensed method's dense algebra or the iterative method's peak; None for the full method, not
     estimated); ``time_seconds``: "build" (mesh, assembly, checks) measured here, "solver setup", "time loop" and "total" estimated

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import CaseError
-from ..results.result import CONTACT_ARRAYS, Fields, Result
+from ..results.columns import CONTACT_ARRAYS
+from ..results.result import Fields, Result
 
 
 @dataclass(frozen=True, eq=False)

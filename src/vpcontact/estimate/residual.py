@@ -38,7 +38,7 @@ import numpy as np
 from skfem import Basis, ElementTetP1, ElementTriP1, FacetBasis, MeshTet1
 
 from .indicators import Indicators, Level
-from ..results.result import ESTIMATE_TERMS
+from ..results.columns import ESTIMATE_TERMS
 from ..fem.space import component, coordinates
 
 #: The terms of the estimate, in the order of the outputs.

@@ -48,7 +48,8 @@ import numpy as np
 from . import directory
 from ..case.schema import _brief
 from ..errors import CaseError
-from ..results.result import CONTACT_ARRAYS, FIELD_NAMES, INTEGER_COLUMNS, Fields
+from ..results.columns import CONTACT_ARRAYS, INTEGER_COLUMNS
+from ..results.result import FIELD_NAMES, Fields
 from ..solvers import StepSolution
 from ..timeloop.loop import COUNTERS, LoopState, TimeLoop, Trend
 from .writers import OUTPUTS, matching, remove_files, replacing, versions

@@ -2,7 +2,7 @@
 its tables and its solution arrays, parsed in this one place for the studies, resume
 (:mod:`vpcontact.drivers.rundir`) and the figures of the reproduction.
 
-Which rows of contact.csv are the steps t_n is the rule of :func:`vpcontact.results.result.step_ends`, the
+Which rows of contact.csv are the steps t_n is the rule of :func:`vpcontact.results.steps.step_ends`, the
 one a run in memory follows too. A file that is missing or damaged reads as nothing (None, an empty
 table, no snapshots): the callers decide whether that is an error.
 """
@@ -21,7 +21,8 @@ import numpy as np
 
 from ..case.schema import Case, load_case
 from ..laws.contact import STATUS_NAMES
-from ..results.result import CONTACT_ARRAYS, step_ends
+from ..results.columns import CONTACT_ARRAYS
+from ..results.steps import step_ends
 from ..fem.space import CELLS, coordinates
 
 if TYPE_CHECKING:
@@ -58,7 +59,7 @@ def read_contact(folder: str | os.PathLike, step: int | None = None) -> dict[str
     """The contact.csv rows of the run in ``folder`` at t_n of step n = ``step`` (default: the last step
     reached, summary.json's "steps"), one array per contact node and column: ``node`` (mesh index),
     ``coordinates`` and ``normals`` (d, m), ``weight``, the per-node arrays of
-    :data:`vpcontact.results.result.CONTACT_ARRAYS` (``status`` as its index in STATUS_NAMES) and ``t``.
+    :data:`vpcontact.results.columns.CONTACT_ARRAYS` (``status`` as its index in STATUS_NAMES) and ``t``.
     KeyError when the step was not reached."""
     folder = Path(folder)
     completed = int((read_summary(folder) or {}).get("steps", 0))

@@ -28,7 +28,8 @@ import numpy as np
 CELL_TYPES = {"line": 3, "triangle": 5, "tetra": 10}
 #: VTK's name of each NumPy type written.
 VTK_TYPES = {np.dtype("<f8"): "Float64", np.dtype("<i8"): "Int64", np.dtype("<i4"): "Int32", np.dtype("u1"): "UInt8"}
-#: The names of the components of a 3 × 3 tensor, written row by row (``tensors_in_space``).
+#: The names of the components of a 3 × 3 tensor, written row by row
+#: (:func:`vpcontact.results.frames.tensors_in_space`).
 TENSOR_COMPONENTS = ("XX", "XY", "XZ", "YX", "YY", "YZ", "ZX", "ZY", "ZZ")
 
 
@@ -82,19 +83,3 @@ def _data_array(name: str, values: np.ndarray) -> str:
     encoded = base64.b64encode(np.uint64(values.nbytes).tobytes() + values.tobytes()).decode("ascii")
     return (f'<DataArray type="{VTK_TYPES[values.dtype]}" Name={quoteattr(name)}{components} format="binary">'
             f"{encoded}</DataArray>")
-
-
-def in_space(vectors: np.ndarray) -> np.ndarray:
-    """Vectors (n, d) as the 3D vectors (n, 3) of a VTU file (z = 0 in 2D)."""
-    return np.column_stack([vectors, np.zeros((vectors.shape[0], 3 - vectors.shape[1]))])
-
-
-def tensors_in_space(tensors: np.ndarray, t33: np.ndarray | None = None) -> np.ndarray:
-    """Tensors (n, d, d) as the 3 × 3 tensors (n, 9) of a VTU file; in 2D the out-of-plane entry is
-    ``t33`` (σ33 of the plane reduction), or 0."""
-    n, d = tensors.shape[:2]
-    full = np.zeros((n, 3, 3))
-    full[:, :d, :d] = tensors
-    if t33 is not None:
-        full[:, 2, 2] = t33
-    return full.reshape(n, 9)

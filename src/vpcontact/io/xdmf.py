@@ -11,7 +11,7 @@ For each of the body and the contact part (with contact), two files in ``fields/
 VTK's ``vtkXdmfReader`` (ParaView's "XDMF Reader"; the tests read every series with it), ParaView's Xdmf3
 readers, VisIt and meshio's ``meshio.xdmf.TimeSeriesReader`` read them; a run of a thousand field steps
 stores its mesh once (the VTU files of ``fields/body.pvd`` store it in each file). The arrays are those of
-the VTU files (:func:`vpcontact.io.writers.field_frames`), of the same types (integers as Int); a 2D contact
+the VTU files (:func:`vpcontact.results.frames.field_frames`), of the same types (integers as Int); a 2D contact
 part's segments are a Polyline topology of 2 nodes per element (XDMF has no linear line cell: VTK reads
 them as poly lines of 2 points, meshio as lines). Each file is written atomically, the HDF5 file before
 the XDMF file that describes it.
@@ -26,7 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from ..results.result import Result
-from .writers import field_frames, field_meshes, replacing
+from ..results.frames import field_frames, field_meshes
+from .writers import replacing
 
 #: XDMF's name of each cell type (as ``space.CELLS`` names them).
 TOPOLOGY_TYPES = {"line": "Polyline", "triangle": "Triangle", "tetra": "Tetrahedron"}

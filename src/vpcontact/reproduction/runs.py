@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..case.schema import load_case
 from ..progress import SILENT, Progress
-from ..results.result import INTEGER_COLUMNS
+from ..results.columns import INTEGER_COLUMNS
 from ..io.run_reader import read_table
 from .paper import T
 from .plan import CaseSpec

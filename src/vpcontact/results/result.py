@@ -1,20 +1,14 @@
 """The result of a run: time series, per-node contact history and fields at the requested steps.
 
-Conventions: the penetration d = u·ν − g0 (> 0 into the foundation); pressures are forces per unit
-length of Γ3 (per unit area in 3D), the compliance part ρK(ξ)p(d) and the rigid part λ_i / w_i;
-the normal stress σ_ν = −(compliance + rigid) ≤ 0; the contact force is the resultant the
-foundation exerts on the body, −Σ_i w_i (compliance_i + rigid_i) ν_i.
-
-Sub-steps: a step whose Newton iteration fails is cut in halves (``stepping``). Every converged
-time level is a row of the history and of the per-node arrays, in time order: a step done whole is
-one row (``substep`` 1, ``k`` the case's step), a step cut into s sub-steps is s rows with the same
-``step`` n, ``substep`` 1, …, s, their own ``t`` and ``k``, the last one at t_n. Fields are kept per
-step n, at t_n. Which rows are the steps t_n is decided in one place, :func:`step_ends` (for a run in
-memory and for a run directory's tables alike); ``series(..., substeps=False)`` and
-``contact_history(..., substeps=False)`` keep only those rows.
+The history's columns and the contact arrays are named in :mod:`vpcontact.results.columns` (with the
+conventions of their signs and units). Sub-steps: a step whose Newton iteration fails is cut in halves
+(``timeloop``); every converged time level is a row of the history and of the per-node arrays, in time
+order, and which rows are the steps t_n is decided by :mod:`vpcontact.results.steps`;
+``series(..., substeps=False)`` and ``contact_history(..., substeps=False)`` keep only those rows.
 
 Memory: the rows and the fields at the field steps are kept until the run is written; a case whose
-outputs would not fit in the memory available is refused before its first step (:func:`check_memory`).
+outputs would not fit in the memory available is refused before its first step
+(:func:`vpcontact.results.footprint.check_memory`).
 """
 
 from __future__ import annotations
@@ -28,31 +22,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import CaseError, flag, shown
+from ..fem.space import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from ..problem.discretization import Discretization
-from ..errors import CaseError, flag, quoted, shown
-from ..memory import available_memory
-from ..fem.space import coordinates
+from .columns import CONTACT_ARRAYS, ESTIMATE_COLUMNS, ESTIMATE_TERMS, history_columns
+from .steps import end_of_step_rows, field_step_numbers, step_ends
 
-def history_columns(dim: int) -> tuple[str, ...]:
-    """The columns of history.csv for a d-dimensional body (one contact force component per coordinate)."""
-    return ("step", "t", "newton_iterations", "residual", "complementarity", "max_penetration", "mean_penetration",
-            "K_min", "K_max", "K_probe", "penetration_probe", "normal_stress_probe", "nodes_separated",
-            "nodes_in_compliance", "nodes_at_limit", *(f"contact_force_{c}" for c in coordinates(dim)), "substep", "k")
-
-
-#: The history columns of a 2D body (the paper's case).
-HISTORY_COLUMNS = history_columns(2)
-#: The terms of the residual error estimate (:mod:`vpcontact.estimate.residual`).
-ESTIMATE_TERMS = ("body_force", "jump", "neumann", "contact_tangential", "contact_normal", "complementarity")
-#: The history columns a run with ``output.error_estimate`` adds: η(t) = (Σ_K η_K²)^½ and each term's share
-#: (Σ_K η_K,term²)^½.
-ESTIMATE_COLUMNS = ("error_estimate", *(f"error_estimate_{term}" for term in ESTIMATE_TERMS))
-#: History columns holding integers (the others are floats).
-INTEGER_COLUMNS = ("step", "newton_iterations", "nodes_separated", "nodes_in_compliance", "nodes_at_limit", "substep")
 #: Most characters of a run's message that ``repr(result)`` shows (on its second line).
 REPR_MESSAGE = 200
-CONTACT_ARRAYS = ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid", "status")
 
 
 class UnknownName(CaseError, KeyError):
@@ -69,30 +47,6 @@ def _unknown(kind: str, name, valid: Collection[str], elsewhere: tuple[Collectio
     else:
         hint = f"did you mean '{close[0]}'? " if close else ""
     return UnknownName(f"unknown {kind} {shown(repr(name))}; {hint}valid names: {', '.join(valid)}")
-
-
-def step_ends(steps, completed: int) -> np.ndarray:
-    """Per history row, given the step number n of each row (in time order): is it the row at t_n? It is
-    the last row of its step, for the steps n ≤ ``completed`` (the steps reached): a step cut into
-    sub-steps has several rows, its last one at t_n; the rows of a step not reached (a step that failed
-    even after its cuts) are none."""
-    steps = np.asarray(steps)
-    last = np.append(steps[1:] != steps[:-1], True) if steps.size else np.zeros(0, dtype=bool)
-    return last & (steps <= completed)
-
-
-def end_of_step_rows(steps, completed: int) -> dict[int, int]:
-    """Step n -> the index of its row at t_n (:func:`step_ends`), for the steps reached."""
-    ends = np.flatnonzero(step_ends(steps, completed))
-    return dict(zip(np.asarray(steps)[ends].astype(int).tolist(), ends.tolist()))
-
-
-def field_step_numbers(field_steps, steps: int) -> Collection[int]:
-    """The steps whose fields are kept, for ``output.field_steps`` ("all", "final", "none" or a list) in a
-    run of ``steps`` steps (a range for "all": no set of every step is built)."""
-    if isinstance(field_steps, str):
-        return {"all": range(1, steps + 1), "final": range(steps, steps + 1), "none": range(0)}[field_steps]
-    return frozenset(field_steps)
 
 
 @dataclass(repr=False)
@@ -336,8 +290,8 @@ class Result:
 
     def to_pyvista(self, step: int | None = None):
         """The body at a field step (default: the last one kept) as a ``pyvista.UnstructuredGrid`` with its
-        fields as point and cell data (needs pyvista); see :func:`vpcontact.io.pyvista_grid.body_grid`."""
-        from ..io.pyvista_grid import body_grid
+        fields as point and cell data (needs pyvista); see :func:`vpcontact.results.pyvista_grid.body_grid`."""
+        from .pyvista_grid import body_grid
 
         return body_grid(self, step)
 
@@ -366,60 +320,3 @@ class Result:
             return text
         message = self.message if len(self.message) <= REPR_MESSAGE else self.message[:REPR_MESSAGE] + " …"
         return f"{text}\n  {message}"
-
-
-# --- memory ----------------------------------------------------------------------------------------
-#: Bytes of one history row in memory: a dict of the HISTORY_COLUMNS and its time (CPython 3.11, measured).
-HISTORY_ROW_BYTES = 1100
-#: Bytes the ESTIMATE_COLUMNS add to a history row in memory (7 float objects and the larger dict; CPython 3.11, measured).
-ESTIMATE_ROW_BYTES = 900
-#: Bytes of a NumPy array object besides its data.
-ARRAY_BYTES = 112
-#: Bytes the writers add while they write, whatever the run's length (contact.csv is written in blocks).
-WRITING_BYTES = 2**24
-
-
-def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, contact_nodes: int,
-                  history: bool, dim: int = 2, estimate: bool = False) -> dict[str, int]:
-    """Bytes a run of ``steps`` steps keeps for its outputs until they are written, by part: the history
-    rows, the per-node contact rows and the fields at ``field_steps`` steps (``history``: with the
-    viscoplastic history z; ``estimate``: with the ESTIMATE_COLUMNS in every row and η_K in the fields),
-    each with the copy a checkpoint or solution.npz makes of them, and what the writers add. A step cut
-    into sub-steps adds rows: this is the least a run needs."""
-    columns = len(history_columns(dim)) + (len(ESTIMATE_COLUMNS) if estimate else 0)
-    copies = 8 * columns
-    row = HISTORY_ROW_BYTES + (ESTIMATE_ROW_BYTES if estimate else 0)
-    contact = len(CONTACT_ARRAYS) * ARRAY_BYTES + 2 * (8 * (len(CONTACT_ARRAYS) - 1) + 1) * contact_nodes
-    tensor = dim * dim
-    per_field = 5 * ARRAY_BYTES + 8 * (dim * nodes + (tensor + 2) * elements) + 8 * (dim * nodes + tensor * elements)
-    if history:
-        per_field += 2 * 8 * tensor * elements
-    if estimate:
-        per_field += ARRAY_BYTES + 2 * 8 * elements
-    return {"history rows": steps * (row + copies), "contact rows": steps * contact,
-            "fields": (field_steps + 1) * per_field, "writing": WRITING_BYTES}
-
-
-def check_memory(steps: int, output, nodes: int, elements: int, contact_nodes: int, history: bool,
-                 dim: int = 2) -> None:
-    """Refuse, before anything per step is allocated, a run of ``steps`` steps whose outputs (``output``, the
-    :class:`~vpcontact.case.schema.OutputSection`) would not fit in the memory available now: one line naming
-    time.steps (and output.field_steps when the fields are the most)."""
-    field_steps = len(field_step_numbers(output.field_steps, steps))
-    parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim,
-                          estimate=output.error_estimate)
-    needed, available = sum(parts.values()), available_memory()
-    if needed <= available:
-        return
-    gib = 2.0**30
-    detail = (f"history rows {parts['history rows'] / gib:.3g} GiB, contact rows of {contact_nodes} nodes "
-              f"{parts['contact rows'] / gib:.3g} GiB, fields at {field_steps} steps of {nodes} nodes and {elements} "
-              f"elements {parts['fields'] / gib:.3g} GiB")
-    key = f"time.steps = {steps}"
-    fix = "use fewer steps"
-    if parts["fields"] > parts["history rows"] + parts["contact rows"]:
-        chosen = output.field_steps
-        key += f" with output.field_steps = {quoted(chosen) if isinstance(chosen, str) else shown(repr(chosen))}"
-        fix = "keep the fields at fewer steps (output.field_steps) or use fewer steps"
-    raise CaseError(f"{key}: the run's outputs need about {needed / gib:.3g} GiB of memory ({detail}), more than "
-                    f"the {available / gib:.3g} GiB available; {fix}")

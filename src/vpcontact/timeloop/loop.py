@@ -44,7 +44,8 @@ from ..estimate.indicators import Level
 from ..problem.build import Problem, checked_problem
 from ..progress import SILENT, Progress, StepReport, reporting
 from ..estimate.residual import ResidualEstimator
-from ..results.result import Fields, Result, check_memory
+from ..results.footprint import check_memory
+from ..results.result import Fields, Result
 from .resting import least_shift, unbalanced
 from ..fem.rigid_modes import RigidModes
 from ..solvers import DofLayout, StepData, StepSolution, make_solver
