@@ -183,7 +183,7 @@ def test_the_documented_submodules_come_with_import_vpcontact():
     (``import vpcontact`` does not load norms, so the command line starts as fast as before)."""
     code = ("import sys, vpcontact; assert 'vpcontact.results.norms' not in sys.modules; "
             "print(vpcontact.results.norms.differences.__name__, vpcontact.laws.contact.CallableLaw.__name__, "
-            "vpcontact.drivers.studies.run_study.__name__, vpcontact.io.writers.write_run.__name__); vpcontact.nothing")
+            "vpcontact.drivers.studies.run_study.__name__, vpcontact.io.run.write_run.__name__); vpcontact.nothing")
     process = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert process.stdout.split() == ["differences", "CallableLaw", "run_study", "write_run"], process.stderr
     assert "AttributeError: module 'vpcontact' has no attribute 'nothing'" in process.stderr
@@ -225,14 +225,14 @@ def test_times_are_an_array():
 
 def test_a_result_writes_its_files(tmp_path):
     result = vpcontact.solve(rectangle_case())
-    assert result.write(tmp_path / "run") == tmp_path / "run"
+    assert vpcontact.write_run(result, tmp_path / "run") == tmp_path / "run"
     assert {p.name for p in (tmp_path / "run").iterdir()} >= {"summary.json", "history.csv", "contact.csv",
                                                               "case.resolved.toml"}
     rows = (tmp_path / "run" / "history.csv").read_text().splitlines()
     assert len(rows) == 12 and rows[0].startswith("step,t,")
     with pytest.raises(FileExistsError):
-        result.write(tmp_path / "run")
-    result.write(tmp_path / "run", overwrite=True)
+        vpcontact.write_run(result, tmp_path / "run")
+    vpcontact.write_run(result, tmp_path / "run", overwrite=True)
     assert (tmp_path / "run" / "summary.json").is_file()
 
 

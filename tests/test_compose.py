@@ -18,7 +18,7 @@ from conftest import half_disc_case
 REPO = pathlib.Path(__file__).resolve().parents[1]
 SOURCE = REPO / "src" / "vpcontact"
 #: The modules after the problem in the flow case -> problem -> time loop -> result -> writers.
-DOWNSTREAM = ("timeloop/loop", "results/result", "io/writers", "io/checkpoint", "estimate/adapt", "estimate/indicators",
+DOWNSTREAM = ("timeloop/loop", "results/result", "io/run", "io/outputs", "io/checkpoint", "estimate/adapt", "estimate/indicators",
               "estimate/residual", "estimate/recovery", "results/plots/contact", "results/plots/body",
               "results/plots/history", "results/norms")
 
@@ -188,8 +188,8 @@ def test_a_result_is_sent_between_processes(from_file, tmp_path):
     view = copy.discretization
     np.testing.assert_array_equal(view.mesh.exact_normals["bottom_arc"](view.surface.coordinates),
                                   from_file.discretization.surface.normals)
-    from_file.write(tmp_path / "solved")
-    copy.write(tmp_path / "copy")
+    vpcontact.write_run(from_file, tmp_path / "solved")
+    vpcontact.write_run(copy, tmp_path / "copy")
     for name in ("history.csv", "contact.csv", "case.resolved.toml"):
         assert (tmp_path / "copy" / name).read_bytes() == (tmp_path / "solved" / name).read_bytes(), name
     np.testing.assert_array_equal(copy.contact_table()["K"], from_file.contact_table()["K"])

@@ -16,7 +16,7 @@ from test_contact_parts import LAYERS, split_case, two_parts_form
 from vpcontact.laws.contact import STATUS_NAMES
 from vpcontact.results.columns import CONTACT_ARRAYS
 from vpcontact.io.vtu import Grid, write_vtu
-from vpcontact.io.writers import write_run
+from vpcontact.io.run import write_run
 
 
 def test_a_vtu_file_reads_back_as_the_arrays_written(tmp_path):

@@ -19,7 +19,7 @@ from vpcontact.results import plots
 from vpcontact.drivers.cli import main
 from vpcontact.laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from vpcontact.errors import CaseError
-from vpcontact.io.writers import write_outputs
+from vpcontact.io.outputs import write_outputs
 from conftest import assert_refused, block_3d_case, half_disc_case, run_cli, snapshot_tree
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -269,7 +269,7 @@ def test_along_contact_refuses_what_it_cannot_draw(run_2d, run_3d):
 
 
 def test_importing_vpcontact_does_not_load_matplotlib():
-    code = ("import sys, vpcontact, vpcontact.results.plots, vpcontact.io.writers, vpcontact.drivers.rundir; "
+    code = ("import sys, vpcontact, vpcontact.results.plots, vpcontact.io.run, vpcontact.drivers.rundir; "
             "assert 'matplotlib' not in sys.modules, 'matplotlib loaded'")
     subprocess.run([sys.executable, "-c", code], check=True)
 

@@ -12,7 +12,9 @@ import vpcontact
 from conftest import half_disc_case
 from vpcontact.results.columns import CONTACT_ARRAYS
 from vpcontact.results.steps import step_ends
-from vpcontact.io.run_reader import read_contact, read_summary, snapshots_at
+from vpcontact.io.contact_csv import read_contact
+from vpcontact.io.solution import snapshots_at
+from vpcontact.io.summary import read_summary
 
 PACKAGE = Path(vpcontact.__file__).parent
 SUBPACKAGE = "vpcontact.reproduction"
@@ -86,7 +88,7 @@ def failed_run(tmp_path_factory):
     case["output"] = {"field_steps": [1, 2, 3]}
     result = vpcontact.solve(case)
     out = tmp_path_factory.mktemp("failed") / "run"
-    result.write(out)
+    vpcontact.write_run(result, out)
     return result, out
 
 

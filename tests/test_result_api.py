@@ -1,6 +1,6 @@
 """Looking at a result from Python, in 2D and 3D: repr, the history and contact tables (pandas) against the
 files the writers write and against Result.series / contact_history, result.plot's figures against the
-numbers they draw, result.to_pyvista, and result.write with the refusals of `vpcontact run --out`."""
+numbers they draw, result.to_pyvista, and vpcontact.write_run with the refusals of `vpcontact run --out`."""
 
 import io
 import subprocess
@@ -49,9 +49,9 @@ def run_3d():
 
 @pytest.fixture(scope="module")
 def written(run_2d, run_3d, tmp_path_factory):
-    """The run directories of both runs, written by result.write."""
+    """The run directories of both runs, written by vpcontact.write_run."""
     folder = tmp_path_factory.mktemp("written")
-    return {2: run_2d.write(folder / "2d"), 3: run_3d.write(folder / "3d")}
+    return {2: vpcontact.write_run(run_2d, folder / "2d"), 3: vpcontact.write_run(run_3d, folder / "3d")}
 
 
 @pytest.fixture(params=[2, 3])
@@ -174,7 +174,7 @@ def test_contact_table_names_the_part_of_each_node(tmp_path):
     table = result.contact_table()
     assert list(table["part"].cat.categories) == ["bottom_arc_below", "bottom_arc_above"]
     assert set(table["part"]) == {"bottom_arc_below", "bottom_arc_above"}
-    csv = pd.read_csv(result.write(tmp_path / "out") / "contact.csv")
+    csv = pd.read_csv(vpcontact.write_run(result, tmp_path / "out") / "contact.csv")
     assert table["part"].astype(str).tolist() == csv[csv["step"] == 11]["part"].tolist()
 
 
@@ -344,13 +344,13 @@ def test_write_refuses_a_directory_that_is_not_empty_and_deletes_nothing(run_2d,
     (out / "case.toml").write_text("# my case")
     before = snapshot_tree(out)
     with pytest.raises(vpcontact.CaseError) as error:
-        run_2d.write(out)
+        vpcontact.write_run(run_2d, out)
     assert isinstance(error.value, FileExistsError)  # as before, for code that catches that
     assert "\n" not in str(error.value) and f"'{out}' is not empty" in str(error.value)
     assert "overwrite=True" in str(error.value)
     assert snapshot_tree(out) == before
     # overwrite=True writes the outputs beside the user's files, which stay as they are
-    assert run_2d.write(out, overwrite=True) == out
+    assert vpcontact.write_run(run_2d, out, overwrite=True) == out
     after = snapshot_tree(out)
     assert {name: after[name] for name in before} == before
     assert {"summary.json", "history.csv", "contact.csv", "solution.npz", "fields/body.pvd"} <= set(after)
@@ -368,7 +368,7 @@ def test_write_refuses_what_stands_in_the_way_before_writing(run_2d, tmp_path, m
     before = snapshot_tree(out)
     for overwrite in (False, True):
         with pytest.raises(vpcontact.CaseError) as error:
-            run_2d.write(out, overwrite=overwrite)
+            vpcontact.write_run(run_2d, out, overwrite=overwrite)
         assert "\n" not in str(error.value)
         for word in words:
             assert word in str(error.value), (word, str(error.value))

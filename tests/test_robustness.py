@@ -198,17 +198,17 @@ def test_a_signal_stops_the_run_at_the_end_of_a_step(tmp_path, reference, number
 def test_outputs_are_atomic_and_summary_json_comes_last(tmp_path, monkeypatch):
     case = creeping_case(steps=20, h=0.1)
     out = tmp_path / "run"
-    real = vpcontact.io.writers.write_solution
+    real = vpcontact.io.solution.write
 
     def disk_full(*args):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(vpcontact.io.writers, "write_solution", disk_full)
+    monkeypatch.setattr(vpcontact.io.solution, "write", disk_full)
     with pytest.raises(OSError):
         rundir.run(vpcontact.load_case(case), out)
     assert not (out / "summary.json").exists() and not list(out.rglob(".*tmp-*"))
     assert len(read_csv(out / "history.csv")[1]) == 20 and checkpoint_step(out) == 20
-    monkeypatch.setattr(vpcontact.io.writers, "write_solution", real)
+    monkeypatch.setattr(vpcontact.io.solution, "write", real)
     outcome = rundir.run(vpcontact.load_case(case), out, resume=True)  # the loop has nothing left to do
     assert outcome.status == "complete" and outcome.result.resumed_at == [20]
     assert json.loads((out / "summary.json").read_text())["status"] == "complete"
@@ -229,7 +229,7 @@ def test_resume_without_a_checkpoint(tmp_path):
     case = vpcontact.load_case(creeping_case(steps=10, h=0.2))
     out = tmp_path / "run"
     out.mkdir()
-    vpcontact.io.writers.write_resolved_case(case.to_toml(), out)
+    vpcontact.io.run.write_resolved_case(case.to_toml(), out)
     (out / ".history.tmp-99999.csv").write_text("half a file")  # a writer killed midway
     with pytest.raises(vpcontact.CaseError, match=r"different case \(material.E = 1000.0 in the run, 900.0 now\)"):
         rundir.run(vpcontact.load_case(creeping_case(steps=10, h=0.2), {"material.E": 900.0}), out, resume=True)

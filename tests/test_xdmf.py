@@ -17,7 +17,7 @@ from test_3d_runs import ball_case
 def written(tmp_path, case: dict, name: str = "run"):
     """The result of ``case`` with ``output.xdmf`` and the folder it was written to."""
     result = vpcontact.solve({**case, "output": {**case["output"], "xdmf": True}})
-    return result, result.write(tmp_path / name)
+    return result, vpcontact.write_run(result, tmp_path / name)
 
 
 def read_series(path):
@@ -89,6 +89,6 @@ def test_overwrite_replaces_the_series(tmp_path):
     case["output"]["field_steps"] = "final"
     _, out = written(tmp_path, case)
     assert {p.name for p in (out / "fields").glob("*.xdmf")} == {"body.xdmf", "contact.xdmf"}
-    vpcontact.solve(case).write(out, overwrite=True)
+    vpcontact.write_run(vpcontact.solve(case), out, overwrite=True)
     assert sorted(p.name for p in (out / "fields").iterdir()) == ["body.pvd", "body_00011.vtu", "contact.pvd",
                                                                   "contact_00011.vtu"]

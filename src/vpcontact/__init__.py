@@ -5,6 +5,7 @@ hardens or softens with the history of penetration (Barboteu, Han, Sofonea).
     >>> case = vpcontact.load_case("examples/paper_ball.toml", {"contact.stiffness.beta": -1})
     >>> result = vpcontact.solve(case)
     >>> result.series("K_probe")[-1]
+    >>> vpcontact.write_run(result, "results/beta-1")   # the files of a run directory, as `vpcontact run` writes
 
 The names of the API (``vpcontact.solve``, ``vpcontact.Case``, ...) and the submodules
 (``vpcontact.results.norms``, ``vpcontact.laws.contact``, ...) are loaded on first use: ``import vpcontact`` (and
@@ -28,7 +29,7 @@ except metadata.PackageNotFoundError:  # running from a source tree
 #: The names of the API, by the module that defines them.
 API = {"Case": "case.schema", "Model": "case.schema", "load_case": "case.schema", "CaseError": "errors",
        "compose": "case.compose", "Problem": "problem.build", "build_problem": "problem.build",
-       "Result": "results.result", "solve_problem": "timeloop.loop"}
+       "Result": "results.result", "solve_problem": "timeloop.loop", "write_run": "io.run"}
 
 #: The packages a user may reach as ``vpcontact.<name>`` after ``import vpcontact`` (and their modules as
 #: ``vpcontact.<name>.<module>``), and the modules of the package itself.
@@ -89,4 +90,4 @@ def solve(case, *, progress=False, **laws) -> Result:
 
 
 __all__ = ["Case", "CaseError", "Model", "Problem", "Result", "build_problem", "compose", "load_case", "solve",
-           "solve_problem"]
+           "solve_problem", "write_run"]

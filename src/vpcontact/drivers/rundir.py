@@ -24,7 +24,7 @@ full disk leaves the previous complete checkpoint: ``--resume`` continues from i
 room, to the same numbers as an uninterrupted run.
 
 The directory is held while the run writes (see :mod:`vpcontact.io.directory`); ``--overwrite`` removes
-the outputs of an earlier run (``writers.OUTPUTS``) and nothing else. A symbolic link where a run writes
+the outputs of an earlier run (``io.run.OUTPUTS``) and nothing else. A symbolic link where a run writes
 (``fields/``, ``checkpoint/``, ``history.csv``, ...) is the user's: the run refuses to start (exit 2,
 one line naming the link), with or without ``--overwrite`` and ``--resume``, and no write ever goes
 through one (see :mod:`vpcontact.io.directory`). ``--out`` itself may be a link to a folder.
@@ -50,16 +50,18 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ..io import checkpoint, directory
-from ..case.schema import Case
+from ..case.schema import Case, load_case
 from ..errors import CaseError
 from ..mesh.msh import write_mesh
 from ..problem.build import Problem, build_problem
 from ..progress import Progress, reporting
 from ..results.result import Result
-from ..io.run_reader import read_case, read_summary
 from ..timeloop.loop import TimeLoop
-from ..io.writers import (check_room, json_safe, remove_files, remove_outputs, remove_temporaries, replacing, versions,
-                      write_outputs, write_resolved_case, write_text)
+from ..io.files import remove_files, replacing, write_text
+from ..io.outputs import write_outputs
+from ..io.run import RESOLVED_CASE, check_room, remove_outputs, remove_temporaries, write_resolved_case
+from ..io.summary import json_safe, read_summary
+from ..io.versions import versions
 
 if TYPE_CHECKING:
     from ..estimate.adapt import Adaptation, Cycle
@@ -250,7 +252,7 @@ def _finished(case: Case, out: Path) -> Outcome | None:
 def _check_same_case(case: Case, out: Path) -> None:
     """--resume in a directory without a checkpoint: it must hold a run of this same case."""
     try:
-        before = read_case(out)
+        before = load_case(out / RESOLVED_CASE)
     except CaseError:
         raise CaseError(f"cannot resume: '{out}' holds no run of vpcontact (no readable case.resolved.toml)") from None
     if checkpoint.comparable(before.resolved()) != checkpoint.comparable(case.resolved()):

@@ -52,9 +52,11 @@ from ..errors import CaseError
 from ..case.inputs import MAX_TOML_BYTES, check_regular_file
 from ..results.norms import Snapshot, differences
 from ..progress import Progress, duration, reporting
-from ..io.run_reader import read_case, read_summary, snapshots_at
+from ..io.solution import snapshots_at
+from ..io.summary import read_summary
 from ..fem.space import COORDINATES
-from ..io.writers import check_room, refuse_links, replacing
+from ..io.files import replacing
+from ..io.run import RESOLVED_CASE, check_room, refuse_links
 
 STUDY_KEYS = {"base", "set", "vary", "runs", "compare"}
 COMPARED = ("V", "Q", "U", "energy")
@@ -225,7 +227,7 @@ def execute_run(spec: RunSpec) -> dict:
     """Solve one run and write its directory; returns its summary (status "error" on an exception)."""
     from ..problem.build import build_problem
     from ..timeloop.loop import solve_problem
-    from ..io.writers import write_run
+    from ..io.run import write_run
 
     try:
         case = load_case(spec.base, spec.overrides)
@@ -242,7 +244,7 @@ def is_complete(spec: RunSpec) -> bool:
     if summary is None or summary.get("status") != "complete":
         return False
     try:
-        done = read_case(spec.out).resolved()
+        done = load_case(Path(spec.out) / RESOLVED_CASE).resolved()
     except CaseError:
         return False
     return done == load_case(spec.base, spec.overrides).resolved()
@@ -402,7 +404,7 @@ def _check_run_directories(study: Study, out: Path) -> None:
     """Every run writes into DIR/runs/<id> and nowhere else: refuse a run directory elsewhere (a study
     loaded for another DIR), a runs/ or runs/<id> that is a symbolic link or not a directory, a
     study.csv that is a link, and anything standing where a run or the table is written (see
-    ``writers.check_room``: a symbolic link too)."""
+    ``io.run.check_room``: a symbolic link too)."""
     runs = out / "runs"
     for spec in study.runs:
         if spec.out != runs / spec.id:

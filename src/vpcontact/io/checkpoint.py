@@ -52,12 +52,13 @@ from ..results.columns import CONTACT_ARRAYS, INTEGER_COLUMNS
 from ..results.result import FIELD_NAMES, Fields
 from ..solvers import StepSolution
 from ..timeloop.loop import COUNTERS, LoopState, TimeLoop, Trend
-from .writers import OUTPUTS, matching, remove_files, replacing, versions
+from .files import matching, remove_files, replacing
+from .versions import versions
 
 FOLDER = "checkpoint"
 STATE = "state.npz"
-FILES = tuple(pattern for pattern in OUTPUTS if pattern.startswith(f"{FOLDER}/"))
-"""state.npz and fields_NNNNN.npz, as listed among the outputs of a run directory."""
+FILES = (f"{FOLDER}/{STATE}", f"{FOLDER}/fields_*.npz")
+"""The files of a checkpoint in a run directory: state.npz and fields_NNNNN.npz."""
 FORMAT = 1
 #: Output keys that do not change the numbers: they may differ between a run and its resumption.
 FREE_KEYS = ("progress", "checkpoint_every_steps", "checkpoint_every_seconds", "figures")

@@ -22,7 +22,7 @@ the way from the held directory to a file (``fields/``, ``checkpoint/``, ``cycle
 opened one by one without following a link (``O_NOFOLLOW``), and a file or folder that is a link is
 neither replaced, nor removed, nor created through: :class:`SymbolicLink` names it (vpcontact never
 makes links, so a link there is the user's, and so is what it leads to). The runs refuse such a link
-before they start (``writers.check_room``); this is the guard of every single write. The held
+before they start (``io.run.check_room``); this is the guard of every single write. The held
 directory itself may be reached through a link (``--out`` a link to a folder on another disk).
 """
 

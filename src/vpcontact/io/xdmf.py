@@ -25,9 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..results.result import Result
 from ..results.frames import field_frames, field_meshes
-from .writers import replacing
+from .files import replacing
+
+FILES = ("fields/body.h5", "fields/body.xdmf", "fields/contact.h5", "fields/contact.xdmf")
 
 #: XDMF's name of each cell type (as ``space.CELLS`` names them).
 TOPOLOGY_TYPES = {"line": "Polyline", "triangle": "Triangle", "tetra": "Tetrahedron"}
@@ -37,14 +38,18 @@ ATTRIBUTE_TYPES = {1: "Scalar", 3: "Vector", 9: "Tensor"}
 NUMBER_TYPES = {"f": "Float", "i": "Int", "u": "UInt"}
 
 
-def write_xdmf(result: Result, folder: Path) -> None:
-    """body.h5 and body.xdmf, and with contact contact.h5 and contact.xdmf, in ``folder`` (which exists),
-    with the fields at every field step of ``result`` (nothing without field steps). The steps' arrays are
-    made and written one step at a time."""
+def wanted(result) -> bool:
+    """Asked for (``output.xdmf``), by a run that kept fields (``output.field_steps``)."""
+    return bool(result.output.xdmf) and bool(result.fields)
+
+
+def write(result, out: Path) -> None:
+    """body.h5 and body.xdmf, and with contact contact.h5 and contact.xdmf, in ``out``/fields (which the VTU
+    files made), with the fields at every field step of ``result``. The steps' arrays are made and written
+    one step at a time; h5py is imported by the runs that write XDMF only."""
     import h5py
 
-    if not result.fields:
-        return
+    folder = Path(out) / "fields"
     body_mesh, contact_mesh = field_meshes(result.discretization)
     meshes = {"body": body_mesh, **({"contact": contact_mesh} if contact_mesh is not None else {})}
     steps = {name: [] for name in meshes}  # (step, t, {center: {array: (shape, dtype)}}) of each series

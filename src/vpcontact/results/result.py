@@ -15,14 +15,12 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
-import os
 from collections.abc import Collection
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from ..errors import CaseError, flag, shown
+from ..errors import CaseError, shown
 from ..fem.space import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from ..problem.discretization import Discretization
@@ -294,15 +292,6 @@ class Result:
         from .pyvista_grid import body_grid
 
         return body_grid(self, step)
-
-    def write(self, out: str | os.PathLike, *, overwrite: bool = False) -> Path:
-        """Write the files of a run directory (README, "Outputs") into ``out``, as ``vpcontact run`` does:
-        created if missing; a directory that is not empty is refused (a CaseError, and a FileExistsError)
-        unless ``overwrite``, which removes only the files a run writes there. Returns ``out`` as a Path."""
-        from ..io.directory import folder_path
-        from ..io.writers import write_run
-
-        return write_run(self, folder_path(out, "output directory"), overwrite=flag("overwrite", overwrite))
 
     def __getstate__(self) -> dict:
         """A copy sent to another process (pickled) leaves the Problem behind (its operators, loads and the
