@@ -76,7 +76,8 @@ def test_repr_is_one_short_line_of_the_run(run, dim):
     text = repr(run)
     assert "\n" not in text and len(text) < 160, text
     cuts = f", {run.step_cuts} step cut" if run.step_cuts else ""
-    assert text == (f"Result(complete, {dim}D, {run.problem.basis.N} dofs, {run.problem.surface.size} contact nodes, "
+    view = run.discretization
+    assert text == (f"Result(complete, {dim}D, {view.mesh.mesh.p.size} dofs, {view.surface.size} contact nodes, "
                     f"11/11 steps{cuts}, method {run.method}, {run.wall_time_s:.3g} s)")
     assert run.method in ("condensed", "full", "iterative")
 
@@ -105,7 +106,7 @@ def test_history_rows_at_the_step_times_are_those_of_series(run_2d):
     at_steps = table[run_2d.ends_step()]
     assert len(table) > len(at_steps) == run_2d.steps == 11  # a step was cut: one row more
     assert at_steps["step"].tolist() == list(range(1, 12))
-    np.testing.assert_array_equal(at_steps["t"], run_2d.problem.times.at(np.arange(1, 12)))
+    np.testing.assert_array_equal(at_steps["t"], run_2d.discretization.times.at(np.arange(1, 12)))
     for column in table.columns:
         np.testing.assert_array_equal(at_steps[column], run_2d.series(column, substeps=False), err_msg=column)
         np.testing.assert_array_equal(table[column], run_2d.series(column), err_msg=column)
@@ -145,7 +146,7 @@ def test_contact_table_agrees_with_the_history_and_contact_history(run, dim):
         assert [counts[name] for name in STATUS_NAMES] == [run.series(c)[row] for c in
                                                           ("nodes_separated", "nodes_in_compliance", "nodes_at_limit")]
     assert list(table["status"].cat.categories) == list(STATUS_NAMES)
-    np.testing.assert_array_equal(table["node"], run.problem.surface.nodes)
+    np.testing.assert_array_equal(table["node"], run.discretization.surface.nodes)
     assert ("arc_length" in table.columns) == (dim == 2)
 
 
@@ -249,7 +250,7 @@ def facet_colors(values, everything):
 @pytest.mark.parametrize("field", ["sigma_xy", "displacement_y", "z_yy", "error_indicator", "sigma_zz"])
 def test_the_deformed_2d_body_is_coloured_by_the_field_asked_for(run_2d, field):
     figure = run_2d.plot.deformed(step=5, field=field, scale=4.0)
-    fields, mesh = run_2d.fields[5], run_2d.problem.mesh.mesh
+    fields, mesh = run_2d.fields[5], run_2d.discretization.mesh.mesh
     expected = {"sigma_xy": fields.stress[:, 0, 1], "displacement_y": fields.displacement[:, 1],
                 "z_yy": fields.z[:, 1, 1], "error_indicator": fields.error_indicator,
                 "sigma_zz": fields.stress33}[field]
@@ -271,7 +272,7 @@ def test_the_deformed_3d_body_is_coloured_by_the_field_asked_for(run_3d, field):
     figure = run_3d.plot.deformed(field=field)
     figure.savefig(io.BytesIO(), format="png")  # the facets are projected when drawn
     (surface,) = [c for c in figure.axes[0].collections if isinstance(c, Poly3DCollection)]
-    fields, mesh = run_3d.fields[11], run_3d.problem.mesh.mesh
+    fields, mesh = run_3d.fields[11], run_3d.discretization.mesh.mesh
     boundary = mesh.boundary_facets()
     if field == "displacement":  # per node: each facet has the mean of its three nodes
         values = np.linalg.norm(fields.displacement, axis=1)
@@ -308,7 +309,7 @@ def test_to_pyvista_holds_the_fields_of_the_step(run, dim):
     pyvista = pytest.importorskip("pyvista")  # the extra "pyvista" (140 MB of VTK) is not in "test"
     grid = run.to_pyvista(step=5)
     assert isinstance(grid, pyvista.UnstructuredGrid)
-    fields, mesh = run.fields[5], run.problem.mesh.mesh
+    fields, mesh = run.fields[5], run.discretization.mesh.mesh
     points = np.zeros((mesh.p.shape[1], 3))
     points[:, :dim] = mesh.p.T
     np.testing.assert_array_equal(grid.points, points)

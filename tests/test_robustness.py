@@ -279,7 +279,7 @@ def test_a_cut_step_is_the_same_scheme_on_a_finer_grid(monkeypatch):
     assert cut.series("substep").tolist() == [1, 2] * 20 and np.all(cut.series("k") == 0.05)
     assert cut.ends_step().tolist() == [False, True] * 20
     np.testing.assert_allclose(cut.series("t"), uniform.series("t"), rtol=1e-15)
-    np.testing.assert_array_equal(cut.series("t", substeps=False), cut.problem.times)
+    np.testing.assert_array_equal(cut.series("t", substeps=False), cut.discretization.times)
     assert cut.series("newton_iterations").tolist() == uniform.series("newton_iterations").tolist()
     for name in ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid"):
         np.testing.assert_allclose(cut.contact_history(name), uniform.contact_history(name), rtol=1e-10, atol=1e-12,
@@ -310,7 +310,7 @@ def test_a_step_newton_cannot_do_whole_is_cut_and_the_run_completes():
     four = result.series("step") == 4
     assert result.series("k")[four].sum() == pytest.approx(0.1, abs=1e-15)  # ... into sub-steps that add up to k
     assert result.series("k")[four].min() == 0.1 / 8  # down to the 3rd halving
-    np.testing.assert_array_equal(result.series("t", substeps=False), result.problem.times)
+    np.testing.assert_array_equal(result.series("t", substeps=False), result.discretization.times)
     assert np.all(np.diff(result.series("t")) > 0)
     assert result.series("newton_iterations").max() <= 4
     # the same solution where no step was cut; close to it after the cut step

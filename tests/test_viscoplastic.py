@@ -111,7 +111,7 @@ def block(law, steps, T=1.0, method="auto", initial=None):
 
 def homogeneous(result, steps):
     """(e_n, σ_n, z_n) of every element at every step, checked homogeneous; u = (0, e y) at the nodes."""
-    y = result.problem.mesh.mesh.p[1]
+    y = result.discretization.mesh.mesh.p[1]
     e, sigma, z = [], [], []
     for n in range(1, steps + 1):
         fields = result.fields[n]
@@ -343,7 +343,7 @@ def test_the_example_creeps_under_the_held_load():
     case = vpcontact.load_case(EXAMPLE, coarse)
     case.material.viscoplastic = None
     elastic = vpcontact.solve(case)
-    p = viscous.problem.mesh.mesh.p
+    p = viscous.discretization.mesh.mesh.p
     top, bottom = np.argmax(p[1]), np.argmin(np.abs(p[0]) + p[1])  # (0, 2) and (0, 0)
     held = np.flatnonzero(viscous.series("t") >= 0.5 - 1e-12) + 1  # the steps of the hold
 

@@ -41,7 +41,7 @@ def test_the_series_holds_the_vtu_fields_at_every_step(tmp_path, dim):
         assert points.shape[1] == 3 and (dim == 3 or not points[:, 2].any())
         assert [c.type for c in cells] == [c.type for c in vtus[0].cells]
         np.testing.assert_array_equal(cells[0].data, vtus[0].cells[0].data)
-        assert [t for t, _, _ in steps] == [result.problem.times[n - 1] for n in (3, 7, 11)]
+        assert [t for t, _, _ in steps] == [result.discretization.times[n - 1] for n in (3, 7, 11)]
         for (t, point_data, cell_data), vtu in zip(steps, vtus):
             assert set(point_data) == set(vtu.point_data) and set(cell_data) == set(vtu.cell_data)
             for name, values in point_data.items():

@@ -75,8 +75,11 @@ FIELD_NAMES = tuple(item.name for item in dataclasses.fields(Fields))
 
 @dataclass(repr=False)
 class Result:
-    """Everything a run computed. Arrays per contact node are (rows, m): one row per converged time
-    level, sub-steps included (see the module's docstring). ``times`` is the array of the rows' times."""
+    """Everything a run computed, as plain data: its sizes, the history rows, the per-node contact arrays
+    (rows, m): one row per converged time level, sub-steps included (see the module's docstring), the
+    fields at the field steps, and ``discretization``, all it needs of the problem (the mesh, the contact
+    nodes, the step times, ℰ, the layer's parameters) to be read, drawn and written; not the problem itself
+    (its operators, loads and laws stay with it). ``times`` is the array of the rows' times."""
 
     dofs: int
     elements: int
@@ -100,8 +103,7 @@ class Result:
     linear_solves: int = 0  # solves with a factored matrix in the time loop
     krylov_iterations: int = 0  # GMRES iterations on Newton systems in the time loop
     newton_factorizations: int = 0  # LU factorizations of condensed Newton matrices in the time loop
-    problem: object = None  # the Problem solved, in the process that solved it (None in a copy sent elsewhere)
-    discretization: object = None  # what the result needs of the problem (vpcontact.problem.discretization), always there
+    discretization: Discretization | None = None  # what the result needs of the problem, always there
     completed_steps: int = 0  # time steps t_n reached
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
@@ -109,14 +111,16 @@ class Result:
     output: object = None  # the OutputSection the run was made with (what the writers write)
 
     @classmethod
-    def start(cls, problem, solver, output) -> "Result":
-        """The empty result of a run of ``problem`` by ``solver`` with the options ``output`` (OutputSection)."""
-        wanted = field_step_numbers(output.field_steps, len(problem.times))
-        return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
-                   contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
-                   augmentation=solver.r, method=solver.name, method_reason=solver.reason, problem=problem,
-                   discretization=Discretization.of(problem),
-                   output=output, error_estimate=output.error_estimate)
+    def start(cls, discretization: Discretization, dofs: int, solver, output) -> "Result":
+        """The empty result of a run on ``discretization`` with ``dofs`` unknowns by the step ``solver`` (its
+        method, why it runs, its augmentation r), with the options ``output`` (the fields kept, the error
+        estimate, and what the writers write)."""
+        mesh = discretization.mesh
+        wanted = field_step_numbers(output.field_steps, len(discretization.times))
+        return cls(dofs=dofs, elements=mesh.mesh.t.shape[1], nodes=mesh.mesh.p.shape[1],
+                   contact_nodes=discretization.surface.size, dim=mesh.dim, probe=discretization.probe,
+                   field_steps=wanted, augmentation=solver.r, method=solver.name, method_reason=solver.reason,
+                   discretization=discretization, output=output, error_estimate=output.error_estimate)
 
     # --- filling in ------------------------------------------------------------------------------
     def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status, substep: int = 1,
@@ -292,11 +296,6 @@ class Result:
         from .pyvista_grid import body_grid
 
         return body_grid(self, step)
-
-    def __getstate__(self) -> dict:
-        """A copy sent to another process (pickled) leaves the Problem behind (its operators, loads and the
-        Python objects it may hold); ``discretization`` has all the writers, tables, plots and norms read."""
-        return {**self.__dict__, "problem": None}
 
     def __repr__(self) -> str:
         """One line: status, dimension, sizes, steps done of those planned, step method and wall time (not the

@@ -42,6 +42,7 @@ from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 from ..laws.elasticity import von_mises
 from ..estimate.indicators import Level
 from ..problem.build import Problem, checked_problem
+from ..problem.discretization import Discretization
 from ..progress import SILENT, Progress, StepReport, reporting
 from ..estimate.residual import ResidualEstimator
 from ..results.footprint import check_memory
@@ -162,7 +163,7 @@ class TimeLoop:
                                   setup_estimate=self._setup_estimate(history))
         self.max_cuts = options.max_step_cuts
         self._loads = problem.loads.on(free)  # F(t) at the free dofs
-        self.result = Result.start(problem, self.solver, output)
+        self.result = Result.start(Discretization.of(problem), problem.basis.N, self.solver, output)
         self.estimator = ResidualEstimator(problem) if output.error_estimate else None
         self._created = started
         self.setup_time = clock.perf_counter() - started
