@@ -131,9 +131,9 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
                 with progress.phase("checkpoint", f"restoring {checkpoint.folder(out)}") as phase:
                     checkpoint.restore(loop, out)
                     phase.done(f"{loop.state.step:,} of {len(problem.times):,} steps done")
-                now = versions()
-                changed = [f"{name} {loop.stored_versions.get(name)} -> {version}" for name, version in now.items()
-                           if loop.stored_versions.get(name) != version]
+                now, stored = versions(), checkpoint.saved_versions(out)
+                changed = [f"{name} {stored.get(name)} -> {version}" for name, version in now.items()
+                           if stored.get(name) != version]
                 if changed:
                     print(f"vpcontact: warning: resuming with other versions ({', '.join(changed)}): the numbers "
                           f"may differ in the last digits from an uninterrupted run", file=sys.stderr)

@@ -13,7 +13,8 @@ from .steps import field_step_numbers
 
 #: Bytes of one history row in memory: a dict of the HISTORY_COLUMNS and its time (CPython 3.11, measured).
 HISTORY_ROW_BYTES = 1100
-#: Bytes the ESTIMATE_COLUMNS add to a history row in memory (7 float objects and the larger dict; CPython 3.11, measured).
+#: Bytes the ESTIMATE_COLUMNS add to a history row in memory (7 float objects and the larger dict; CPython 3.11,
+#: measured).
 ESTIMATE_ROW_BYTES = 900
 #: Bytes of a NumPy array object besides its data.
 ARRAY_BYTES = 112

@@ -24,7 +24,7 @@ from ..errors import CaseError, shown
 from ..fem.space import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from ..problem.discretization import Discretization
-from .columns import CONTACT_ARRAYS, ESTIMATE_COLUMNS, ESTIMATE_TERMS, history_columns
+from .columns import CONTACT_ARRAYS, ESTIMATE_COLUMNS, ESTIMATE_TERMS, INTEGER_COLUMNS, history_columns
 from .steps import end_of_step_rows, field_step_numbers, step_ends
 
 #: Most characters of a run's message that ``repr(result)`` shows (on its second line).
@@ -182,6 +182,42 @@ class Result:
         self.timings = timings
         self.wall_time_s = timings["total"]
 
+    # --- a checkpoint ----------------------------------------------------------------------------
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The rows so far as named arrays: ``row_<column>`` for each of ``columns`` (int64 for the
+        INTEGER_COLUMNS, else float64), ``row_time`` and ``contact_<name>`` (rows, contact nodes) for each of
+        the CONTACT_ARRAYS; :meth:`resume` reads them back, bit for bit."""
+        rows = len(self.rows)
+        arrays = {f"row_{column}": np.array([row[column] for row in self.rows],
+                                            dtype=np.int64 if column in INTEGER_COLUMNS else np.float64)
+                  for column in self.columns}
+        arrays["row_time"] = np.array(self.times, dtype=np.float64)
+        arrays.update({f"contact_{name}": np.array(self.contact[name]).reshape(rows, self.contact_nodes)
+                       for name in CONTACT_ARRAYS})
+        return arrays
+
+    def field_arrays(self) -> dict[int, dict[str, np.ndarray]]:
+        """The Fields of each field step kept so far as named arrays (FIELD_NAMES; a field the run has not,
+        None, is left out)."""
+        return {n: {name: getattr(fields, name) for name in FIELD_NAMES if getattr(fields, name) is not None}
+                for n, fields in sorted(self.fields.items())}
+
+    def resume(self, arrays: dict[str, np.ndarray], fields: dict[int, dict[str, np.ndarray]], step: int,
+               step_cuts: int, resumed_at: list[int]) -> None:
+        """Take back the rows of :meth:`arrays` and the fields of :meth:`field_arrays` (a field left out is
+        None), the ``step`` reached, its ``step_cuts`` and the steps where the run was resumed."""
+        columns = {column: arrays[f"row_{column}"] for column in self.columns}
+        count = len(arrays["row_time"])
+        self.rows = [{column: (int(values[i]) if column in INTEGER_COLUMNS else np.float64(values[i]))
+                      for column, values in columns.items()} for i in range(count)]
+        self.times = [np.float64(t) for t in arrays["row_time"]]
+        self.contact = {name: list(arrays[f"contact_{name}"]) for name in CONTACT_ARRAYS}
+        self.completed_steps, self.step_cuts, self.resumed_at = step, step_cuts, resumed_at
+        for n, data in fields.items():
+            self.fields[n] = Fields(**{name: data.get(name) for name in FIELD_NAMES})
+        if self.fields:
+            self.final = self.fields[max(self.fields)]
+
     # --- reading ---------------------------------------------------------------------------------
     @property
     def columns(self) -> tuple[str, ...]:
@@ -268,7 +304,8 @@ class Result:
     def history(self):
         """The history as a pandas DataFrame (a new one at each access): one row per converged time level,
         the columns of history.csv (``columns``), integer columns as int64. ``result.history[result.ends_step()]``
-        keeps the rows at the step times t_n (those of ``series(..., substeps=False)``). See :mod:`vpcontact.results.tables`."""
+        keeps the rows at the step times t_n (those of ``series(..., substeps=False)``). See
+        :mod:`vpcontact.results.tables`."""
         from .tables import history_table
 
         return history_table(self)

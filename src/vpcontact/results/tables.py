@@ -72,7 +72,8 @@ def step_row(result, step: int | None) -> int:
 
 
 def arc_lengths(surface) -> np.ndarray:
-    """The arc length along Γ3 (2D) of each contact node, in their order (see :func:`vpcontact.results.plots.curves.arc_length`)."""
+    """The arc length along Γ3 (2D) of each contact node, in their order (see
+    :func:`vpcontact.results.plots.curves.arc_length`)."""
     lengths = np.zeros(surface.size)
     if surface.size:
         order, s, _ = arc_length(surface.coordinates, surface.facets)

@@ -19,6 +19,6 @@ from .figures import DPI, FIGURES, run_figures
 from .history import TIME_SERIES, time_series
 from .layout import STATE_COLORS, STATE_LABELS, STRESS_MAP
 
-__all__ = ["DPI", "FIGURES", "STATE_COLORS", "STATE_LABELS", "STRESS_MAP", "TIME_SERIES", "along_contact", "along_curve",
-           "arc_length", "body_field", "body_fields", "contact_pressure", "contact_zoom", "default_steps",
-           "deformed_body", "magnification", "node_states", "run_figures", "time_series"]
+__all__ = ["DPI", "FIGURES", "STATE_COLORS", "STATE_LABELS", "STRESS_MAP", "TIME_SERIES", "along_contact",
+           "along_curve", "arc_length", "body_field", "body_fields", "contact_pressure", "contact_zoom",
+           "default_steps", "deformed_body", "magnification", "node_states", "run_figures", "time_series"]

@@ -202,7 +202,8 @@ def along_contact(results, quantities=ALONG_CONTACT, step=None):
             s = s[order]
         for ax, quantity in zip(axes, quantities):
             if quantity == "pressure":
-                value = result.contact_history("pressure_compliance")[row] + result.contact_history("pressure_rigid")[row]
+                value = (result.contact_history("pressure_compliance")[row]
+                         + result.contact_history("pressure_rigid")[row])
             else:
                 value = result.contact_history(quantity)[row]
             style = dict(lw=1.2) if result.dim == 2 else dict(ls="none", marker=".", markersize=3)

@@ -37,6 +37,6 @@ def time_series(result, columns=TIME_SERIES):
     axes[-1].set_xlabel("t")
     start, end = result.discretization.times.start, float(result.discretization.times[-1])
     axes[0].set_xlim(start, end + 0.02 * (end - start))  # room for the last marker
-    figure.suptitle(f"History of the run ({result.status}, {result.completed_steps} of {len(result.discretization.times)} "
-                    f"steps)", fontsize=10)
+    planned = len(result.discretization.times)
+    figure.suptitle(f"History of the run ({result.status}, {result.completed_steps} of {planned} steps)", fontsize=10)
     return figure
