@@ -49,7 +49,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..io import checkpoint, directory
+from ..io import checkpoint, directory, paths
 from ..case.schema import Case, load_case
 from ..errors import CaseError
 from ..mesh.msh import write_mesh
@@ -99,7 +99,7 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
     if resume and case.adapt is not None:
         raise CaseError("--resume of an adaptive run ([adapt]) is not supported: it keeps no checkpoints; run it "
                         "again with --overwrite")
-    directory.usable(out)
+    paths.usable(out)
     check_room(out)
     if case.adapt is not None and (out / "cycles").exists() and not (out / "cycles").is_dir():
         raise CaseError(f"--out '{out}': '{out / 'cycles'}' is not a folder, and an adaptive run writes its cycles/ "

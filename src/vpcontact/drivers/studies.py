@@ -46,7 +46,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..io import directory
+from ..io import directory, paths
 from ..case.schema import _brief, load_case
 from ..errors import CaseError
 from ..case.inputs import MAX_TOML_BYTES, check_regular_file
@@ -269,7 +269,7 @@ def run_study(study: Study, out: str | os.PathLike, *, executor: Executor | None
     the reason or None}.
     """
     out = Path(out)
-    directory.usable(out)
+    paths.usable(out)
     _check_run_directories(study, out)
     held = directory.acquire(out)
     try:

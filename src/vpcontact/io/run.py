@@ -33,7 +33,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from ..errors import CaseError, flag
-from . import checkpoint, directory
+from . import checkpoint, directory, paths
 from .files import matching, remove_files, temporaries, write_text
 from .outputs import FILES, write_outputs
 from .versions import versions
@@ -100,8 +100,8 @@ def write_run(result, out: str | os.PathLike, *, overwrite: bool = False) -> Pat
     CaseError for a path that cannot be a directory or with a file or folder standing where an output goes,
     NotEmpty (a CaseError, and a FileExistsError) for a directory that is not empty without ``overwrite``.
     Returns ``out`` as a Path."""
-    out, overwrite = directory.folder_path(out, "output directory"), flag("overwrite", overwrite)
-    directory.usable(out, "output directory")
+    out, overwrite = paths.folder_path(out, "output directory"), flag("overwrite", overwrite)
+    paths.usable(out, "output directory")
     check_room(out, "output directory")
     if directory.holds_files(out, "output directory") and not overwrite:
         raise NotEmpty(f"output directory '{out}' is not empty: overwrite=True replaces the outputs of a run in it "
