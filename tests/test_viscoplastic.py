@@ -323,6 +323,18 @@ def test_a_callable_of_the_wrong_shape_is_refused():
         vpcontact.solve(block(None, 2), viscoplastic=lambda s, e: np.zeros(3))
 
 
+def test_a_callable_whose_shape_changes_during_the_run_fails_the_step_in_one_line():
+    """A law of the right shape at t_0 (the check before the run: σ_0 = 0 there) that returns another shape
+    once the body is loaded: the step fails with one line naming both shapes, no exception escapes."""
+    def changing(sigma, strain):
+        return np.zeros_like(sigma) if not np.any(sigma) else np.zeros(3)
+
+    result = vpcontact.solve(block(None, 4), viscoplastic=changing)
+    assert result.status == "failed" and result.steps == 0 and "\n" not in result.message
+    assert result.message == ("step 1 (t = 0.25) failed: at t = 0.25 the viscoplastic law returned an array of shape "
+                              "(3,); expected (2, 2, 16) (d, d, elements), like its arguments")
+
+
 @pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
 def test_an_unstable_explicit_step_fails_cleanly():
     """k ≫ η: the explicit history blows up; the run stops with status "failed" and says why."""

@@ -11,14 +11,19 @@ from ..fem.space import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 
 
+class LawShapeError(ValueError):
+    """A viscoplastic law whose values do not have the shape of its arguments (one that passed the check
+    before the run, at t_0, and changes its shape later): the step fails with this message."""
+
+
 def viscoplastic_rate(G, sigma: np.ndarray, strain: np.ndarray) -> np.ndarray:
-    """𝒢(σ, ε) per element, checked: an array of the shape of σ, (d, d, nelements)."""
+    """𝒢(σ, ε) per element, checked: an array of the shape of σ, (d, d, nelements); LawShapeError otherwise."""
     rate = G(sigma.copy(), strain.copy())  # a law may not change the stored fields
     try:
         rate = np.broadcast_to(np.asarray(rate, dtype=float), sigma.shape)
     except (TypeError, ValueError):
-        raise ValueError(f"the viscoplastic law returned an array of shape {np.shape(rate)}; expected "
-                         f"{sigma.shape} (d, d, elements), like its arguments") from None
+        raise LawShapeError(f"the viscoplastic law returned an array of shape {np.shape(rate)}; expected "
+                            f"{sigma.shape} (d, d, elements), like its arguments") from None
     return rate
 
 

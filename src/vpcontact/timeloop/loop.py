@@ -54,7 +54,7 @@ from ..fem.rigid_modes import RigidModes
 from ..solvers import DofLayout, StepData, StepSolution, make_solver
 from ..solvers.errors import NotConvergedError, SingularMatrixError
 from ..solvers.time_estimate import estimate_seconds
-from .checks import failure_message, history_failure, invalid_law, pulled_off, viscoplastic_rate
+from .checks import LawShapeError, failure_message, history_failure, invalid_law, pulled_off, viscoplastic_rate
 from .resting import FreeMotions, room
 from .snapshot import LoopSnapshot
 from .state import Attempt, LoopState, Trend
@@ -295,7 +295,10 @@ class TimeLoop:
             if wanted:
                 fields = self._fields(*computed)
             if G is not None:
-                rate = viscoplastic_rate(G, sigma, strain)
+                try:
+                    rate = viscoplastic_rate(G, sigma, strain)
+                except LawShapeError as error:
+                    return f"step {n} (t = {problem.times[n - 1]:g}) failed: at t = {attempt.t:.10g} {error}"
         values = {"ξ": xi, "K": K, "the compliance pressure": compliance}
         if fields is not None:
             values.update({"the displacement": fields.displacement, "the stress": fields.von_mises})
