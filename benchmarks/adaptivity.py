@@ -38,9 +38,11 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
-from vpcontact.estimate.adapt import adapt, solve_and_estimate
+from vpcontact import adapt
+from vpcontact.case.translate import adapt_options, output_options
+from vpcontact.estimate.adapt import solve_and_estimate
 from vpcontact.results.norms import differences, element_energies, transfer
-from vpcontact.problem.build import build_problem
+from vpcontact import build_problem
 from vpcontact.mesh.refinement import signed_measures
 from vpcontact.reproduction.plan import level_overrides
 from vpcontact.reproduction.records import dofs_reaching
@@ -137,7 +139,8 @@ def study(beta: float, args) -> dict:
     for level in args.levels:
         started = time.perf_counter()
         case = load(level, beta, settings)
-        result, functional = solve_and_estimate(build_problem(case), case.adapt, case.output)
+        result, functional = solve_and_estimate(build_problem(case), adapt_options(case.adapt),
+                                                output_options(case.output))
         row = {"level": level, "dofs": int(complete(result).dofs), "contact_nodes": int(result.contact_nodes),
                "estimate": float(np.sqrt(functional.sum())), "errors": reference.errors(result),
                "wall_time_s": time.perf_counter() - started}

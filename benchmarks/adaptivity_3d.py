@@ -35,10 +35,10 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
-from vpcontact.estimate.adapt import adapt
+from vpcontact import adapt
 from vpcontact.estimate.indicators import Level
 from vpcontact.results.norms import differences
-from vpcontact.problem.build import build_problem
+from vpcontact import build_problem
 from vpcontact.reproduction.records import dofs_reaching
 from vpcontact.estimate.residual import ResidualEstimator
 
@@ -61,7 +61,7 @@ def load(h: float, **overrides):
 def solved(case):
     """(problem, result) of a run of ``case`` that completes (else SystemExit)."""
     problem = build_problem(case)
-    result = problem.solve(output=case.output)
+    result = vpcontact.solve(problem, output=case.output)
     if result.status != "complete":
         raise SystemExit(f"the run failed: {result.message}")
     return problem, result

@@ -70,7 +70,7 @@ CASES = {"paper": (paper_case, (1.0, -1.0)), "punch": (punch_case, (None,))}
 def _solve(case):
     """(problem, result) of a run of ``case`` that completes (else SystemExit)."""
     problem = vpcontact.build_problem(case)
-    result = problem.solve(output=case.output)
+    result = vpcontact.solve(problem, output=case.output)
     if result.status != "complete":
         raise SystemExit(f"the run failed: {result.message}")
     return problem, result

@@ -95,7 +95,7 @@ def write_case(mesh: Path, steps: int, folder: Path) -> tuple[Path, dict, list[i
 def getfem_arguments(case: dict) -> list[str]:
     """The law, loads, time grid and Newton tolerance of `case` as options of getfem_half_disc.py (K = c_v:
     β = 0); refused (SystemExit) where the case is not what that model solves."""
-    from vpcontact.case.expressions import parse_expression
+    from vpcontact.expressions.parse import parse_expression
 
     (traction,) = case["boundary"]["traction"]
     horizontal, vertical = (parse_expression(value, where="traction") for value in traction["value"])

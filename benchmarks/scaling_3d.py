@@ -49,7 +49,8 @@ def run_level(h: float, method: str, steps: int | None = None, beta: float = 1.0
     """Solve the example on the mesh of edge h with ``method`` (``steps`` steps over its time span, the
     layer's β) in this process and return its record."""
     import vpcontact
-    from vpcontact.problem.build import build_problem
+    from vpcontact import build_problem
+    from vpcontact.case.translate import output_options
     from vpcontact.solvers.condensed import condensed_memory
     from vpcontact.timeloop.loop import TimeLoop
 
@@ -65,7 +66,7 @@ def run_level(h: float, method: str, steps: int | None = None, beta: float = 1.0
               "contact_dofs": len(set(N.indices)), "steps": case.time.steps,
               "condensed_memory_mb": condensed_memory(N, A.shape[0]) / 2**20}
     try:
-        loop = TimeLoop(problem, case.output)
+        loop = TimeLoop(problem, output_options(case.output))
     except vpcontact.CaseError as error:  # the memory guard, or a factorization that fails
         return {**record, "status": "refused", "message": str(error), "peak_rss_mb": peak_rss_mb()}
     rss_setup = peak_rss_mb()

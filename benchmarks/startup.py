@@ -79,8 +79,9 @@ def phases(case_path: str, overrides: dict, out: Path) -> dict:
     import vpcontact.drivers.cli  # noqa: F401  (what `vpcontact run` imports)
     from vpcontact.io import checkpoint, contact_csv, figures, history_csv, solution, summary, vtu
     from vpcontact.io.run import write_resolved_case
-    from vpcontact.case.schema import load_case
-    from vpcontact.problem.build import build_problem
+    from vpcontact.case.load import load_case
+    from vpcontact import build_problem
+    from vpcontact.case.translate import output_options
     from vpcontact.drivers.rundir import run  # noqa: F401
     from vpcontact.timeloop.loop import TimeLoop
 
@@ -95,7 +96,7 @@ def phases(case_path: str, overrides: dict, out: Path) -> dict:
     case = timed("case", lambda: load_case(case_path, overrides))
     problem = build_problem(case)
     seconds |= {"mesh": problem.timings["mesh"], "assembly": problem.timings["assembly"]}
-    loop = TimeLoop(problem, case.output)
+    loop = TimeLoop(problem, output_options(case.output))
     result = loop.run(progress=False)
     seconds |= {name: result.timings.get(name, 0.0) for name in ("factorization", "condensation", "time_loop")}
     out.mkdir(parents=True, exist_ok=True)

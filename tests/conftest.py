@@ -64,7 +64,7 @@ def solved(case, **laws):
 
     case = case if isinstance(case, vpcontact.Case) else vpcontact.load_case(case)
     problem = vpcontact.build_problem(case, **laws)
-    return problem, problem.solve(output=case.output)
+    return problem, vpcontact.solve(problem, output=case.output)
 
 
 @pytest.fixture
@@ -115,13 +115,14 @@ def resumed_after(case, step: int, folder):
     """A time loop of ``case`` (a Case) stopped after ``step``, checkpointed into ``folder`` and restored into a
     new loop of the same case, not run yet: where a test of resuming starts."""
     from vpcontact.io import checkpoint
-    from vpcontact.problem.build import build_problem
+    from vpcontact import build_problem
+    from vpcontact.case.translate import output_options
     from vpcontact.timeloop.loop import TimeLoop
 
-    first = TimeLoop(build_problem(case), case.output)
+    first = TimeLoop(build_problem(case), output_options(case.output))
     assert first.run(stop=lambda: "stopped" if first.state.step == step else None).status == "interrupted"
     folder.mkdir(parents=True, exist_ok=True)
     checkpoint.save(first, folder)
-    second = TimeLoop(build_problem(case), case.output)
+    second = TimeLoop(build_problem(case), output_options(case.output))
     assert checkpoint.restore(second, folder) == step
     return second

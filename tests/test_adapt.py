@@ -10,12 +10,14 @@ import pytest
 
 import vpcontact
 from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree, solved
-from vpcontact.estimate.adapt import ESTIMATORS, adapt, dorfler, solve_and_estimate
-from vpcontact.case.schema import AdaptSection
+from vpcontact import adapt
+from vpcontact.estimate.adapt import ESTIMATORS, dorfler, solve_and_estimate
+from vpcontact.case.run import AdaptSection
+from vpcontact.case.translate import adapt_options, output_options
 from vpcontact.estimate.indicators import Level
 from vpcontact.mesh import read_mesh
 from vpcontact.results.norms import differences
-from vpcontact.problem.build import build_problem
+from vpcontact import build_problem
 from vpcontact.estimate.recovery import estimate as recovery_estimate
 from vpcontact.estimate.residual import estimate as residual_estimate
 
@@ -44,7 +46,7 @@ def paper_case(**settings):
 @pytest.mark.parametrize("estimator", ["residual", "recovery"])
 def test_the_time_functional_folds_every_steps_indicators(functional, estimator):
     case = paper_case(functional=functional, estimator=estimator)
-    result, folded = solve_and_estimate(build_problem(case), case.adapt, case.output)
+    result, folded = solve_and_estimate(build_problem(case), adapt_options(case.adapt), output_options(case.output))
     assert sorted(result.fields) == [3, 11]  # the other steps' fields were dropped once folded
     problem, every = solved(case.model_copy(update={"output": case.output.model_copy(update={"field_steps": "all"})}))
     estimate = {"residual": residual_estimate, "recovery": recovery_estimate}[estimator]

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
-from vpcontact.estimate.adapt import adapt
+from vpcontact import adapt
 from vpcontact.results.norms import element_energies, transfer
-from vpcontact.problem.build import build_problem
+from vpcontact import build_problem
 from vpcontact.reproduction.plan import level_overrides
 
 ROOT = Path(__file__).resolve().parents[1]

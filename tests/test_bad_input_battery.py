@@ -6,7 +6,7 @@ reaches a user on a correct run.
 The families: a case's keys and values (unknown, of the wrong type, out of range, not finite, empty, huge,
 values the run would not use), expressions, ``--set`` syntax, mesh files, ``--out`` paths, the files of
 ``initial.from_run``, and the Python API (``compose``'s arguments, ``Mesh`` arrays, NumPy values, Python laws
-and loads, the tables of ``Problem.solve``, ``TimeLoop`` and ``adapt``, ``Result.write``). The command line is
+and loads, the tables of ``vpcontact.solve`` and ``vpcontact.adapt``, ``Result.write``). The command line is
 called in this process (``vpcontact.drivers.cli.main``): a subprocess costs a second each, and the exit status, the
 one line on stderr and the files are the same (tests/test_bad_input.py, test_robustness.py run the CLI in
 subprocesses)."""
@@ -25,6 +25,7 @@ import tomli_w
 import vpcontact
 from vpcontact import mesh as meshes
 from vpcontact.drivers.cli import main
+from vpcontact.case.translate import output_options
 from vpcontact.errors import CaseError
 from vpcontact.timeloop.loop import TimeLoop, solve_problem
 
@@ -571,10 +572,10 @@ def test_numpy_numbers_and_arrays_are_the_numbers_and_lists_of_the_tables():
         solver={"tolerance": np.float64(1e-12), "max_iterations": np.int32(50)},
     )
     assert (numpy.A != plain.A).nnz == 0
-    assert numpy.model == plain.model
-    assert type(numpy.model.time.steps) is int and type(numpy.model.contact.probe[0]) is float
-    np.testing.assert_array_equal(numpy.solve(output={"progress": np.bool_(False)}).final.displacement,
-                                  plain.solve().final.displacement)
+    assert numpy.options == plain.options
+    assert type(numpy.options.time.steps) is int and type(numpy.options.contact.probe[0]) is float
+    np.testing.assert_array_equal(vpcontact.solve(numpy, output={"progress": np.bool_(False)}).final.displacement,
+                                  vpcontact.solve(plain).final.displacement)
 
 
 def test_numpy_values_in_a_case_dict_and_its_overrides_are_numbers():
@@ -665,7 +666,7 @@ def test_a_mesh_made_in_python_solves_the_uniform_block():
     assert mesh.parts["bottom"].dtype == np.int64 and np.all(np.diff(mesh.parts["bottom"]) > 0)
     problem = vpcontact.compose(mesh, material={"E": 100.0, "nu": 0.0}, dirichlet={"bottom": "y", "left": "x"},
                                 traction={"top": ["0", "t"]}, time={"T": 1.0, "steps": 1})
-    result = problem.solve()
+    result = vpcontact.solve(problem)
     top = mesh.nodes("top")
     np.testing.assert_allclose(result.final.displacement[top, 1], 1.0 / 100.0, rtol=1e-12)
 
@@ -684,15 +685,15 @@ def problem():
 
 @pytest.fixture(scope="module")
 def solved(problem):
-    return problem.solve()
+    return vpcontact.solve(problem)
 
 
-@pytest.mark.parametrize("call", ["Problem.solve", "solve_problem", "TimeLoop"])
+@pytest.mark.parametrize("call", ["vpcontact.solve", "solve_problem", "TimeLoop"])
 def test_an_output_table_is_a_dict_as_everywhere_in_compose(problem, call):
     output = {"field_steps": "all", "progress": np.bool_(False)}
-    run = {"Problem.solve": lambda: problem.solve(output=output),
-           "solve_problem": lambda: solve_problem(problem, output=output),
-           "TimeLoop": lambda: TimeLoop(problem, output).run()}[call]
+    run = {"vpcontact.solve": lambda: vpcontact.solve(problem, output=output),
+           "solve_problem": lambda: solve_problem(problem, output=output_options(output)),
+           "TimeLoop": lambda: TimeLoop(problem, output_options(output)).run()}[call]
     result = run()
     assert result.status == "complete" and sorted(result.fields) == [1, 2, 3]
 
@@ -705,28 +706,28 @@ def test_an_output_table_is_a_dict_as_everywhere_in_compose(problem, call):
     ({"checkpoint_every_seconds": np.float64("nan")}, ["output.checkpoint_every_seconds = nan"]),
 ])
 def test_a_bad_output_table_is_refused_naming_its_key(problem, output, words):
-    for call in (lambda: problem.solve(output=output), lambda: TimeLoop(problem, output)):
+    for call in (lambda: vpcontact.solve(problem, output=output), lambda: TimeLoop(problem, output_options(output))):
         refused_by_api(call, *words)
 
 
 @pytest.mark.parametrize("call, words", [
-    (lambda problem: problem.solve(progress="yes"), ["progress = 'yes': expected True or False"]),
+    (lambda problem: vpcontact.solve(problem, progress="yes"), ["progress = 'yes': expected True or False"]),
     (lambda problem: TimeLoop("problem"), ["problem = 'problem': expected a vpcontact.Problem"]),
     (lambda problem: solve_problem(None), ["problem = None: expected a vpcontact.Problem"]),
     (lambda problem: vpcontact.solve(half_disc_case(h=0.25), progress="no"), ["progress = 'no'"]),
-    (lambda problem: vpcontact.estimate.adapt.adapt(problem, {"cycles": 0}), ["adapt.cycles = 0", ">= 1"]),
-    (lambda problem: vpcontact.estimate.adapt.adapt(problem, {"cycles": 1, "theta": 2}), ["adapt.theta = 2"]),
-    (lambda problem: vpcontact.estimate.adapt.adapt(problem, None), ["missing required value 'adapt.cycles'"]),
-    (lambda problem: vpcontact.estimate.adapt.adapt(problem, {"cycles": 1}, {"xdmf": "yes"}), ["output.xdmf = \"yes\""]),
-    (lambda problem: vpcontact.estimate.adapt.adapt("problem", {"cycles": 1}), ["problem = 'problem'"]),
-    (lambda problem: problem.solve(output={("a",): 1}), ["in output: keys must be strings"]),
+    (lambda problem: vpcontact.adapt(problem, {"cycles": 0}), ["adapt.cycles = 0", ">= 1"]),
+    (lambda problem: vpcontact.adapt(problem, {"cycles": 1, "theta": 2}), ["adapt.theta = 2"]),
+    (lambda problem: vpcontact.adapt(problem, None), ["missing required value 'adapt.cycles'"]),
+    (lambda problem: vpcontact.adapt(problem, {"cycles": 1}, {"xdmf": "yes"}), ["output.xdmf = \"yes\""]),
+    (lambda problem: vpcontact.adapt("problem", {"cycles": 1}), ["problem = 'problem'"]),
+    (lambda problem: vpcontact.solve(problem, output={("a",): 1}), ["in output: keys must be strings"]),
 ])
 def test_a_bad_argument_of_solving_is_refused(problem, call, words):
     refused_by_api(lambda: call(problem), *words)
 
 
 def test_adapt_takes_its_settings_and_outputs_as_dicts(problem):
-    adaptation = vpcontact.estimate.adapt.adapt(problem, {"cycles": np.int64(2), "theta": 0.5}, {"field_steps": "none"})
+    adaptation = vpcontact.adapt(problem, {"cycles": np.int64(2), "theta": 0.5}, {"field_steps": "none"})
     assert adaptation.status == "complete" and len(adaptation.rows) == 2
 
 
@@ -764,7 +765,7 @@ def test_the_condensed_newton_matrix_of_a_floating_body_with_every_node_separate
     from vpcontact.solvers.condensed import KRYLOV_TOLERANCE
 
     case = vpcontact.load_case(half_disc_case(h=0.25), {"solver.method": "condensed"})
-    solver = TimeLoop(vpcontact.build_problem(case), case.output).solver
+    solver = TimeLoop(vpcontact.build_problem(case), output_options(case.output)).solver
     systems, c0 = solver.systems, solver.reference
     m = c0.size
     inactive, w = np.ones(m), -c0.copy()

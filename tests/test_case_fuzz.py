@@ -15,7 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 import vpcontact
-from vpcontact.case.schema import MAX_NESTING
+from vpcontact.case.load import MAX_NESTING
 from vpcontact.errors import LONGEST_MESSAGE
 from vpcontact.errors import CaseError
 from conftest import half_disc_case, rectangle_case

@@ -54,7 +54,7 @@ def test_help_and_import_load_no_numerics():
     assert loaded.strip() == "[]"
     script = "import vpcontact; print(vpcontact.load_case.__module__, type(vpcontact.solve).__name__)"
     assert subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          check=True).stdout.split() == ["vpcontact.case.schema", "function"]
+                          check=True).stdout.split() == ["vpcontact.case.load", "function"]
 
 
 def test_python_dash_m_vpcontact_is_the_command_line(tmp_path):

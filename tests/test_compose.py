@@ -1,6 +1,7 @@
 """A problem composed in Python (vpcontact.compose) is the problem of the same case file; the problem
-keeps its model and Python objects (Problem.on rebuilds it on a refined mesh); nothing downstream of the
-problem reads a case."""
+keeps its options and Python objects (Problem.on rebuilds it on a refined mesh); the case is translated once,
+and nothing below it (the problem, the time loop, the solvers, the results, the files, the estimators) imports
+it."""
 
 import ast
 import pathlib
@@ -10,6 +11,7 @@ import pytest
 
 import vpcontact
 from vpcontact import mesh as meshes
+from vpcontact.case.translate import output_options
 from vpcontact.estimate.indicators import Level
 from vpcontact.mesh.refinement import refine
 
@@ -21,6 +23,8 @@ SOURCE = REPO / "src" / "vpcontact"
 DOWNSTREAM = ("timeloop/loop", "results/result", "io/run", "io/outputs", "io/checkpoint", "estimate/adapt",
               "estimate/indicators", "estimate/residual", "estimate/recovery", "results/plots/contact",
               "results/plots/body", "results/plots/history", "results/norms")
+#: The packages below the case: they take plain options (vpcontact.case.translate), never the case itself.
+BELOW_THE_CASE = ("problem", "timeloop", "solvers", "results", "io", "estimate")
 
 
 def composed(h=0.1, **changes):
@@ -49,7 +53,7 @@ def test_a_composed_problem_is_the_problem_of_the_case(from_file):
     case_problem = vpcontact.build_problem(vpcontact.load_case(half_disc_case()))
     assert (problem.A != case_problem.A).nnz == 0
     np.testing.assert_array_equal(problem.free, case_problem.free)
-    result = problem.solve()
+    result = vpcontact.solve(problem)
     assert result.status == "complete"
     np.testing.assert_array_equal(result.final.displacement, from_file.final.displacement)
     np.testing.assert_array_equal(result.series("K_probe"), from_file.series("K_probe"))
@@ -67,7 +71,7 @@ def test_python_objects_replace_the_tables(from_file):
             return np.full_like(xi, 2000.0)
 
     contact = {"part": "bottom_arc", "g": 0.2, "probe": [0.0, 0.0], "stiffness": Power()}
-    result = composed(traction={"top_arc": lambda x, y, t: (0 * x, -20.0 * t + 0 * y)}, contact=contact).solve()
+    result = vpcontact.solve(composed(traction={"top_arc": lambda x, y, t: (0 * x, -20.0 * t + 0 * y)}, contact=contact))
     assert result.status == "complete"
     scale = np.abs(from_file.final.displacement).max()
     np.testing.assert_allclose(result.final.displacement, from_file.final.displacement, rtol=0, atol=1e-9 * scale)
@@ -87,7 +91,7 @@ def test_a_3d_problem_from_a_mesh_table():
         time={"T": T, "steps": 2},
     )
     assert problem.mesh.dim == 3
-    result = problem.solve()
+    result = vpcontact.solve(problem)
     d = result.contact_row()["penetration"]
     np.testing.assert_allclose(d, c * T / K, rtol=1e-8)
 
@@ -105,7 +109,7 @@ def test_a_problem_is_built_again_on_a_refined_mesh():
         contact=contact, time={"T": 1.1, "steps": 11}, solver={"tolerance": 1e-12}).items()})
     assert rebuilt.basis.N > coarse.basis.N
     assert (rebuilt.A != direct.A).nnz == 0
-    np.testing.assert_array_equal(rebuilt.solve().final.displacement, direct.solve().final.displacement)
+    np.testing.assert_array_equal(vpcontact.solve(rebuilt).final.displacement, vpcontact.solve(direct).final.displacement)
 
 
 def test_initial_arrays_belong_to_their_mesh():
@@ -156,6 +160,49 @@ def test_nothing_downstream_of_the_problem_reads_a_case():
                    and node.module == "case" and any(alias.name in ("Case", "load_case") for alias in node.names)]
         assert not reads and not imports, (name, reads, imports)
     assert not hasattr(composed(h=0.2), "case")
+
+
+def imported_modules(path: pathlib.Path) -> set[str]:
+    """The absolute names of the modules the source file ``path`` of vpcontact imports, at any depth of its code
+    (``from ..case.model import Case`` in problem/build.py: vpcontact.case.model and vpcontact.case.model.Case;
+    ``from .. import case``: vpcontact and vpcontact.case)."""
+    package = ".".join(("vpcontact", *path.relative_to(SOURCE).parent.parts))
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parent = ".".join(package.split(".")[:len(package.split(".")) - node.level + 1])
+                base = f"{parent}.{base}" if base else parent
+            names |= {base, *(f"{base}.{alias.name}" for alias in node.names)}
+    return names
+
+
+@pytest.mark.parametrize("package", BELOW_THE_CASE)
+def test_no_module_below_the_case_imports_it(package):
+    """Every module of the packages below the case imports nothing of vpcontact.case: the case is translated once
+    into options (vpcontact.case.translate), by the command line, the API and compose."""
+    assert "vpcontact.problem.options" in imported_modules(SOURCE / "case" / "translate.py")  # the helper sees them
+    modules = sorted((SOURCE / package).rglob("*.py"))
+    assert len(modules) >= 3
+    for path in modules:
+        names = imported_modules(path)
+        case = sorted(name for name in names if name == "vpcontact.case" or name.startswith("vpcontact.case."))
+        assert not case, (path.relative_to(SOURCE).as_posix(), case)
+
+
+def test_the_problem_does_not_import_the_time_loop():
+    """The arrow runs from the time loop to the problem only: a problem is solved by vpcontact.solve."""
+    for path in sorted((SOURCE / "problem").rglob("*.py")):
+        loop = sorted(name for name in imported_modules(path) if name.startswith("vpcontact.timeloop"))
+        assert not loop, (path.relative_to(SOURCE).as_posix(), loop)
+
+
+def test_the_default_outputs_are_the_case_files():
+    """The options of an [output] table left out are the case file's defaults, with and without a table."""
+    assert output_options(None) == output_options({}) == vpcontact.results.output_options.OutputOptions()
 
 
 def test_the_readme_example_balances_its_load():

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import vpcontact
+from vpcontact.case.translate import output_options
 from vpcontact.solvers import condensed
 from vpcontact.solvers.condensed import KRYLOV_TOLERANCE, NewtonSystems
 from vpcontact.solvers.errors import NotConvergedError, SingularMatrixError, SolverError
@@ -52,7 +53,7 @@ def condensed_run(case, krylov_from: int | None = None):
     """The case by the condensed method, fields at every step; with ``krylov_from``: its Newton systems by
     GMRES from that many contact nodes on (0: always, DENSE: never)."""
     case = vpcontact.load_case(case, {"solver.method": "condensed", "output.field_steps": "all"})
-    loop = TimeLoop(vpcontact.build_problem(case), case.output)
+    loop = TimeLoop(vpcontact.build_problem(case), output_options(case.output))
     if krylov_from is not None:
         loop.solver.krylov_from = krylov_from
     result = loop.run()
@@ -256,7 +257,7 @@ def test_a_newton_system_gmres_cannot_solve_is_a_step_cut(monkeypatch):
 def test_newton_systems_gmres_never_solves_fail_the_run_with_one_line(monkeypatch):
     failing(monkeypatch, lambda call: call >= 5)
     case = vpcontact.load_case(CASES["2D half disc beta=1"], {"solver.method": "condensed"})
-    loop = TimeLoop(vpcontact.build_problem(case), case.output)
+    loop = TimeLoop(vpcontact.build_problem(case), output_options(case.output))
     loop.solver.krylov_from = 0
     result = loop.run()
     assert result.status == "failed" and "\n" not in result.message, result.message

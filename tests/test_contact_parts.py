@@ -15,7 +15,7 @@ import vpcontact
 from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree
 from test_3d import block_case, states
 from vpcontact.mesh import block, half_disc
-from vpcontact.problem.build import build_problem
+from vpcontact import build_problem
 
 HISTORIES = ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid")
 

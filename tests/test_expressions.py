@@ -1,4 +1,4 @@
-"""Tests of vpcontact.case.expressions: values, broadcasting, dependencies, pickling, rejections."""
+"""Tests of vpcontact.expressions: values, broadcasting, dependencies, pickling, rejections."""
 
 from __future__ import annotations
 
@@ -10,13 +10,8 @@ import numpy as np
 import pytest
 
 from vpcontact.errors import CaseError
-from vpcontact.case.expressions import (
-    CONSTANT_NAMES,
-    FUNCTION_NAMES,
-    MAX_DEPTH,
-    Expression,
-    parse_expression,
-)
+from vpcontact.expressions.language import CONSTANT_NAMES, FUNCTION_NAMES, MAX_DEPTH
+from vpcontact.expressions.parse import Expression, parse_expression
 
 X = np.array([-1.5, -0.25, 0.0, 0.3, 0.5, 2.0])
 Y = np.array([2.0, 1.0, 0.5, -1.0, 3.0, 0.75])

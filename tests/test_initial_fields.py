@@ -13,8 +13,9 @@ from conftest import assert_refused, half_disc_case, rectangle_case, resumed_aft
 from test_3d_runs import ball_case
 from test_robustness import write
 from vpcontact.fem.assembly import element_strain
-from vpcontact.case.schema import load_case
-from vpcontact.problem.build import build_problem
+from vpcontact.case.load import load_case
+from vpcontact.case.translate import output_options
+from vpcontact import build_problem
 from vpcontact.drivers.rundir import run
 from vpcontact.timeloop.loop import TimeLoop, solve_problem
 
@@ -112,7 +113,7 @@ def test_a_restart_is_resumed_from_its_checkpoint_as_if_never_stopped(tmp_path):
     restart["time"]["steps"] = 6
     restart["output"]["field_steps"] = "final"
     restart = load_case(restart)
-    whole = TimeLoop(build_problem(restart), restart.output).run()
+    whole = TimeLoop(build_problem(restart), output_options(restart.output)).run()
     resumed = resumed_after(restart, 2, tmp_path / "stopped").run()
     assert resumed.status == whole.status == "complete"
     np.testing.assert_array_equal(resumed.times, whole.times)

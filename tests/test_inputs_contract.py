@@ -10,6 +10,7 @@ import pytest
 import tomli_w
 
 import vpcontact
+from vpcontact.case.translate import output_options
 from vpcontact.problem.time_grid import TimeGrid
 from vpcontact.results.footprint import memory_needed
 from vpcontact.memory import available_memory
@@ -295,7 +296,7 @@ def test_the_estimate_covers_what_a_run_holds_and_writes(tmp_path):
     case["time"]["steps"] = steps = 400
     case["output"] = {"field_steps": "all"}
     loaded = vpcontact.load_case(case)
-    loop = vpcontact.timeloop.loop.TimeLoop(vpcontact.build_problem(loaded), loaded.output)
+    loop = vpcontact.timeloop.loop.TimeLoop(vpcontact.build_problem(loaded), output_options(loaded.output))
     tracemalloc.start()
     try:
         result = loop.run()
@@ -327,7 +328,7 @@ def test_a_million_steps_of_a_small_case_are_accepted_and_start_at_once():
     started = time.perf_counter()
     loaded = vpcontact.load_case(case)
     problem = vpcontact.build_problem(loaded)
-    loop = vpcontact.timeloop.loop.TimeLoop(problem, loaded.output)
+    loop = vpcontact.timeloop.loop.TimeLoop(problem, output_options(loaded.output))
     assert time.perf_counter() - started < 20
     result = loop.run(stop=lambda: "enough" if loop.state.step >= 3 else None)
     assert result.status == "interrupted" and result.steps == 3

@@ -37,7 +37,7 @@ def test_a_softening_python_law_that_turns_negative_stops_the_run_at_the_node_an
     """K(ξ) = 100 − 5000 ξ is negative once ξ > 0.02: the run stops at the first level where a node's ξ passes it,
     naming that node, its ξ (K(ξ) recomputed from it matches the value printed) and the time."""
     K = lambda xi: 100.0 - 5000.0 * xi  # noqa: E731
-    result = composed(K).solve()
+    result = vpcontact.solve(composed(K))
     assert result.status == "failed" and "\n" not in result.message
     assert "the contact law K(ξ) is -" in result.message and "check contact.stiffness" in result.message
     i = node_in_message(result, "K")
@@ -54,7 +54,7 @@ def test_a_law_that_is_not_a_number_inside_the_newton_iteration_is_named_in_the_
     """K(ξ) = 100 √(0.02 − ξ) is NaN beyond ξ = 0.02: the Newton iterates stop being finite, and the failure names
     the law and a node where it was NaN."""
     with np.errstate(invalid="ignore"):
-        result = composed(lambda xi: 100.0 * np.sqrt(0.02 - xi)).solve()
+        result = vpcontact.solve(composed(lambda xi: 100.0 * np.sqrt(0.02 - xi)))
     assert result.status == "failed" and "\n" not in result.message
     assert "the contact law K(ξ) is nan at contact node" in result.message
     node_in_message(result, "K")
@@ -64,7 +64,7 @@ def test_a_p_law_that_pulls_separated_nodes_stops_the_run_with_r():
     """p(r) = r (not r⁺) is negative where a node is separated (r < 0): the layer would pull. The message gives
     p's value and r = d at that node, and p(r) = r there."""
     case = vpcontact.Case.model_validate(rectangle_case(gap="2*x*x"))  # the nodes far from x = 0 stay separated
-    result = vpcontact.solve_problem(vpcontact.build_problem(case, p=lambda r: r))
+    result = vpcontact.solve(vpcontact.build_problem(case, p=lambda r: r))
     assert result.status == "failed"
     assert "the contact law p(r) is -" in result.message and "check contact.p" in result.message
     value = float(result.message.split("p(r) is ")[1].split(" at")[0])
@@ -87,5 +87,5 @@ def test_an_overflowing_law_of_the_case_file_stops_the_command_line_with_exit_3_
 
 def test_valid_laws_are_not_refused_at_any_node():
     """The check lets every valid law through: the paper's law, p = r⁺ written by hand, K ≥ 0 everywhere."""
-    result = composed(lambda xi: 100.0 * (1 + 20 * xi), p=lambda r: np.maximum(r, 0.0)).solve()
+    result = vpcontact.solve(composed(lambda xi: 100.0 * (1 + 20 * xi), p=lambda r: np.maximum(r, 0.0)))
     assert result.status == "complete", result.message

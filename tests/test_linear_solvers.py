@@ -7,7 +7,7 @@ import pytest
 import scipy.sparse as sp
 
 import vpcontact
-from vpcontact.problem.build import build_problem
+from vpcontact import build_problem
 from vpcontact.fem.rigid_modes import RigidModes
 from vpcontact.solvers import amg
 from vpcontact.solvers.errors import NotConvergedError

@@ -14,7 +14,7 @@ import pytest
 
 from conftest import assert_refused, run_cli
 
-from vpcontact import build_problem, load_case, solve_problem
+from vpcontact import build_problem, load_case, solve
 from vpcontact.errors import CaseError
 from vpcontact.laws.elasticity import Perzyna
 from vpcontact.laws.materials import RegionalViscoplastic
@@ -53,7 +53,7 @@ def test_two_materials_in_series_are_exact(dim):
     """E as an expression with a jump at the mesh line x = A: the P1 solution is the exact piecewise-linear
     displacement, the stress uniaxial and equal in both materials."""
     problem = build_problem(load_case(bar_case(dim, {"E": SERIES_MODULUS, "nu": 0.0})))
-    result = solve_problem(problem)
+    result = solve(problem)
     assert result.status == "complete"
     p = problem.mesh.mesh.p
     for step, fields in result.fields.items():
@@ -73,8 +73,8 @@ def test_two_materials_in_series_are_exact(dim):
 def test_a_constant_expression_is_the_number(dim):
     """E and ν written as expressions of constant value give bitwise the run of the numbers (the
     per-element assembly equals the homogeneous one)."""
-    number = solve_problem(build_problem(load_case(bar_case(dim, {"E": 700.0, "nu": 0.3}))))
-    expression = solve_problem(build_problem(load_case(bar_case(dim, {"E": "700 + 0*x", "nu": "0.3"}))))
+    number = solve(build_problem(load_case(bar_case(dim, {"E": 700.0, "nu": 0.3}))))
+    expression = solve(build_problem(load_case(bar_case(dim, {"E": "700 + 0*x", "nu": "0.3"}))))
     for step in number.fields:
         assert np.array_equal(number.fields[step].displacement, expression.fields[step].displacement)
         assert np.array_equal(number.fields[step].stress, expression.fields[step].stress)
@@ -162,7 +162,7 @@ def test_two_regions_in_series_are_exact():
     unstructured mesh): the P1 solution is the exact piecewise-linear displacement."""
     materials = [{"region": "core", "E": E1, "nu": 0.0}, {"region": "shell", "E": E2, "nu": 0.0}]
     problem = build_problem(load_case(regions_case(2, materials)))
-    result = solve_problem(problem)
+    result = solve(problem)
     x = problem.mesh.mesh.p[0]
     for step, fields in result.fields.items():
         stress = F * problem.times[step - 1]
@@ -178,9 +178,9 @@ def test_one_material_in_every_region_is_the_single_material(dim):
     """Two entries with the same data on 'core' and 'shell' (a viscoplastic law in both) give the run of one
     [material] table, to rounding; naming a region by its number is naming it by its name."""
     law = {"law": "perzyna", "eta": 0.5, "yield_stress": 1.0}
-    single = solve_problem(build_problem(load_case(regions_case(dim, {"E": 800.0, "nu": 0.3, "viscoplastic": law}))))
+    single = solve(build_problem(load_case(regions_case(dim, {"E": 800.0, "nu": 0.3, "viscoplastic": law}))))
     tags = {2: "6", 3: "4"}
-    regional = solve_problem(build_problem(load_case(regions_case(dim, [
+    regional = solve(build_problem(load_case(regions_case(dim, [
         {"region": "core", "E": 800.0, "nu": 0.3, "viscoplastic": law},
         {"region": int(tags[dim]), "E": 800.0, "nu": 0.3, "viscoplastic": law}]))))
     for step in single.fields:
@@ -197,7 +197,7 @@ def test_a_region_without_a_law_stays_elastic(dim):
     law = {"law": "perzyna", "eta": 0.5, "yield_stress": 0.0}
     problem = build_problem(load_case(regions_case(dim, [{"region": "core", "E": 800.0, "nu": 0.3, "viscoplastic": law},
                                                          {"region": "shell", "E": 300.0, "nu": 0.2}])))
-    result = solve_problem(problem)
+    result = solve(problem)
     z = result.fields[2].z
     assert not np.any(z[problem.mesh.regions["shell"]])
     assert np.all(np.abs(z[problem.mesh.regions["core"]]).max(axis=(1, 2)) > 0)
@@ -238,9 +238,9 @@ def test_a_python_viscoplastic_law_of_the_centroids_is_the_regional_law():
         return np.where(x[0] < 1.0, perzyna(sigma, strain), 0.0)
 
     materials = [{"region": "core", "E": 800.0, "nu": 0.3}, {"region": "shell", "E": 300.0, "nu": 0.2}]
-    by_python = solve_problem(build_problem(load_case(regions_case(2, materials)), viscoplastic=G))
+    by_python = solve(build_problem(load_case(regions_case(2, materials)), viscoplastic=G))
     materials[0]["viscoplastic"] = {"law": "perzyna", "eta": 0.5, "yield_stress": 0.0}
-    by_case = solve_problem(build_problem(load_case(regions_case(2, materials))))
+    by_case = solve(build_problem(load_case(regions_case(2, materials))))
     scale = np.abs(by_case.fields[2].stress).max()
     assert np.abs(by_python.fields[2].stress - by_case.fields[2].stress).max() < 1e-12 * scale
     assert np.abs(by_case.fields[2].z).max() > 1e-2 * scale

@@ -149,7 +149,7 @@ def test_the_python_api_prints_nothing_unless_asked(capfd):
     case = half_disc_case(h=0.25)
     vpcontact.solve(case)
     problem = vpcontact.build_problem(vpcontact.load_case(case))
-    problem.solve()
+    vpcontact.solve(problem)
     assert capfd.readouterr() == ("", "")
     vpcontact.solve(case, progress=True)
     out, err = capfd.readouterr()

@@ -32,7 +32,7 @@ def block(load: str, method: str = "condensed", **time) -> dict:
 
 def solved(case: dict):
     case = vpcontact.Case.model_validate(case)
-    return vpcontact.solve_problem(vpcontact.build_problem(case), output=case.output)
+    return vpcontact.solve(vpcontact.build_problem(case), output=case.output)
 
 
 # --- the least-distance program and the balance test, against independent solvers --------------------------
@@ -121,7 +121,7 @@ def test_a_viscoplastic_block_keeps_its_permanent_strain_and_rests_on_the_layer(
     case["time"]["steps"] = 20
     problem = vpcontact.build_problem(vpcontact.Case.model_validate(case))
     output = vpcontact.Case.model_validate(case).output
-    result = vpcontact.solve_problem(problem, output=output)
+    result = vpcontact.solve(problem, output=output)
     assert result.status == "complete", result.message
     d = result.contact_history("penetration")
     rest = result.series("t") > 0.5 + 1e-9

@@ -15,6 +15,7 @@ from matplotlib.colors import Normalize, to_hex
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 import vpcontact
+from vpcontact.case.translate import output_options
 from vpcontact.results import plots
 from vpcontact.laws.contact import STATUS_NAMES
 from vpcontact.results.columns import INTEGER_COLUMNS
@@ -396,7 +397,7 @@ def test_a_complete_run_that_kept_no_fields_draws_its_last_step():
     np.testing.assert_array_equal(cells.get_array(), result.final.stress[:, 0, 1])
     assert "t = 1.1" in figure.get_suptitle()
     loaded = vpcontact.load_case(case)
-    loop = vpcontact.timeloop.loop.TimeLoop(vpcontact.build_problem(loaded), loaded.output)
+    loop = vpcontact.timeloop.loop.TimeLoop(vpcontact.build_problem(loaded), output_options(loaded.output))
     stopped = loop.run(stop=lambda: "stopped" if loop.state.step == 3 else None)
     with pytest.raises(vpcontact.CaseError, match="the run kept no fields"):
         stopped.plot.deformed()

@@ -6,7 +6,7 @@ import pytest
 from skfem import MeshTri
 
 import vpcontact
-from vpcontact.problem.build import build_problem
+from vpcontact import build_problem
 from vpcontact.fem.rigid_modes import RigidModes, bodies
 from conftest import half_disc_case
 

@@ -24,7 +24,8 @@ from vpcontact.io.files import write_text
 from vpcontact.io.outputs import write_outputs
 from vpcontact.io.run import remove_outputs, write_resolved_case, write_run
 from vpcontact.drivers.cli import main
-from vpcontact.problem.build import build_problem
+from vpcontact import build_problem
+from vpcontact.case.translate import output_options
 from vpcontact.timeloop.loop import TimeLoop
 from conftest import assert_refused, half_disc_case, rectangle_case, run_cli, snapshot_tree
 
@@ -107,7 +108,7 @@ def test_the_list_of_outputs_names_every_file_a_run_writes(tmp_path):
     case = rectangle_case()
     case["output"]["field_steps"] = "all"
     case = vpcontact.load_case(case)
-    loop = TimeLoop(build_problem(case), case.output)
+    loop = TimeLoop(build_problem(case), output_options(case.output))
     result = loop.run(stop=lambda: "stopped" if loop.state.step >= 5 else None)
     out = tmp_path / "run"
     out.mkdir()
@@ -286,7 +287,7 @@ def killed_run(folder, steps_done=5):
     path = Path(folder) / "case.toml"
     path.write_text(tomli_w.dumps(case))
     loaded = vpcontact.load_case(path)
-    loop = TimeLoop(build_problem(loaded), loaded.output)
+    loop = TimeLoop(build_problem(loaded), output_options(loaded.output))
     loop.run(stop=lambda: "killed" if loop.state.step >= steps_done else None)
     out = Path(folder) / "run"
     out.mkdir()

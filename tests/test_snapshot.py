@@ -9,6 +9,7 @@ import pytest
 
 import vpcontact
 from conftest import half_disc_case
+from vpcontact.case.translate import output_options
 from vpcontact.results.columns import CONTACT_ARRAYS
 from vpcontact.results.result import FIELD_NAMES
 from vpcontact.timeloop.loop import TimeLoop
@@ -26,8 +27,8 @@ def viscoplastic_half_disc(method: str):
 @pytest.mark.parametrize("method", ["condensed", "full"])
 def test_a_loop_restored_from_a_snapshot_ends_as_the_uninterrupted_run(method):
     case = viscoplastic_half_disc(method)
-    whole = TimeLoop(vpcontact.build_problem(case), case.output).run()
-    first = TimeLoop(vpcontact.build_problem(case), case.output)
+    whole = TimeLoop(vpcontact.build_problem(case), output_options(case.output)).run()
+    first = TimeLoop(vpcontact.build_problem(case), output_options(case.output))
     assert first.run(stop=lambda: "stopped" if first.state.step == 5 else None).status == "interrupted"
     snapshot = first.snapshot()
 
@@ -37,7 +38,7 @@ def test_a_loop_restored_from_a_snapshot_ends_as_the_uninterrupted_run(method):
     assert set(snapshot.fields[5]) == {"displacement", "stress", "stress33", "von_mises", "z"}
     assert int(snapshot.arrays["step"]) == 5 and str(snapshot.arrays["solver_method"]) == method
 
-    second = TimeLoop(vpcontact.build_problem(case), case.output)
+    second = TimeLoop(vpcontact.build_problem(case), output_options(case.output))
     second.restore(snapshot)
     assert second.state.step == 5 and second.result.resumed_at == [5]
     resumed = second.run()

@@ -281,6 +281,7 @@ def test_the_fields_kept_are_those_of_every_step(field_steps):
     """The loop computes σ at every level but builds the fields at the field steps only: those kept, and
     the last level's of a run interrupted after step 4 (``result.final``), are the ones a run keeping every
     step's has there."""
+    from vpcontact.case.translate import output_options
     from vpcontact.timeloop.loop import TimeLoop
 
     case = ball(h=0.2, viscoplastic={"law": "perzyna", "eta": 0.5, "yield_stress": 1.0})
@@ -288,7 +289,7 @@ def test_the_fields_kept_are_those_of_every_step(field_steps):
     every = vpcontact.solve(case)
     case["output"]["field_steps"] = field_steps
     loaded = vpcontact.load_case(case)
-    loop = TimeLoop(vpcontact.build_problem(loaded), loaded.output)
+    loop = TimeLoop(vpcontact.build_problem(loaded), output_options(loaded.output))
     stopped = loop.run(stop=lambda: "stopped" if loop.state.step == 4 else None)
     kept = [] if field_steps == "none" else field_steps
     assert stopped.status == "interrupted" and stopped.steps == 4 and sorted(stopped.fields) == kept

@@ -28,7 +28,6 @@ from matplotlib.figure import Figure
 from matplotlib.tri import Triangulation
 
 import vpcontact
-from vpcontact.estimate.adapt import adapt
 
 EDGE = np.array([0.5, 0.0])  # the punch's edge
 
@@ -50,7 +49,7 @@ def punch(h: float, cycles: int):
 
 def adaptive(case):
     """The adaptive cycles of ``case``: its problem, its [adapt] settings and its output options."""
-    return adapt(vpcontact.build_problem(case), case.adapt, case.output)
+    return vpcontact.adapt(vpcontact.build_problem(case), case.adapt, case.output)
 
 
 adaptation = adaptive(punch(1 / 8, cycles=8))

@@ -48,8 +48,8 @@ def ball(viscoplastic: bool):
 
 viscous_case = ball(True)
 viscous = vpcontact.build_problem(viscous_case)
-creeping = vpcontact.solve_problem(viscous, output=viscous_case.output)  # the fields at steps 5 and 20
-elastic = vpcontact.solve(ball(False))  # build_problem and solve_problem in one call
+creeping = vpcontact.solve(viscous, output=viscous_case.output)  # the fields at steps 5 and 20
+elastic = vpcontact.solve(ball(False))  # built and solved in one call
 print(creeping)
 
 # %%
@@ -112,7 +112,7 @@ block = vpcontact.load_case({
     "output": {"field_steps": "all", "progress": False},
 })
 square_problem = vpcontact.build_problem(block)
-square = vpcontact.solve_problem(square_problem, output=block.output)
+square = vpcontact.solve(square_problem, output=block.output)
 top = square_problem.mesh.nodes("top")
 settlement = np.array([square.fields[n].displacement[top, 1].mean() for n in range(1, square.steps + 1)])
 rates = np.diff(settlement) / square_problem.k  # the top's velocity between consecutive steps

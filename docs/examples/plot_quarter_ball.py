@@ -27,7 +27,6 @@ import numpy as np
 import vpcontact
 from vpcontact import mesh
 from vpcontact.results import plots
-from vpcontact.case.schema import OutputSection
 
 C = 11.4443  # the traction's rate, per unit area of the upper half
 
@@ -45,7 +44,7 @@ print(problem)
 # %%
 # The problem knows its sizes before anything is solved. The time loop keeps the fields (displacement,
 # stress) at the steps asked for:
-result = problem.solve(output=OutputSection(field_steps=[2, 5, 8, 11]))
+result = vpcontact.solve(problem, output={"field_steps": [2, 5, 8, 11]})
 print(result)
 
 # %%

@@ -16,10 +16,6 @@ from __future__ import annotations
 
 import importlib
 from importlib import metadata
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from .results.result import Result
 
 try:
     __version__ = metadata.version("vpcontact")
@@ -27,14 +23,14 @@ except metadata.PackageNotFoundError:  # running from a source tree
     __version__ = "0+unknown"
 
 #: The names of the API, by the module that defines them.
-API = {"Case": "case.schema", "Model": "case.schema", "load_case": "case.schema", "CaseError": "errors",
-       "compose": "case.compose", "Problem": "problem.build", "build_problem": "problem.build",
-       "Result": "results.result", "solve_problem": "timeloop.loop", "write_run": "io.run"}
+API = {"Case": "case.model", "Model": "case.model", "load_case": "case.load", "CaseError": "errors",
+       "compose": "case.compose", "Problem": "problem.build", "build_problem": "api", "solve": "api", "adapt": "api",
+       "Result": "results.result", "write_run": "io.run"}
 
 #: The packages a user may reach as ``vpcontact.<name>`` after ``import vpcontact`` (and their modules as
 #: ``vpcontact.<name>.<module>``), and the modules of the package itself.
-SUBMODULES = ("case", "drivers", "errors", "estimate", "fem", "io", "laws", "mesh", "problem", "progress", "reproduction",
-              "results", "solvers", "timeloop")
+SUBMODULES = ("case", "drivers", "errors", "estimate", "expressions", "fem", "inputs", "io", "laws", "mesh", "problem",
+              "progress", "reproduction", "results", "solvers", "timeloop")
 
 
 def submodule(package: str, name: str):
@@ -63,31 +59,5 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(API) | set(SUBMODULES))
 
 
-def solve(case, *, progress=False, **laws) -> Result:
-    """Solve a case (a :class:`Case`, or a path or dict for :func:`load_case`).
-
-    ``laws`` replace parts of the case by Python objects (see :func:`build_problem`): ``p`` and
-    ``stiffness_law`` (functions of a NumPy array; with a ``derivative`` method, or a central difference is
-    used; f(r, x) of the contact nodes' coordinates x too), ``tractions`` ({part: f(x, y, t) -> (fx, fy)}:
-    replaces the case's traction on that part), ``body_force`` (f(x, y, t) -> (fx, fy): replaces the case's
-    body forces), ``viscoplastic`` (𝒢(σ, ε)) and the initial state's arrays ``initial_displacement``
-    (nodes, d), ``initial_stress`` (elements, d, d) or (d, d), ``initial_xi`` (contact nodes,).
-    Bad objects are a :class:`CaseError` before the first step. Nothing is printed, unless ``progress`` is
-    True (the set-up phases and the steps reported on stderr, as the command line does) or a reporter
-    (:mod:`vpcontact.progress`).
-    """
-    from .case.schema import Case, load_case
-    from .errors import flag
-    from .problem.build import build_problem
-    from .progress import reporting
-    from .timeloop.loop import solve_problem
-
-    progress = flag("progress", progress)
-    if not isinstance(case, Case):
-        case = load_case(case)
-    with reporting(progress) as reporter:
-        return solve_problem(build_problem(case, progress=reporter, **laws), output=case.output, progress=reporter)
-
-
-__all__ = ["Case", "CaseError", "Model", "Problem", "Result", "build_problem", "compose", "load_case", "solve",
-           "solve_problem", "write_run"]
+__all__ = ["Case", "CaseError", "Model", "Problem", "Result", "adapt", "build_problem", "compose", "load_case", "solve",
+           "write_run"]

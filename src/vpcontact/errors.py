@@ -1,6 +1,7 @@
 """The one exception a user sees for bad input, and how its messages show a user's values."""
 
 import json
+import math
 
 
 class CaseError(ValueError):
@@ -28,6 +29,21 @@ def shown(text: str) -> str:
     if len(text) <= SHOWN:
         return text
     return f"{text[:SHOWN]}… ({len(text)} characters)"
+
+
+def brief(value) -> str:
+    """``repr(value)`` on one line, cut as :func:`shown` cuts: a huge integer by its number of digits, a value whose
+    repr spans lines on one, any object of the API (whatever its repr does) at least by its type."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 200:
+        sign = "a negative" if value < 0 else "an"
+        return f"{sign} integer of about {int(value.bit_length() * math.log10(2)) + 1} digits"
+    try:
+        text = repr(value)
+    except Exception:  # noqa: BLE001 - an object of the API may have any repr
+        return f"a value of type {type(value).__name__}"
+    if "\n" in text:  # an object shown over several lines (a scikit-fem mesh, a table): one line
+        text = " ".join(text.split())
+    return shown(text)
 
 
 def quoted(text: str) -> str:

@@ -1,4 +1,4 @@
-"""The case: its schema (the keys of a case file), expressions, input files, and its translation into a problem."""
+"""The case: its schema (the keys of a case file), its loading and overrides, and its translation into plain options."""
 
 from .. import submodule
 

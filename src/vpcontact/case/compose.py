@@ -12,7 +12,7 @@ the boundary conditions, the contact law, the time grid and the solver options.
     ...              "stiffness": {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": 1.0}},
     ...     time={"T": 1.1, "steps": 11},
     ... )
-    >>> result = problem.solve()
+    >>> result = vpcontact.solve(problem)
 
 Each piece is given as the table of the case file holds it (the same keys, the same checks, the same
 one-line :class:`~vpcontact.errors.CaseError` naming the key), or as a Python object where one is
@@ -20,9 +20,10 @@ natural: a :class:`~vpcontact.mesh.Mesh` (or a mesh file's name), a traction or 
 (f(x, y, z, t) in 3D), a stiffness law K(ξ) or a law p(r) (with a ``derivative`` method, or a
 central difference is used; K(ξ, x) of the contact nodes' coordinates x too), a viscoplastic law
 𝒢(σ, ε), and NumPy arrays of the initial state. A case file is one way to state the same problem:
-``vpcontact.build_problem(vpcontact.load_case(path))``; :func:`compose` another. Either way the problem
-keeps its :class:`~vpcontact.case.schema.Model` (``problem.model``, the tables) and the Python objects
-(``problem.objects``), so that :meth:`~vpcontact.problem.build.Problem.on` builds it again on a refined mesh.
+``vpcontact.build_problem(vpcontact.load_case(path))``; :func:`compose` another. Either way the tables are
+validated as a :class:`~vpcontact.case.model.Model`, translated once (:mod:`vpcontact.case.translate`), and the
+problem keeps their options (``problem.options``) and the Python objects (``problem.objects``), so that
+:meth:`~vpcontact.problem.build.Problem.on` builds it again on a refined mesh.
 """
 
 from __future__ import annotations
@@ -35,9 +36,13 @@ import skfem
 from pydantic import ValidationError
 
 from ..mesh import core as meshes
-from .schema import MeshSection, Model, _brief, _check_expressions, _check_tree, _describe, _material_keys, plain, section
-from ..errors import CaseError
+from .body import MeshSection
+from .load import check_expressions, check_tree, plain, section
+from .messages import describe
+from .model import Model
+from ..errors import CaseError, brief
 from ..problem.build import Problem, build_problem, make_mesh
+from .translate import mesh_source, problem_options
 
 #: The contact keys that may be Python laws instead of tables, and the build_problem argument each becomes.
 PYTHON_LAWS = {"stiffness": "stiffness_law", "p": "p"}
@@ -64,7 +69,7 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     - ``initial``: the ``[initial]`` table; its ``displacement`` (nodes, d), ``stress`` (elements, d, d) or
       (d, d) and ``xi`` (contact nodes,) may be NumPy arrays.
 
-    Numbers may be NumPy numbers, lists NumPy arrays or tuples (see :func:`vpcontact.case.schema.plain`). Every
+    Numbers may be NumPy numbers, lists NumPy arrays or tuples (see :func:`vpcontact.case.load.plain`). Every
     value is checked before anything is assembled: a bad one, or one the problem would not use, is a
     CaseError naming it."""
     mesh = _mesh(mesh)
@@ -88,19 +93,20 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
                 objects[argument] = initial.pop(key)
         tables["initial"] = initial
     tables = plain(tables)
-    _check_tree(tables)
+    check_tree(tables)
     try:
         model = Model.model_validate(tables, context={"python_laws": python_laws})
     except ValidationError as error:
-        raise CaseError(_describe(error.errors()[0])) from None
-    _check_expressions(model)
+        raise CaseError(describe(error.errors()[0])) from None
+    check_expressions(model)
     if viscoplastic is not None:
-        tabled = [key for key, entry in _material_keys(model) if entry.viscoplastic is not None]
+        tabled = [key for key, entry in model.keyed_materials() if entry.viscoplastic is not None]
         if tabled:
-            raise CaseError(f"{tabled[0]}.viscoplastic and viscoplastic = {_brief(viscoplastic)}: the Python law "
+            raise CaseError(f"{tabled[0]}.viscoplastic and viscoplastic = {brief(viscoplastic)}: the Python law "
                             f"replaces the tables' laws on the whole body, so {tabled[0]}.viscoplastic would not be "
                             f"used; give one of them")
-    return build_problem(model, mesh=mesh, **{name: value for name, value in objects.items() if value is not None})
+    return build_problem(problem_options(model), mesh=mesh,
+                         **{name: value for name, value in objects.items() if value is not None})
 
 
 def _mesh(mesh) -> meshes.Mesh:
@@ -110,19 +116,19 @@ def _mesh(mesh) -> meshes.Mesh:
     if isinstance(mesh, (str, os.PathLike)):
         return meshes.read_mesh(mesh)
     if isinstance(mesh, Mapping):
-        return make_mesh(section(MeshSection, mesh, "mesh"))
+        return make_mesh(mesh_source(section(MeshSection, mesh, "mesh")))
     if isinstance(mesh, skfem.Mesh):
         raise CaseError(f"mesh = a scikit-fem {type(mesh).__name__} without named boundary parts: not accepted yet; "
                         f"pass vpcontact.mesh.Mesh(m, parts={{name: indices of boundary facets}}, exact_normals={{}}) "
                         f"(or save it to a mesh file with physical groups and pass its name)")
-    raise CaseError(f"mesh = {_brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, quarter_ball, "
+    raise CaseError(f"mesh = {brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, quarter_ball, "
                     f"rectangle, block or read_mesh), a mesh file's name or a [mesh] table")
 
 
 def _table(key: str, value) -> dict:
     """A copy of the table ``value`` of ``key``, or CaseError."""
     if not isinstance(value, Mapping):
-        raise CaseError(f"{key} = {_brief(value)}: expected a table (dict) of the [{key}] keys")
+        raise CaseError(f"{key} = {brief(value)}: expected a table (dict) of the [{key}] keys")
     return dict(value)
 
 
@@ -135,13 +141,13 @@ def _dirichlet(dirichlet) -> list:
         return [{"part": part, **_components(part, components)} for part, components in dirichlet.items()]
     if isinstance(dirichlet, Sequence) and not isinstance(dirichlet, str):
         return list(dirichlet)
-    raise CaseError(f"dirichlet = {_brief(dirichlet)}: expected {{part: components}} (components \"x\", [\"x\", \"y\"] "
+    raise CaseError(f"dirichlet = {brief(dirichlet)}: expected {{part: components}} (components \"x\", [\"x\", \"y\"] "
                     f"or None for all) or a list of [[boundary.dirichlet]] tables")
 
 
 def _components(part, components) -> dict:
     """The "components" key of the [[boundary.dirichlet]] table of ``dirichlet[part] = components``."""
-    where = f"dirichlet[{_brief(part)}] = {_brief(components)}"
+    where = f"dirichlet[{brief(part)}] = {brief(components)}"
     if isinstance(components, Mapping):
         raise CaseError(f"{where}: prescribed displacements are not supported yet (only u = 0): give the components "
                         f"held at 0 (\"x\", [\"x\", \"y\"] or None for all)")
@@ -160,7 +166,7 @@ def _tractions(traction) -> tuple[list, dict | None]:
     if traction is None:
         return [], None
     if not isinstance(traction, Mapping):
-        raise CaseError(f"traction = {_brief(traction)}: expected {{part: value}}, value a list of expressions or a "
+        raise CaseError(f"traction = {brief(traction)}: expected {{part: value}}, value a list of expressions or a "
                         f"function f(x, y, (z,) t) -> (fx, fy, (fz))")
     functions = {part: value for part, value in traction.items() if callable(value)}
     tables = [{"part": part, "value": value} for part, value in traction.items() if not callable(value)]

@@ -88,9 +88,10 @@ def _refuse(error) -> int:
 
 
 def _run(args) -> int:
-    from ..case.schema import load_case
+    from ..case.load import load_case
     from ..progress import SILENT, Log
-    from .rundir import EXIT_SIGNAL, run
+    from .rundir import run
+    from .signals import EXIT_SIGNAL
 
     try:
         case = load_case(args.case, args.overrides)
@@ -127,7 +128,7 @@ def _run(args) -> int:
 def _check(args) -> int:
     import json
 
-    from ..case.schema import load_case
+    from ..case.load import load_case
     from .check import check_case
 
     try:
@@ -137,47 +138,8 @@ def _check(args) -> int:
     if args.json:
         print(json.dumps(checked.as_dict(), indent=2))
     else:
-        print("\n".join(_check_lines(checked)))
+        print("\n".join(checked.lines()))
     return 0
-
-
-def _check_lines(c) -> list[str]:
-    """The description of :class:`~vpcontact.drivers.check.CaseCheck` ``c`` as lines of text."""
-    elements = "triangles" if c.dim == 2 else "tetrahedra"
-    angle = f", smallest angle {c.smallest_angle_degrees:.1f}°" if c.smallest_angle_degrees is not None else ""
-    lines = [f"{c.dim}D body: {c.nodes:,} nodes, {c.elements:,} {elements}, {c.dofs:,} dofs ({c.free_dofs:,} free)",
-             f"element quality (mean ratio, 1 = equilateral): min {c.quality_min:.3f}, median {c.quality_median:.3f}"
-             f"{angle}; element size (longest edge) {c.h_min:.3g} to {c.h_max:.3g}",
-             "parts: " + ", ".join(f"{p.name} ({p.facets:,} facets, {p.nodes:,} nodes)" for p in c.parts)]
-    if c.regions:
-        lines.append("regions: " + ", ".join(f"{r.name} ({r.elements:,} {elements}: {r.material})" for r in c.regions))
-    for m in c.materials:
-        where = f"regions {', '.join(m.regions)}" if m.regions else "the whole body"
-        law = f"viscoplastic ({m.viscoplastic})" if m.viscoplastic else "elastic"
-        lines.append(f"{m.key}: E = {m.E}, nu = {m.nu}, {law}, on {where} ({m.elements:,} {elements})")
-    if c.contact_nodes:
-        lines.append(f"contact: {c.contact_nodes:,} nodes (" +
-                     ", ".join(f"{part}: {count:,}" for part, count in c.contact_nodes_by_part.items()) + ")")
-    else:
-        lines.append("contact: none")
-    lines.append(f"time: {c.steps:,} steps of k = {c.k:.6g} from t = {c.start:g} to T = {c.T:g}; fields written at "
-                 f"{c.field_steps:,} steps")
-    lines.append(f"method: {c.method} ({c.method_reason})")
-    outputs = {part: size for part, size in c.memory_bytes.items() if part != "solver"}
-    solver = c.memory_bytes["solver"]
-    lines.append(f"memory: outputs {_bytes(sum(outputs.values()))} (" +
-                 ", ".join(f"{part} {_bytes(size)}" for part, size in outputs.items()) + "), solver " +
-                 (f"{_bytes(solver)}" if solver is not None else "not estimated") +
-                 f"; {_bytes(c.memory_available_bytes)} available")
-    t = c.time_seconds
-    lines.append(f"time: about {t['total']:.2g} s (build {t['build']:.2g} s, measured; solver setup "
-                 f"{t['solver setup']:.2g} s and time loop {t['time loop']:.2g} s, estimated to a factor of 2)")
-    return lines
-
-
-def _bytes(size: int) -> str:
-    """A size in MiB below 1 GiB, else in GiB."""
-    return f"{size / 2**20:.3g} MiB" if size < 2**30 else f"{size / 2**30:.3g} GiB"
 
 
 def _describe(error: OSError) -> str:
@@ -190,8 +152,9 @@ def _describe(error: OSError) -> str:
 
 def _study(args) -> int:
     from ..progress import SILENT, Log
-    from .rundir import EXIT_SIGNAL, StopOnSignals
-    from .studies import load_study, run_study
+    from .signals import EXIT_SIGNAL, StopOnSignals
+    from .studies.file import load_study
+    from .studies.running import connect, run_study
 
     client = None
     try:
@@ -199,7 +162,7 @@ def _study(args) -> int:
             raise CaseError(f"--workers {args.workers}: must be at least 1")
         study = load_study(args.study, args.out)
         if args.scheduler is not None:
-            client = _connect(args.scheduler)
+            client = connect(args.scheduler)
         with StopOnSignals() as stopper, (Log(hold=0.0, watch=False) if not args.quiet else SILENT) as progress:
             report = run_study(study, args.out, executor=client.get_executor() if client else None,
                                workers=args.workers, progress=progress, stop=stopper.reason)
@@ -222,20 +185,6 @@ def _study(args) -> int:
     for run_id in report["failed"]:
         print(f"vpcontact: run '{run_id}' failed (see {args.out / 'runs' / run_id})", file=sys.stderr)
     return EXIT_FAILED if report["failed"] else 0
-
-
-def _connect(address: str):
-    """A client of the Dask scheduler at ``address`` (CaseError without the cluster extra, or when it
-    cannot be reached)."""
-    try:
-        from distributed import Client
-    except ImportError:
-        raise CaseError(f'--scheduler {address}: the Dask client is not installed; install it with: '
-                        f'pip install "vpcontact[cluster]"') from None
-    try:
-        return Client(address, timeout="10s")
-    except (OSError, ValueError, TypeError) as error:
-        raise CaseError(f"--scheduler {address}: cannot connect ({error})") from None
 
 
 def _reproduce(args) -> int:

@@ -41,33 +41,31 @@ from __future__ import annotations
 import csv
 import errno
 import json
-import signal
 import sys
-import threading
 import time as clock
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..io import checkpoint, directory, paths
-from ..case.schema import Case, load_case
+from ..case.load import read_case
+from ..case.model import Case
+from ..case.translate import CaseOptions, translate
 from ..errors import CaseError
+from ..io import checkpoint, directory, paths
+from ..io.files import remove_files, replacing, write_text
+from ..io.outputs import write_outputs
+from ..io.run import check_room, remove_outputs, remove_temporaries, write_resolved_case
+from ..io.summary import json_safe, read_summary
+from ..io.versions import versions
 from ..mesh.msh import write_mesh
 from ..problem.build import Problem, build_problem
 from ..progress import Progress, reporting
 from ..results.result import Result
 from ..timeloop.loop import TimeLoop
-from ..io.files import remove_files, replacing, write_text
-from ..io.outputs import write_outputs
-from ..io.run import RESOLVED_CASE, check_room, remove_outputs, remove_temporaries, write_resolved_case
-from ..io.summary import json_safe, read_summary
-from ..io.versions import versions
+from .signals import StopOnSignals
 
 if TYPE_CHECKING:
     from ..estimate.adapt import Adaptation, Cycle
-
-SIGNAL_NAMES = {signal.SIGINT: "SIGINT", signal.SIGTERM: "SIGTERM"}
-EXIT_SIGNAL = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
 
 class RunStopped(OSError):
@@ -112,20 +110,21 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
         done = _finished(case, out)
         if done is not None:
             return done
+    options = translate(case)
     held = directory.acquire(out)  # before any computation: an unusable directory is refused at once
     started = False
     try:
         with StopOnSignals() as stopper, reporting(progress) as progress:
-            problem = build_problem(case, progress=progress)
+            problem = build_problem(options.problem, progress=progress)
             if case.adapt is not None:
                 from ..estimate.adapt import check_start  # an adaptive run only (as _adapt_locked)
 
-                check_start(problem, case.adapt)
+                check_start(problem, options.adapt)
                 started = True  # from here on the directory is written to: nothing above wrote to it
-                adaptation = _adapt_locked(problem, case, held, clear=overwrite and used, stopper=stopper,
+                adaptation = _adapt_locked(problem, case, options, held, clear=overwrite and used, stopper=stopper,
                                            progress=progress)
                 return Outcome(adaptation.last.result, adaptation.status, adaptation.message, stopper.signal)
-            loop = TimeLoop(problem, case.output, progress)
+            loop = TimeLoop(problem, options.output, progress)
             resuming = resume and checkpoint.exists(out)
             if resuming:
                 with progress.phase("checkpoint", f"restoring {checkpoint.folder(out)}") as phase:
@@ -202,10 +201,10 @@ def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool
     return result
 
 
-def _adapt_locked(problem: Problem, case: Case, held: directory.Held, *, clear: bool, stopper,
+def _adapt_locked(problem: Problem, case: Case, options: CaseOptions, held: directory.Held, *, clear: bool, stopper,
                   progress: Progress) -> Adaptation:
-    """The adaptive cycles of ``case.adapt`` from ``problem`` (the case's) in a directory this process holds
-    (see the module docstring)."""
+    """The adaptive cycles of ``case.adapt`` (translated: ``options``) from ``problem`` (the case's) in a directory
+    this process holds (see the module docstring)."""
     from ..estimate.adapt import COLUMNS, adapt
 
     out = held.path
@@ -229,7 +228,8 @@ def _adapt_locked(problem: Problem, case: Case, held: directory.Held, *, clear: 
             writer.writeheader()
             writer.writerows({k: repr(v) if isinstance(v, float) else v for k, v in row.items()} for row in rows)
 
-    adaptation = adapt(problem, case.adapt, case.output, after_cycle=after_cycle, stop=stopper.reason, progress=progress,
+    adaptation = adapt(problem, options.adapt, options.output, after_cycle=after_cycle, stop=stopper.reason,
+                       progress=progress,
                        after_step=lambda loop: held.check())
     with replacing(out / "final_mesh.msh") as temporary:
         write_mesh(adaptation.mesh, temporary)
@@ -252,7 +252,7 @@ def _finished(case: Case, out: Path) -> Outcome | None:
 def _check_same_case(case: Case, out: Path) -> None:
     """--resume in a directory without a checkpoint: it must hold a run of this same case."""
     try:
-        before = load_case(out / RESOLVED_CASE)
+        before = read_case(out)
     except CaseError:
         raise CaseError(f"cannot resume: '{out}' holds no run of vpcontact (no readable case.resolved.toml)") from None
     if checkpoint.comparable(before.resolved()) != checkpoint.comparable(case.resolved()):
@@ -274,31 +274,3 @@ class _Cadence:
 
     def saved(self, step: int) -> None:
         self.last_step, self.last_time = step, clock.monotonic()
-
-
-class StopOnSignals:
-    """While active (main thread only), SIGINT and SIGTERM ask the time loop to stop at the end of the
-    current step (a study: to stop its runs, see ``studies.run_study``); a second signal of the same
-    kind acts at once (the default action)."""
-
-    def __init__(self):
-        self.signal: int | None = None
-        self._previous = {}
-
-    def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
-            for number in SIGNAL_NAMES:
-                self._previous[number] = signal.signal(number, self._handle)
-        return self
-
-    def __exit__(self, *exc):
-        for number, handler in self._previous.items():
-            signal.signal(number, handler)
-        return False
-
-    def _handle(self, number, frame):
-        self.signal = number
-        signal.signal(number, self._previous.get(number, signal.SIG_DFL))  # a second one is not deferred
-
-    def reason(self) -> str | None:
-        return None if self.signal is None else f"stopped by {SIGNAL_NAMES[self.signal]}"

@@ -24,14 +24,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import recovery as recovery_estimate
-from ..case.schema import AdaptSection, OutputSection, section
 from ..errors import CaseError
+from .adapt_options import AdaptOptions
 from .indicators import Indicators, Level
 from ..mesh.core import Mesh
 from ..problem.build import Problem, checked_problem
 from ..progress import SILENT, Progress, duration, reporting
 from ..mesh.refinement import refine
 from .residual import ResidualEstimator
+from ..results.output_options import OutputOptions
 from ..results.result import Result
 from ..timeloop.loop import TimeLoop
 
@@ -96,7 +97,7 @@ def dorfler(values: np.ndarray, theta: float) -> np.ndarray:
     return np.sort(order[:min(count, order.size)])
 
 
-def solve_and_estimate(problem: Problem, settings: AdaptSection, output: OutputSection | None = None, *,
+def solve_and_estimate(problem: Problem, settings: AdaptOptions, output: OutputOptions | None = None, *,
                        stop: Callable[[], str | None] | None = None, progress: Progress = SILENT,
                        after_step: Callable[[TimeLoop], None] | None = None,
                        label: str = "time steps") -> tuple[Result, np.ndarray]:
@@ -130,7 +131,7 @@ def solve_and_estimate(problem: Problem, settings: AdaptSection, output: OutputS
     return result, functional
 
 
-def check_start(problem: Problem, settings: AdaptSection) -> None:
+def check_start(problem: Problem, settings: AdaptOptions) -> None:
     """CaseError unless the first mesh of the adaptation, ``problem``'s, is within ``adapt.max_dofs``."""
     limit = settings.max_dofs
     if problem.basis.N > limit:
@@ -138,21 +139,20 @@ def check_start(problem: Problem, settings: AdaptSection) -> None:
                         f"it, or start from a coarser mesh (mesh.h)")
 
 
-def adapt(problem: Problem, settings: AdaptSection, output: OutputSection | None = None, *,
+def adapt(problem: Problem, settings: AdaptOptions, output: OutputOptions | None = None, *,
           after_cycle: Callable[[Cycle], None] | None = None, stop: Callable[[], str | None] | None = None,
           progress: bool | Progress = False, after_step: Callable[[TimeLoop], None] | None = None) -> Adaptation:
-    """The adaptive cycles of ``settings`` (a case's ``[adapt]``, :class:`~vpcontact.case.schema.AdaptSection`) from
-    the mesh of ``problem``, each run with the outputs ``output`` (see the module docstring);
-    ``after_cycle(cycle)`` is called after each (its outputs), ``stop`` and ``after_step`` are the time
-    loop's hooks. ``settings`` and ``output`` may be dicts (the tables [adapt] and [output]); ``progress``:
-    True for each cycle, its set-up, steps and refinement reported on stderr (:mod:`vpcontact.progress`), or a
+    """The adaptive cycles of ``settings`` (a case's ``[adapt]``,
+    :class:`~vpcontact.estimate.adapt_options.AdaptOptions`; :func:`vpcontact.adapt` takes the table as a dict) from
+    the mesh of ``problem``, each run with the outputs ``output`` (see the module docstring); ``after_cycle(cycle)``
+    is called after each (its outputs), ``stop`` and ``after_step`` are the time loop's hooks; ``progress``: True
+    for each cycle, its set-up, steps and refinement reported on stderr (:mod:`vpcontact.progress`), or a
     reporter."""
-    settings, output = section(AdaptSection, settings, "adapt"), section(OutputSection, output, "output")
     with reporting(progress) as reporter:
         return _cycles(problem, settings, output, after_cycle, stop, reporter, after_step)
 
 
-def _cycles(problem: Problem, settings: AdaptSection, output: OutputSection | None, after_cycle, stop,
+def _cycles(problem: Problem, settings: AdaptOptions, output: OutputOptions | None, after_cycle, stop,
             progress: Progress, after_step) -> Adaptation:
     """The cycles of `adapt`, reported to ``progress``."""
     check_start(checked_problem(problem), settings)

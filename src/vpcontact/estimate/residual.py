@@ -103,7 +103,7 @@ def _build_geometry(problem) -> _Geometry:
         else np.zeros(0, dtype=np.int64)
     neumann = np.setdiff1d(boundary, contact)
     free = np.ones((neumann.size, d), dtype=bool)
-    for item in problem.model.boundary.dirichlet:
+    for item in problem.options.boundary.dirichlet:
         rows = _rows(neumann, mesh.facets(item.part))
         for name in item.components or coordinates(d):
             free[rows, component(name)] = False

@@ -22,7 +22,7 @@ from skfem import Basis, ElementTetP1, ElementTriP1, ElementVector, FacetBasis, 
 from skfem.assembly.basis import AbstractBasis
 
 from ..errors import CaseError, quoted
-from ..case.expressions import Expression
+from ..expressions.parse import Expression
 from ..laws.elasticity import Elasticity
 from ..mesh.core import Mesh
 from ..mesh.simplex import elastic_stiffness, geometry, strains, stress_work

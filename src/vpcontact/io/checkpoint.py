@@ -46,8 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from . import directory
-from ..case.schema import _brief
-from ..errors import CaseError
+from ..errors import CaseError, brief
 from ..timeloop.loop import TimeLoop
 from ..timeloop.snapshot import LoopSnapshot
 from .files import matching, remove_files, replacing
@@ -199,4 +198,4 @@ def first_difference(a, b, where: str = "") -> str:
             if a.get(key) != b.get(key):
                 return first_difference(a.get(key), b.get(key), f"{where}.{key}" if where else str(key))
         return where or "?"
-    return f"{where} = {_brief(a)} in the run, {_brief(b)} now"
+    return f"{where} = {brief(a)} in the run, {brief(b)} now"

@@ -119,7 +119,7 @@ def write_run(result, out: str | os.PathLike, *, overwrite: bool = False) -> Pat
 
 def write_resolved_case(resolved: str, out: Path) -> None:
     """case.resolved.toml: ``resolved``, the case with every value used and defaults included
-    (:meth:`~vpcontact.case.schema.Case.to_toml`), the versions in its header. A run directory's case reads
+    (:meth:`~vpcontact.case.model.Case.to_toml`), the versions in its header. A run directory's case reads
     back with ``vpcontact.load_case(DIR / "case.resolved.toml")``."""
     header = "".join(f"# {name} {version}\n" for name, version in versions().items())
     write_text(Path(out) / RESOLVED_CASE, header + resolved)

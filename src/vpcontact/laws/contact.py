@@ -20,7 +20,7 @@ import scipy.sparse as sp
 from skfem import FacetBasis
 
 from ..errors import CaseError, quoted
-from ..case.expressions import Expression
+from ..expressions.parse import Expression
 from ..mesh.core import Mesh
 from ..fem.space import coordinates as coordinates_names
 

@@ -11,14 +11,13 @@ claiming one element are refused before any computation.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..case.schema import MaterialSection, Model, _material_keys
 from ..errors import CaseError, quoted
-from ..case.expressions import values_at
+from ..expressions.parse import values_at
 from .elasticity import Elasticity, Perzyna, Relaxation
 from ..mesh.core import Mesh
 from ..fem.space import coordinates
@@ -54,7 +53,7 @@ class AtCentroids:
 class Materials:
     """The body's materials on the elements: which entry each element has, ℰ per element and 𝒢."""
 
-    owner: np.ndarray  # the index of each element's entry in ``model.materials`` (nelements,)
+    owner: np.ndarray  # the index of each element's entry in the case's materials (nelements,)
     elasticity: Elasticity  # E, ν floats for one homogeneous material, else arrays over the elements
     viscoplastic: Callable | None  # 𝒢(σ, ε) over arrays (d, d, nelements); None: 𝒢 = 0 everywhere
 
@@ -69,15 +68,16 @@ class Materials:
         return np.broadcast_to(np.asarray(self.elasticity.nu, dtype=float), self.owner.shape)
 
 
-def body_materials(model: Model, mesh: Mesh) -> Materials:
-    """The materials of ``model`` on the elements of ``mesh`` (CaseError naming the entry, region or
-    element where they do not assign exactly one admissible material to every element)."""
-    entries = _material_keys(model)
+def body_materials(materials: Sequence, mesh: Mesh) -> Materials:
+    """The case's ``materials`` (:class:`~vpcontact.problem.options.MaterialOptions`: key, E, ν, hypothesis,
+    regions, viscoplastic law) on the elements of ``mesh`` (CaseError naming the entry, region or element where
+    they do not assign exactly one admissible material to every element)."""
+    entries = [(entry.key, entry) for entry in materials]
     owner = _owners(entries, mesh)
     dim = mesh.dim
-    hypothesis = (model.materials[0].hypothesis or "plane_strain") if dim == 2 else None
-    if len(entries) == 1 and not any(isinstance(v, str) for v in (model.materials[0].E, model.materials[0].nu)):
-        entry = model.materials[0]
+    hypothesis = (materials[0].hypothesis or "plane_strain") if dim == 2 else None
+    if len(entries) == 1 and not any(isinstance(v, str) for v in (materials[0].E, materials[0].nu)):
+        entry = materials[0]
         elasticity = Elasticity(float(entry.E), float(entry.nu), hypothesis)  # homogeneous: the scalar form
     else:
         centroids = mesh.centroids
@@ -98,15 +98,15 @@ def body_materials(model: Model, mesh: Mesh) -> Materials:
     return Materials(owner, elasticity, viscoplastic)
 
 
-def _viscoplastic_law(entry: MaterialSection, hypothesis: str | None) -> Callable:
-    """𝒢 of an entry's ``viscoplastic`` table."""
-    v = entry.viscoplastic
-    if v.law == "perzyna":
-        return Perzyna(v.eta, v.yield_stress)
-    return Relaxation(v.mu, Elasticity(v.E_inf, v.nu_inf, hypothesis))
+def _viscoplastic_law(entry, hypothesis: str | None) -> Callable:
+    """𝒢 of an entry's viscoplastic law (its name and parameters)."""
+    law, v = entry.viscoplastic.law, entry.viscoplastic.parameters
+    if law == "perzyna":
+        return Perzyna(v["eta"], v["yield_stress"])
+    return Relaxation(v["mu"], Elasticity(v["E_inf"], v["nu_inf"], hypothesis))
 
 
-def _owners(entries: list[tuple[str, MaterialSection]], mesh: Mesh) -> np.ndarray:
+def _owners(entries: list[tuple[str, object]], mesh: Mesh) -> np.ndarray:
     """The entry of each element; refused: a region the mesh does not have, an element claimed twice or
     by no entry (naming the regions)."""
     elements = mesh.mesh.t.shape[1]
@@ -161,7 +161,7 @@ def _coefficient(key: str, value, centroids: np.ndarray, *, minimum: float | Non
     refused (naming the element's centroid) where not finite, not > ``minimum``, or (ν) not admissible
     for ``hypothesis``."""
     names = coordinates(centroids.shape[0])
-    values = values_at(value, key, centroids)
+    values = values_at(value, key, centroids, names)
     if minimum is not None:
         wrong, expected = ~(values > minimum), f"a finite number > {minimum:g}"
     else:

@@ -30,7 +30,7 @@ from scipy.spatial import Delaunay
 import skfem
 
 from . import ball, msh22
-from ..case.inputs import check_regular_file
+from ..inputs import check_regular_file
 from ..errors import CaseError, shown
 from ..memory import available_memory
 from .checks_2d import check_finite, check_triangles

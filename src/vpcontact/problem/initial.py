@@ -28,13 +28,14 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import Basis
 
-from ..case.schema import Model, _brief, check_time_span
 from ..laws.contact import ContactLaw, ContactSurface
-from ..errors import CaseError, quoted
-from ..case.expressions import values_at
-from ..case.inputs import check_regular_file
+from ..errors import CaseError, brief, quoted
+from ..expressions.parse import values_at
+from ..inputs import check_regular_file
 from ..mesh.core import Mesh
 from ..fem.space import CELLS, component, coordinates
+from .options import ProblemOptions
+from .time_grid import check_time_span
 
 #: |u_0| below this fraction of the largest |u_0| is rounding: such values on a Dirichlet component are 0.
 ROUNDING = 1e-12
@@ -77,16 +78,16 @@ class RunState:
     time: float
 
 
-def initial_state(model: Model, mesh: Mesh, basis: Basis, surface: ContactSurface, law: ContactLaw, *,
+def initial_state(options: ProblemOptions, mesh: Mesh, basis: Basis, surface: ContactSurface, law: ContactLaw, *,
                   displacement=None, stress=None, xi=None) -> InitialState:
-    """The checked initial state of ``model`` (see the module's docstring); ``displacement``, ``stress``,
+    """The checked initial state of ``options`` (see the module's docstring); ``displacement``, ``stress``,
     ``xi``: arrays of the API that replace the case's."""
     d, nodes, elements = mesh.dim, mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
-    given = model.initial
+    given = options.initial
     names = {"displacement": "initial.displacement", "stress": "initial.stress", "xi": "initial.xi"}
-    start = model.time.start
+    start = options.time.start
     if given.from_run is not None:
-        run = read_run_state(model, mesh, surface)
+        run = read_run_state(options, mesh, surface)
         label = f"initial.from_run = {quoted(given.from_run)} at step {given.step}"
         u0, sigma0 = run.displacement, np.moveaxis(run.stress, 0, -1)
         names.update(displacement=f"{label} (u)", stress=f"{label} (stress)")
@@ -123,15 +124,15 @@ def initial_state(model: Model, mesh: Mesh, basis: Basis, surface: ContactSurfac
         start = 0.0
     else:
         try:
-            check_time_span(start, model.time.T, model.time.steps, "time.start" if model.time.start is not None
+            check_time_span(start, options.time.T, options.time.steps, "time.start" if options.time.start is not None
                             else f"the time of step {given.step} of initial.from_run")
         except ValueError as error:
             raise CaseError(str(error)) from None
     state = InitialState(np.array(u0, dtype=float), np.array(sigma0, dtype=float), np.array(xi0, dtype=float),
                          float(start), names)
     _check_finite(state, mesh, surface)
-    _check_dirichlet(state, model, mesh)
-    _check_admissible(state, model, mesh, basis, surface, law)
+    _check_dirichlet(state, options, mesh)
+    _check_admissible(state, options, mesh, basis, surface, law)
     _check_history(state, surface)
     return state
 
@@ -142,7 +143,9 @@ def _at_nodes(sources, mesh: Mesh) -> np.ndarray:
     p = mesh.mesh.p
     if sources is None:
         return np.zeros((p.shape[1], mesh.dim))
-    return np.column_stack([values_at(source, f"initial.displacement[{i}]", p) for i, source in enumerate(sources)])
+    names = coordinates(mesh.dim)
+    return np.column_stack([values_at(source, f"initial.displacement[{i}]", p, names)
+                            for i, source in enumerate(sources)])
 
 
 def _at_centroids(sources, mesh: Mesh) -> np.ndarray:
@@ -154,7 +157,7 @@ def _at_centroids(sources, mesh: Mesh) -> np.ndarray:
         return sigma
     for i, row in enumerate(sources):
         for j, source in enumerate(row):
-            sigma[i, j] = values_at(source, f"initial.stress[{i}][{j}]", mesh.centroids)
+            sigma[i, j] = values_at(source, f"initial.stress[{i}][{j}]", mesh.centroids, coordinates(d))
     return sigma
 
 
@@ -162,7 +165,7 @@ def _at_contact_nodes(source, surface: ContactSurface) -> np.ndarray:
     """ξ_0 of initial.xi at the contact nodes (m,); 0 when not given."""
     if source is None or surface.size == 0:
         return np.zeros(surface.size)
-    return values_at(source, "initial.xi", surface.coordinates)
+    return values_at(source, "initial.xi", surface.coordinates, coordinates(surface.coordinates.shape[0]))
 
 
 # --- the arrays of the API -------------------------------------------------------------------------
@@ -175,7 +178,7 @@ def _api_array(name: str, value, shapes: list[tuple], expected: str) -> np.ndarr
         array = None
     if array is None or array.dtype.kind not in "iuf":
         what = "" if array is None else f" (real numbers, not {array.dtype})"
-        raise CaseError(f"{name} = {_brief(value)}: expected an array of numbers of shape {expected}{what}")
+        raise CaseError(f"{name} = {brief(value)}: expected an array of numbers of shape {expected}{what}")
     array = array.astype(float)
     if array.shape not in shapes:
         sizes = " or ".join(str(shape) for shape in shapes)
@@ -213,12 +216,12 @@ def _check_finite(state: InitialState, mesh: Mesh, surface: ContactSurface) -> N
                             f"expected finite values")
 
 
-def _check_dirichlet(state: InitialState, model: Model, mesh: Mesh) -> None:
+def _check_dirichlet(state: InitialState, options: ProblemOptions, mesh: Mesh) -> None:
     """u_0 = 0 on the Dirichlet components (u_0 ∈ V); values at rounding level are set to 0."""
     u = state.displacement
     rounding = ROUNDING * np.abs(u).max(initial=0.0)
     p = mesh.mesh.p
-    for i, item in enumerate(model.boundary.dirichlet):
+    for i, item in enumerate(options.boundary.dirichlet):
         names = item.components or coordinates(mesh.dim)
         nodes = mesh.nodes(item.part)
         columns = [component(c) for c in names]
@@ -233,7 +236,7 @@ def _check_dirichlet(state: InitialState, model: Model, mesh: Mesh) -> None:
         u[np.ix_(nodes, columns)] = 0.0
 
 
-def _check_admissible(state: InitialState, model: Model, mesh: Mesh, basis: Basis, surface: ContactSurface,
+def _check_admissible(state: InitialState, options: ProblemOptions, mesh: Mesh, basis: Basis, surface: ContactSurface,
                       law: ContactLaw) -> None:
     """u_0·ν − g0 ≤ g at every contact node (to the complementarity tolerance of the solver)."""
     if surface.size == 0 or not state.moves:
@@ -241,7 +244,7 @@ def _check_admissible(state: InitialState, model: Model, mesh: Mesh, basis: Basi
     d0 = surface.operator @ state.dofs(basis) - surface.gap0
     g = np.broadcast_to(law.g, d0.shape)
     excess = d0 - g
-    wrong = excess > model.solver.tolerance * mesh.diameter
+    wrong = excess > options.solver.tolerance * mesh.diameter
     if wrong.any():
         node = int(np.argmax(excess))
         raise CaseError(f"{state.names['displacement']} penetrates the foundation beyond the layer: u_0.nu - gap = "
@@ -267,11 +270,11 @@ _NEEDED = ("points", "steps", "times", "displacement", "stress")
 MAX_SOLUTION_BYTES = 2**36
 
 
-def read_run_state(model: Model, mesh: Mesh, surface: ContactSurface) -> RunState:
+def read_run_state(options: ProblemOptions, mesh: Mesh, surface: ContactSurface) -> RunState:
     """The state of the run directory initial.from_run at its field step initial.step, checked against
     the case's mesh (same nodes, coordinates and elements) and contact nodes; CaseError otherwise."""
-    folder, step = model.from_run_path, model.initial.step
-    where = f"initial.from_run = {quoted(model.initial.from_run)}"
+    folder, step = options.initial.from_run_path, options.initial.step
+    where = f"initial.from_run = {quoted(options.initial.from_run)}"
     if not os.path.isdir(folder):  # (False for a name the file system refuses, too long or with a NUL)
         raise CaseError(f"{where}: '{folder}' is not a run directory (give the --out folder of a vpcontact run)")
     path = folder / "solution.npz"
@@ -285,7 +288,7 @@ def read_run_state(model: Model, mesh: Mesh, surface: ContactSurface) -> RunStat
     written = arrays["steps"].tolist()
     if step not in written:
         kept = ", ".join(map(str, written)) or "none"
-        raise CaseError(f"initial.step = {step}: the run in {quoted(model.initial.from_run)} wrote its fields at the "
+        raise CaseError(f"initial.step = {step}: the run in {quoted(options.initial.from_run)} wrote its fields at the "
                         f"steps {kept} (its output.field_steps): give one of them")
     at = written.index(step)
     time = float(arrays["times"][at])
@@ -295,9 +298,9 @@ def read_run_state(model: Model, mesh: Mesh, surface: ContactSurface) -> RunStat
     if "xi" in arrays:
         run_nodes = arrays["contact_nodes"]
         if not np.array_equal(run_nodes, surface.nodes):
-            parts = "', '".join(str(layer.part) for _, layer in model.contact.layers()) if model.contact else ""
+            parts = "', '".join(str(layer.part) for layer in options.contact.layers) if options.contact else ""
             ours = (f"the case's contact part '{parts}' has {surface.size} other nodes"
-                    if model.contact is not None else "the case has no [contact]")
+                    if options.contact is not None else "the case has no [contact]")
             raise CaseError(f"{where}: the run's contact part has {run_nodes.size} nodes and {ours}: a restart "
                             f"needs the same contact part")
         xi = arrays["xi"][at].astype(float)

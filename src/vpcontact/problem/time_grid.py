@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import math
 import operator
 from collections.abc import Sequence
 
 import numpy as np
+
+from ..errors import brief
 
 
 class TimeGrid(Sequence):
@@ -47,3 +50,12 @@ class TimeGrid(Sequence):
     def __repr__(self) -> str:
         start = f", start={self.start!r}" if self.start else ""
         return f"TimeGrid(T={self.T!r}, steps={self.steps}{start})"
+
+
+def check_time_span(start: float, T: float, steps: int, where: str) -> None:
+    """ValueError unless t_0 = ``start`` (named ``where``) is before T by steps of a positive float64 length."""
+    if not T > start:
+        raise ValueError(f"time.T = {brief(T)} must be > {where} = {brief(start)}")
+    if not (math.isfinite(T - start) and (T - start) / steps > 0):
+        raise ValueError(f"{where} = {brief(start)}: the steps (T - {where}) / time.steps are not positive finite "
+                         f"numbers in float64")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..case.schema import load_case
+from ..case.load import load_case
 from .paper import CALIBRATED_LOAD, PAPER, T, load_overrides
 from .plan import Plan
 from .runs import ReproduceError

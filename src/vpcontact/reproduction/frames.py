@@ -1,7 +1,7 @@
 """The deformed configurations the paper's Figs. 2, 3, 5 and 9 draw (`Frame`): the mesh, the
 displacement, and on Γ3 the normals, the contact pressure and the node states at one time, from a
-result in memory or from a run directory (:mod:`vpcontact.io.solution`, :mod:`vpcontact.io.contact_csv`). A frame also chooses the
-contact nodes that get a force arrow: no more than `ARROWS`, evenly spaced along Γ3."""
+result in memory or from a run directory (:mod:`vpcontact.io.solution`, :mod:`vpcontact.io.contact_csv`). A
+frame also chooses the contact nodes that get a force arrow: no more than `ARROWS`, evenly spaced along Γ3."""
 
 from __future__ import annotations
 
@@ -14,9 +14,8 @@ import numpy as np
 
 from ..errors import CaseError
 from ..results.plots import along_curve
-from ..case.schema import load_case
+from ..case.load import read_case
 from ..io.contact_csv import read_contact
-from ..io.run import RESOLVED_CASE
 from ..io.solution import read_solution
 from .paper import CONTACT_CONDITIONS, FIGURE_TIMES, SHORT_LABELS
 from .plan import Plan, figure_step
@@ -84,7 +83,7 @@ class Frame:
         solution, contact = read_solution(folder), read_contact(folder)
         if solution is None:
             raise CaseError(f"the run in '{folder}' has no readable solution.npz: it kept no fields or did not end")
-        g = load_case(Path(folder) / RESOLVED_CASE).contact.g
+        g = read_case(folder).contact.g
         if not isinstance(g, (int, float)):
             raise CaseError(f"the paper's figures draw its foundation, a layer of one thickness g; the run in "
                             f"'{folder}' has contact.g = {g!r}: draw it with vpcontact.results.plots")

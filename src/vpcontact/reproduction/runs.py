@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..case.schema import load_case
+from ..case.load import load_case
 from ..progress import SILENT, Progress
 from ..results.columns import INTEGER_COLUMNS
 from ..io.csv_format import read_table
@@ -87,7 +87,8 @@ def mesh_record(result) -> dict:
 def run_named_study(out: Path, name: str, text: str, executor, progress: Progress = SILENT) -> list[dict]:
     """Write DIR/studies/NAME.toml, run it into DIR/studies/NAME with ``executor``, return study.csv's rows;
     ``progress`` hears of its runs (``studies.run_study``)."""
-    from ..drivers.studies import load_study, run_study
+    from ..drivers.studies.file import load_study
+    from ..drivers.studies.running import run_study
 
     folder = out / "studies"
     folder.mkdir(exist_ok=True)

@@ -46,8 +46,8 @@ def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, conta
 def check_memory(steps: int, output, nodes: int, elements: int, contact_nodes: int, history: bool,
                  dim: int = 2) -> None:
     """Refuse, before anything per step is allocated, a run of ``steps`` steps whose outputs (``output``, the
-    :class:`~vpcontact.case.schema.OutputSection`) would not fit in the memory available now: one line naming
-    time.steps (and output.field_steps when the fields are the most)."""
+    :class:`~vpcontact.results.output_options.OutputOptions`) would not fit in the memory available now: one line
+    naming time.steps (and output.field_steps when the fields are the most)."""
     field_steps = len(field_step_numbers(output.field_steps, steps))
     parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim,
                           estimate=output.error_estimate)

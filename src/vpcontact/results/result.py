@@ -108,7 +108,7 @@ class Result:
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
     error_estimate: bool = False  # output.error_estimate: the rows have the ESTIMATE_COLUMNS
-    output: object = None  # the OutputSection the run was made with (what the writers write)
+    output: object = None  # the OutputOptions the run was made with (what the writers write)
 
     @classmethod
     def start(cls, discretization: Discretization, dofs: int, solver, output) -> "Result":

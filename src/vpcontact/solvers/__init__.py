@@ -6,19 +6,18 @@
     r, name, timings
 Methods: "full" (Newton on the whole system, its SPD systems by a sparse direct solver),
 "iterative" (the same Newton iteration, its systems by AMG-preconditioned CG), "condensed" (factor
-once, Newton on the contact nodes), "auto" (a choice from the sizes and the memory available);
-``solver.reason`` says which method runs and why.
+once, Newton on the contact nodes); ``solver.method = "auto"`` chooses one from the sizes and the memory
+available (:mod:`.choice`, in the plan of a run: :mod:`vpcontact.timeloop.plan`); ``solver.reason`` says which
+method runs and why.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from .base import StepData, StepSolution, default_augmentation
-from .choice import check_iterative_memory, chosen_method
 from .condensed import CondensedNewton
 from .full import FullNewton, IterativeNewton
 from ..errors import CaseError
@@ -41,29 +40,26 @@ class DofLayout:
     rigid_motions: np.ndarray
 
 
-def make_solver(method: str, A, N, weights, gap0, *, rigid, augmentation: float | None, tolerance: float,
-                max_iterations: int, length_scale: float, factorization: str = "auto",
-                layout: DofLayout, progress: Progress = SILENT, setup_estimate: Callable[[str], float] | None = None):
-    """The step solver ``method`` for stiffness A and contact operator N (both on the free dofs);
-    ``rigid``: an orthonormal basis of the rigid motions held only by contact, (free dofs, k);
-    ``layout``: the dofs' nodal layout; ``progress`` (:mod:`vpcontact.progress`) hears of the method chosen
-    and of the set-up phases, each with ``setup_estimate(method)``, the seconds its set-up is expected to take
-    (:mod:`vpcontact.solvers.time_estimate`)."""
-    r = augmentation_parameter(A, N, augmentation)
-    method, reason = chosen_method(method, A, N, layout.dim)
+def make_solver(method: str, A, N, weights, gap0, *, r: float, reason: str, rigid, tolerance: float,
+                max_iterations: int, length_scale: float, factorization: str = "auto", layout: DofLayout,
+                progress: Progress = SILENT, expected_seconds: float | None = None):
+    """The step solver ``method`` ("full", "iterative" or "condensed": the method of a run's plan, whose
+    memory the plan has checked, :mod:`vpcontact.timeloop.plan`; ``reason``: why it runs) for stiffness A and
+    contact operator N (both on the free dofs), with the Alart–Curnier augmentation r; ``rigid``: an orthonormal
+    basis of the rigid motions held only by contact, (free dofs, k); ``layout``: the dofs' nodal layout;
+    ``progress`` (:mod:`vpcontact.progress`) hears of the method and of the set-up phases, each with
+    ``expected_seconds``, the time its set-up is expected to take (:mod:`vpcontact.solvers.time_estimate`)."""
     progress.note(f"method: {method} ({reason})")
-    expected = None if setup_estimate is None else setup_estimate(method)
     common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale, rigid)
     if method == CondensedNewton.name:
         solver = _built(lambda: CondensedNewton(*common, factorization=factorization, progress=progress,
-                                                expected_seconds=expected), factorization, A)
+                                                expected_seconds=expected_seconds), factorization, A)
     elif method == IterativeNewton.name:
-        check_iterative_memory(A)
         solver = IterativeNewton(*common, near_nullspace=layout.rigid_motions, free=layout.free, dim=layout.dim,
-                                 nodes=layout.nodes, progress=progress, expected_seconds=expected)
+                                 nodes=layout.nodes, progress=progress, expected_seconds=expected_seconds)
     else:
-        solver = _built(lambda: FullNewton(*common, factorization, progress=progress, expected_seconds=expected),
-                        factorization, A)
+        solver = _built(lambda: FullNewton(*common, factorization, progress=progress,
+                                           expected_seconds=expected_seconds), factorization, A)
     solver.reason = reason
     return solver
 

@@ -21,6 +21,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..errors import CaseError, quoted
 from ..memory import available_memory
 from ..progress import SILENT, Progress, size
 from .errors import SingularMatrixError, SolverMemoryError
@@ -207,11 +208,20 @@ def splu(A: sp.csc_matrix, **options):
 
 
 BACKENDS = {backend.name: backend for backend in (PardisoFactorization, SuperLUFactorization)}
+#: The names of the backends, fastest first (``solver.factorization``: the case's schema checks against them).
+FACTORIZATIONS = tuple(BACKENDS)
 
 
 def installed_backends() -> list[str]:
     """The backends that work here, fastest first."""
     return [name for name, backend in BACKENDS.items() if backend.available()]
+
+
+def check_installed(backend: str) -> None:
+    """CaseError unless ``backend`` (``solver.factorization``: "auto" or one of FACTORIZATIONS) works here."""
+    if backend != "auto" and backend not in installed_backends():
+        raise CaseError(f"solver.factorization = {quoted(backend)}: not installed here; expected \"auto\" or one of "
+                        f"{', '.join(repr(b) for b in installed_backends())}")
 
 
 def chosen_backend(backend: str = "auto") -> str:

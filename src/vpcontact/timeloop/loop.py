@@ -40,7 +40,6 @@ from typing import Callable
 import numpy as np
 
 from ..fem.assembly import NonFiniteLoad, element_strain, stress_force
-from ..case.schema import OutputSection, section
 from ..laws.contact import node_status
 from ..laws.elasticity import von_mises
 from ..estimate.indicators import Level
@@ -48,13 +47,13 @@ from ..problem.build import Problem, checked_problem
 from ..problem.discretization import Discretization
 from ..progress import SILENT, Progress, StepReport, reporting
 from ..estimate.residual import ResidualEstimator
-from ..results.footprint import check_memory
+from ..results.output_options import OutputOptions
 from ..results.result import Fields, Result
 from ..fem.rigid_modes import RigidModes
 from ..solvers import DofLayout, StepData, StepSolution, make_solver
 from ..solvers.errors import NotConvergedError, SingularMatrixError
-from ..solvers.time_estimate import estimate_seconds
 from .checks import LawShapeError, failure_message, history_failure, invalid_law, pulled_off, viscoplastic_rate
+from .plan import free_operators, plan_run
 from .resting import FreeMotions, room
 from .snapshot import LoopSnapshot
 from .state import Attempt, LoopState, Trend
@@ -66,9 +65,10 @@ COUNTERS = ("linear_solves", "krylov_iterations", "newton_factorizations")
 
 class TimeLoop:
     """The time loop of a problem: ``TimeLoop(problem, output).run()`` returns the :class:`Result`;
-    ``output`` (:class:`~vpcontact.case.schema.OutputSection`, default: its defaults) says which steps keep their
-    fields and whether the error is estimated at every step. A run whose outputs would not fit in memory
-    is refused here, before its first step.
+    ``output`` (:class:`~vpcontact.results.output_options.OutputOptions`, default: its defaults) says which steps
+    keep their fields and whether the error is estimated at every step. The run's plan
+    (:mod:`vpcontact.timeloop.plan`, ``self.plan``) is made here: what cannot run is refused before its first
+    step, and the step solver is the plan's.
 
     ``run`` takes two hooks: ``after_step(loop)``, called after every completed time step (the
     checkpoints of :mod:`vpcontact.drivers.rundir`), and ``stop()``, asked before every step (a signal
@@ -78,25 +78,23 @@ class TimeLoop:
     the time steps in ``run``.
     """
 
-    def __init__(self, problem: Problem, output: OutputSection | None = None, progress: Progress = SILENT):
+    def __init__(self, problem: Problem, output: OutputOptions | None = None, progress: Progress = SILENT):
         started = clock.perf_counter()
         self.problem, self.progress = checked_problem(problem), progress
-        output = section(OutputSection, output, "output")  # a dict is the [output] table
+        output = OutputOptions() if output is None else output
         free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
-        history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
-        check_memory(problem.times.steps, output, mesh.p.shape[1], mesh.t.shape[1], surface.size, history,
-                     mesh.dim())
+        A, N = free_operators(problem)
+        self.plan = plan = plan_run(problem, output, A, N)  # the refusals before the first step
         modes = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs)
         layout = DofLayout(free, mesh.dim(), mesh.nvertices, modes.matrix[free].toarray())
         rigid = modes.free_basis(free)
         self.motions = FreeMotions(rigid, surface.operator[:, free] @ rigid, surface.weights, options.tolerance)
-        self.solver = make_solver(options.method, problem.A[free][:, free].tocsr(), surface.operator[:, free].tocsr(),
-                                  surface.weights, surface.gap0, rigid=rigid,
-                                  augmentation=options.augmentation, tolerance=options.tolerance,
+        self.solver = make_solver(plan.method, A, N, surface.weights, surface.gap0, r=plan.augmentation,
+                                  reason=plan.method_reason, rigid=rigid, tolerance=options.tolerance,
                                   max_iterations=options.max_iterations, length_scale=problem.mesh.diameter,
                                   factorization=options.factorization, layout=layout, progress=progress,
-                                  setup_estimate=self._setup_estimate(history))
+                                  expected_seconds=plan.setup_seconds)
         self.max_cuts = options.max_step_cuts
         self._loads = problem.loads.on(free)  # F(t) at the free dofs
         self.result = Result.start(Discretization.of(problem), problem.basis.N, self.solver, output)
@@ -110,16 +108,6 @@ class TimeLoop:
         # computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
         self._level_without_fields: tuple | None = None
         self._u = np.zeros(problem.basis.N)
-
-    def _setup_estimate(self, history: bool) -> Callable[[str], float] | None:
-        """The seconds the set-up of a method is expected to take (:mod:`vpcontact.solvers.time_estimate`, from the
-        problem's build time), for the progress lines; None for a problem without a build time."""
-        problem = self.problem
-        build = problem.timings.get("build")
-        if build is None:
-            return None
-        return lambda method: estimate_seconds(method, problem.mesh.dim, problem.free.size, len(problem.times), history,
-                                               build)["solver setup"]
 
     # --- the loop ---------------------------------------------------------------------------------
     def run(self, *, progress: bool | Progress | None = None, after_step: Callable[["TimeLoop"], None] | None = None,
@@ -368,11 +356,11 @@ class TimeLoop:
                       z=None if z is None else np.moveaxis(z, -1, 0).copy())
 
 
-def solve_problem(problem: Problem, *, output: OutputSection | None = None,
+def solve_problem(problem: Problem, *, output: OutputOptions | None = None,
                   progress: bool | Progress = False) -> Result:
     """Run the time loop of ``problem`` and return the result (status "failed" if a step fails); ``output``:
-    the fields kept and the error estimate (:class:`~vpcontact.case.schema.OutputSection`, default: its defaults);
-    ``progress``: True for the solver's set-up and the steps reported on stderr (:mod:`vpcontact.progress`),
-    or a reporter."""
+    the fields kept and the error estimate (:class:`~vpcontact.results.output_options.OutputOptions`, default:
+    its defaults); ``progress``: True for the solver's set-up and the steps reported on stderr
+    (:mod:`vpcontact.progress`), or a reporter."""
     with reporting(progress) as reporter:
         return TimeLoop(problem, output, reporter).run()

@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import stat
 
-from ..errors import CaseError
+from .errors import CaseError
 
 #: Largest case or study file read (bytes).
 MAX_TOML_BYTES = 16 * 2**20

@@ -1,25 +1,21 @@
-"""Safe arithmetic expressions from case files, evaluated vectorized with NumPy.
+"""The language of expressions: what a case file's formula may contain, checked and compiled into NumPy.
 
 A case file may give a value as a number or as a string such as ``"-1000*t"``,
-``"0.01*(x-0.5)**2"`` or ``"sin(pi*x)*exp(-t)"``. :func:`parse_expression` turns it
-into an :class:`Expression`, a callable that computes the value in float64 for arrays
-of coordinates and times.
+``"0.01*(x-0.5)**2"`` or ``"sin(pi*x)*exp(-t)"`` (:mod:`vpcontact.expressions.parse` turns it into an
+:class:`~vpcontact.expressions.parse.Expression`).
 
 The text is never executed as Python. It is parsed with ``ast.parse(..., mode="eval")``
 and every node of the tree is checked against a whitelist: numbers, the variables
-given to :func:`parse_expression`, the constants ``pi`` and ``e``, the operators
+given to :func:`~vpcontact.expressions.parse.parse_expression`, the constants ``pi`` and ``e``, the operators
 ``+ - * / ** %`` (binary) and ``+ -`` (unary), and calls of the functions in
 :data:`FUNCTION_NAMES` by bare name with positional arguments. Anything else
 (attributes, subscripts, strings, lambdas, comparisons, keyword arguments, unknown
 names, ...) is a :class:`~vpcontact.errors.CaseError`. The checked tree is then turned
-into a tree of small Python closures over NumPy operations, built once at parse time.
+into a tree of small Python closures over NumPy operations, built once at parse time (:class:`Compiler`).
 
 All numbers are float64 (integer literals are converted), so Python's unbounded
 integers never appear; a constant exponent is limited to ``MAX_EXPONENT`` in absolute
 value so that ``10**10**10`` is reported instead of silently giving ``inf``.
-Floating-point warnings are not silenced here: a result may be ``inf`` or ``nan`` (``1/x`` at
-``x = 0``, ``sqrt(-1)``) and the caller evaluates under ``np.errstate`` and checks finiteness where it
-matters (the loads, the initial gap), reporting the expression and where it is not finite.
 
 Messages show the source as ``<where> = "<source>"``; a long source (or a long part of it) is cut to
 its first characters and its length (:func:`~vpcontact.errors.quoted`), so the reason is always read.
@@ -38,16 +34,6 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import CaseError, quoted, shown
-from ..fem.space import coordinates
-
-__all__ = [
-    "CONSTANT_NAMES",
-    "FUNCTION_NAMES",
-    "MAX_DEPTH",
-    "MAX_EXPONENT",
-    "Expression",
-    "parse_expression",
-]
 
 MAX_EXPONENT = 100.0
 """Largest absolute value allowed for an exponent that does not depend on a variable."""
@@ -56,7 +42,7 @@ MAX_DEPTH = 100
 """Deepest nesting of operations and calls allowed in one expression."""
 
 _Value = np.ndarray | np.float64
-_Evaluator = Callable[[Mapping[str, np.ndarray]], _Value]
+Evaluator = Callable[[Mapping[str, np.ndarray]], _Value]
 
 
 def _minimum(*values: _Value) -> _Value:
@@ -164,128 +150,7 @@ _REJECTED_CONSTRUCTS: dict[type[ast.AST], str] = {
 }
 
 
-class Expression:
-    """A parsed arithmetic expression in a fixed set of variables, evaluated with NumPy.
-
-    Create one with :func:`parse_expression`. Calling it with the variables as keyword
-    arguments (arrays or scalars) computes the expression elementwise in float64 and
-    returns a new array of the broadcast shape of all the values passed, also when the
-    expression uses only some of them or none (``"0"`` gives ``np.zeros(shape)``). When
-    every value passed is a scalar (or nothing is passed), the result is a Python float.
-
-    Equal expressions have the same source and variables. Pickling stores only
-    ``source``, ``variables`` and ``where`` and parses the text again when loaded.
-    """
-
-    __slots__ = ("source", "variables", "where", "_evaluate", "_depends_on")
-
-    source: str
-    variables: tuple[str, ...]
-    where: str
-
-    def __init__(
-        self,
-        source: str,
-        variables: tuple[str, ...],
-        where: str,
-        evaluate: _Evaluator,
-        depends_on: frozenset[str],
-    ) -> None:
-        """Wrap an already checked and compiled expression (use :func:`parse_expression`)."""
-        self.source = source
-        self.variables = variables
-        self.where = where
-        self._evaluate = evaluate
-        self._depends_on = depends_on
-
-    @property
-    def depends_on(self) -> frozenset[str]:
-        """The variables that occur in the expression, e.g. ``{"t"}`` for ``"-1000*t"``."""
-        return self._depends_on
-
-    def __call__(self, **values: object) -> np.ndarray | float:
-        """Compute the expression for the given variable values, broadcast together.
-
-        Values for variables the expression does not use may be omitted; those that are
-        given still take part in the broadcast shape. Passing a name that is not one of
-        ``variables``, or omitting one the expression uses, is a TypeError.
-        """
-        unknown = sorted(set(values) - set(self.variables))
-        if unknown:
-            raise TypeError(
-                f"{self!r} got unknown variable(s) {', '.join(unknown)};"
-                f" its variables are {', '.join(self.variables)}"
-            )
-        missing = [name for name in self.variables if name in self._depends_on and name not in values]
-        if missing:
-            raise TypeError(f"{self!r} needs a value for {', '.join(missing)}")
-        arrays = {name: np.asarray(value, dtype=np.float64) for name, value in values.items()}
-        shape = np.broadcast_shapes(*(array.shape for array in arrays.values()))
-        result = self._evaluate(arrays)
-        if shape == ():
-            return float(result)
-        out = np.empty(shape, dtype=np.float64)
-        out[...] = result
-        return out
-
-    def __reduce__(self) -> tuple[Callable[..., Expression], tuple[str, tuple[str, ...], str]]:
-        """Pickle as the call ``parse_expression(source, variables, where)``."""
-        return parse_expression, (self.source, self.variables, self.where)
-
-    def __eq__(self, other: object) -> bool:
-        """Expressions are equal when their source text and variables are equal."""
-        if not isinstance(other, Expression):
-            return NotImplemented
-        return (self.source, self.variables) == (other.source, other.variables)
-
-    def __hash__(self) -> int:
-        """Hash of the source text and variables (consistent with ``==``)."""
-        return hash((self.source, self.variables))
-
-    def __repr__(self) -> str:
-        """``Expression('-1000*t', variables=('x', 'y', 't'))``."""
-        return f"Expression({self.source!r}, variables={self.variables!r})"
-
-    def __str__(self) -> str:
-        """The source text."""
-        return self.source
-
-
-def parse_expression(
-    source: str | int | float,
-    variables: Iterable[str] = ("x", "y", "t"),
-    where: str = "expression",
-) -> Expression:
-    """Check and compile an expression given as text or as a number.
-
-    ``source`` is the text of the expression, or an int or float (as TOML gives
-    numbers), which is turned into its repr. ``variables`` are the names the expression
-    may use besides the constants ``pi`` and ``e``. ``where`` names the place in the case
-    for error messages, e.g. ``"boundary.traction[0].value[1]"``.
-
-    Raises CaseError with a one-line message ``<where> = <source>: <problem>`` for bad
-    input: a type other than str/int/float (bool and None included), a non-finite
-    number, an empty string, a syntax error, or anything outside the whitelist described
-    in the module docstring. Raises ValueError if ``variables`` themselves are invalid
-    (not identifiers, repeated, or clashing with a function or constant name).
-    """
-    variables = _check_variables(variables)
-    text = _source_text(source, where)
-    compiler = _Compiler(text, variables, where)
-    evaluate, depends_on = compiler.compile_source()
-    return Expression(text, variables, where, evaluate, depends_on)
-
-
-def values_at(source, where: str, points: np.ndarray) -> np.ndarray:
-    """The expression (or number) ``source`` of the case key ``where`` in the coordinates x, y[, z] at
-    ``points`` (d, k): k floats, not checked (a value that is not finite is for the caller to report)."""
-    names = coordinates(points.shape[0])
-    expression = parse_expression(source, names, where=where)
-    with np.errstate(all="ignore"):
-        return np.broadcast_to(expression(**dict(zip(names, points))), points.shape[1:]).astype(float)
-
-
-def _check_variables(variables: Iterable[str]) -> tuple[str, ...]:
+def check_variables(variables: Iterable[str]) -> tuple[str, ...]:
     """Return ``variables`` as a tuple after checking they can be used as names."""
     names = tuple(variables)
     for name in names:
@@ -298,29 +163,7 @@ def _check_variables(variables: Iterable[str]) -> tuple[str, ...]:
     return names
 
 
-def _source_text(source: object, where: str) -> str:
-    """The text to parse for ``source``: a str as given, an int or float as its repr."""
-    if isinstance(source, str):
-        return source
-    if isinstance(source, bool) or not isinstance(source, (int, float, np.integer, np.floating)):
-        raise CaseError(
-            f"{where} = {shown(' '.join(repr(source).split()))}: expected a number or an expression string,"
-            f" got {type(source).__name__}"
-        )
-    try:
-        value = float(source)
-    except OverflowError:
-        value = math.inf
-    if math.isinf(value) and isinstance(source, (int, np.integer)):
-        raise CaseError(f"{where}: integer out of the float64 range")
-    if not math.isfinite(value):
-        raise CaseError(f"{where} = {value!r}: not a finite number")
-    if isinstance(source, (int, np.integer)):
-        return repr(int(source))
-    return repr(value)
-
-
-class _Compiler:
+class Compiler:
     """Checks the syntax tree of one expression and builds its evaluator closure."""
 
     def __init__(self, source: str, variables: tuple[str, ...], where: str) -> None:
@@ -336,7 +179,7 @@ class _Compiler:
         """A CaseError ``<where> = "<source>": <problem>`` (source quoted as in TOML, a long one cut)."""
         return CaseError(f"{self.where} = {quoted(self.source)}: {problem}")
 
-    def compile_source(self) -> tuple[_Evaluator, frozenset[str]]:
+    def compile_source(self) -> tuple[Evaluator, frozenset[str]]:
         """Parse the source, check it and return its evaluator and the variables it uses."""
         if not self.body:
             raise self.error("empty expression")
@@ -370,7 +213,7 @@ class _Compiler:
         """The source text of ``node`` (a long one cut, see :func:`~vpcontact.errors.shown`)."""
         return shown(ast.get_source_segment(self.body, node) or type(node).__name__)
 
-    def compile(self, node: ast.AST, depth: int) -> tuple[_Evaluator, frozenset[str]]:
+    def compile(self, node: ast.AST, depth: int) -> tuple[Evaluator, frozenset[str]]:
         """Check ``node`` and return its evaluator and the variables occurring in it."""
         if depth > MAX_DEPTH:
             raise self.error(f"nested too deeply (more than {MAX_DEPTH} levels)")
@@ -390,7 +233,7 @@ class _Compiler:
             raise self.error(f"subscripts like '{self.segment(node)}' are not allowed")
         raise self.error(_REJECTED_CONSTRUCTS.get(type(node), f"'{self.segment(node)}' is not allowed"))
 
-    def compile_constant(self, node: ast.Constant) -> tuple[_Evaluator, frozenset[str]]:
+    def compile_constant(self, node: ast.Constant) -> tuple[Evaluator, frozenset[str]]:
         """A number literal, as a float64 constant; other literals are rejected."""
         value = node.value
         if isinstance(value, bool):
@@ -411,7 +254,7 @@ class _Compiler:
             raise self.error(f"number {self.segment(node)} is out of the float64 range")
         return (lambda values: number), frozenset()
 
-    def compile_name(self, node: ast.Name) -> tuple[_Evaluator, frozenset[str]]:
+    def compile_name(self, node: ast.Name) -> tuple[Evaluator, frozenset[str]]:
         """A variable (looked up at evaluation) or a constant (pi, e)."""
         name = node.id
         if name in self.variables:
@@ -423,7 +266,7 @@ class _Compiler:
             raise self.error(f"'{name}' is a function; call it as {name}(...)")
         raise self.error(f"unknown name '{shown(name)}' (allowed: {self.allowed_names()})")
 
-    def compile_unary(self, node: ast.UnaryOp, depth: int) -> tuple[_Evaluator, frozenset[str]]:
+    def compile_unary(self, node: ast.UnaryOp, depth: int) -> tuple[Evaluator, frozenset[str]]:
         """Unary plus or minus."""
         apply = _UNARY_OPERATORS.get(type(node.op))
         if apply is None:
@@ -431,7 +274,7 @@ class _Compiler:
         operand, names = self.compile(node.operand, depth + 1)
         return (lambda values: apply(operand(values))), names
 
-    def compile_binary(self, node: ast.BinOp, depth: int) -> tuple[_Evaluator, frozenset[str]]:
+    def compile_binary(self, node: ast.BinOp, depth: int) -> tuple[Evaluator, frozenset[str]]:
         """``+ - * / ** %``; a ``**`` with a constant exponent must keep it within MAX_EXPONENT."""
         apply = _BINARY_OPERATORS.get(type(node.op))
         if apply is None:
@@ -453,7 +296,7 @@ class _Compiler:
                 )
         return (lambda values: apply(left(values), right(values))), left_names | right_names
 
-    def compile_call(self, node: ast.Call, depth: int) -> tuple[_Evaluator, frozenset[str]]:
+    def compile_call(self, node: ast.Call, depth: int) -> tuple[Evaluator, frozenset[str]]:
         """A whitelisted function called by bare name with the right number of positional arguments."""
         if not isinstance(node.func, ast.Name):
             raise self.error(f"only functions called by name can be called, not '{self.segment(node.func)}'")

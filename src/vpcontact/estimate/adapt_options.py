@@ -1,0 +1,19 @@
+"""The settings of an adaptation: the ``[adapt]`` table of a case as plain values
+(:func:`vpcontact.case.translate.adapt_options`), read by :mod:`vpcontact.estimate.adapt`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class AdaptOptions:
+    """Up to ``cycles`` solves of the whole history, each on the mesh refined from the one before by Dörfler
+    marking of the fraction ``theta`` of the time functional ``functional`` ("max" or "l2") of the indicators of
+    ``estimator`` (a key of :data:`vpcontact.estimate.adapt.ESTIMATORS`), none with more than ``max_dofs`` dofs."""
+
+    cycles: int
+    theta: float
+    max_dofs: int
+    functional: str
+    estimator: str

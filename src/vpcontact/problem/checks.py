@@ -1,0 +1,177 @@
+"""The refusals of a problem that could not be run, made before its first step: vectors and tables of the case
+in another dimension than the mesh's, a contact part clamped along its normal, rigid motions held by nothing,
+and initial data whose first step cannot be finite."""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import scipy.sparse as sp
+from skfem import Basis
+
+from ..errors import CaseError, brief, quoted
+from ..expressions.parse import parse_expression
+from ..fem.assembly import stress_force
+from ..fem.rigid_modes import RigidModes
+from ..fem.space import component, coordinates
+from ..laws.contact import ContactSurface
+from ..laws.python_laws import check_returned, tried
+from ..mesh import core as meshes
+from .initial import InitialState
+from .options import ProblemOptions
+
+
+def check_dimension(options: ProblemOptions, dim: int) -> None:
+    """Refuse vectors and tensors of the case that do not have the mesh's dimension d, a plane
+    hypothesis in 3D, and the coordinate z in 2D."""
+    names = coordinates(dim)
+    where = f"the mesh is {dim}D"
+    give = f"give {dim} ({', '.join(names)})"
+    loads = [(f"boundary.traction[{i}].value", t.value) for i, t in enumerate(options.boundary.traction)]
+    loads += [(f"boundary.body_force[{i}].value", f.value) for i, f in enumerate(options.boundary.body_force)]
+    vectors = list(loads)
+    if options.contact is not None:
+        vectors += [("contact.probe", options.contact.probe), ("contact.normal", options.contact.normal)]
+    vectors.append(("initial.displacement", options.initial.displacement))
+    for key, value in vectors:
+        if isinstance(value, list) and len(value) != dim:
+            raise CaseError(f"{key} has {len(value)} components and {where}: {give}")
+    if options.initial.stress is not None and len(options.initial.stress) != dim:
+        raise CaseError(f"initial.stress is {len(options.initial.stress)} x {len(options.initial.stress)} and {where}: "
+                        f"give a {dim} x {dim} table")
+    for entry in options.materials:
+        key = entry.key
+        if dim == 3 and entry.hypothesis is not None:
+            raise CaseError(f"{key}.hypothesis = \"{entry.hypothesis}\" is a 2D reduction and {where} (3D uses the "
+                            f"full isotropic tensor): remove {key}.hypothesis")
+    for i, item in enumerate(options.boundary.dirichlet):
+        extra = [c for c in item.components or () if c not in names]
+        if extra:
+            raise CaseError(f"boundary.dirichlet[{i}].components names \"{extra[0]}\" and {where}: use "
+                            f"{', '.join(repr(n) for n in names)}")
+    expressions = [(f"{key}[{c}]", source) for key, value in loads for c, source in enumerate(value)]
+    if options.contact is not None:
+        expressions += [(f"{layer.key}.gap", layer.gap) for layer in options.contact.layers]
+    expressions += [(f"{entry.key}.{name}", getattr(entry, name)) for entry in options.materials
+                    for name in ("E", "nu")]
+    initial = options.initial
+    expressions += [(f"initial.displacement[{c}]", source) for c, source in enumerate(initial.displacement or ())]
+    expressions += [(f"initial.stress[{i}][{j}]", source) for i, row in enumerate(initial.stress or ())
+                    for j, source in enumerate(row)]
+    if initial.xi is not None:
+        expressions.append(("initial.xi", initial.xi))
+    for key, source in expressions:
+        unknown = parse_expression(source, ("x", "y", "z", "t"), where=key).depends_on - {*names, "t"}
+        if unknown:
+            raise CaseError(f"{key} = {quoted(str(source))} uses {sorted(unknown)[0]} and {where}: the coordinates "
+                            f"are {', '.join(names)}")
+
+
+def check_contact_can_move(options: ProblemOptions, mesh: meshes.Mesh, basis: Basis, free: np.ndarray,
+                           surface: ContactSurface):
+    """Refuse a contact part on which the Dirichlet conditions leave no node free to move along its
+    normal: its contact force would be 0 (or fixed) whatever the load. (A few clamped nodes, such as
+    the corners the contact part shares with a clamped part, are fine.)"""
+    if surface.size == 0:
+        return
+    on_free = np.zeros(basis.N)
+    on_free[free] = 1.0
+    normal_freedom = np.sqrt(np.asarray((surface.operator @ sp.diags(on_free)).power(2).sum(axis=1)).ravel())
+    if np.any(normal_freedom > 1e-6):
+        return
+    contact_dofs = basis.nodal_dofs[:, surface.nodes].ravel()
+    entries = []
+    for i, item in enumerate(options.boundary.dirichlet):
+        names = item.components or coordinates(mesh.dim)
+        components = [component(c) for c in names]
+        if np.intersect1d(basis.nodal_dofs[components][:, mesh.nodes(item.part)], contact_dofs).size:
+            entries.append(f"boundary.dirichlet[{i}] (part '{item.part}', components {', '.join(names)})")
+    parts = f"part '{surface.parts[0]}' is" if len(surface.parts) == 1 else \
+        f"parts {', '.join(repr(part) for part in surface.parts)} are"
+    raise CaseError(f"contact {parts} clamped: {' and '.join(entries)} fix every contact node "
+                    f"along its normal, so the contact force cannot change whatever the load; remove the contact part "
+                    f"from boundary.dirichlet or fix only components along the contact surface")
+
+
+def check_rigid_motions(mesh: meshes.Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
+    """Refuse a body, or a separate part of the mesh, whose rigid motions are held neither by
+    Dirichlet conditions nor by contact: the motions of each connected part (the d translations and
+    the rotations about its centroid scaled by its size, :mod:`vpcontact.fem.rigid_modes`) must stay
+    independent on the fixed dofs and the contact normals of that part."""
+    modes = RigidModes.of_mesh(mesh.mesh.p, mesh.mesh.t, basis.nodal_dofs)
+    fixed = np.ones(basis.N, dtype=bool)
+    fixed[free] = False
+    free_motions, least_held = modes.unheld(sp.eye(basis.N, format="csr")[fixed], surface.operator)
+    loose = np.flatnonzero(free_motions)
+    if loose.size == 0:
+        return
+    b, count = loose[0], modes.count
+    where = "the Dirichlet conditions and the contact part" if surface.size else "the Dirichlet conditions"
+    if free_motions[b] > 1:
+        words = ("", "one", "two", "three", "four", "five", "six")
+        motion = (f"all {words[modes.per_body]}" if free_motions[b] == modes.per_body
+                  else f"{words[free_motions[b]]} of the {words[modes.per_body]}")
+    else:
+        motion = _rigid_motion(least_held[b], modes.centroid[:, b], modes.size[b])
+    if count == 1:
+        raise CaseError(f"{where} leave a rigid motion of the body free ({motion}): add boundary.dirichlet entries")
+    p = mesh.mesh.p
+    inside = np.flatnonzero(modes.body == b)
+    point = inside[np.argmin(np.sum((p[:, inside] - modes.centroid[:, b:b + 1]) ** 2, axis=0))]
+    nodes = np.bincount(modes.body, minlength=count)
+    raise CaseError(f"the mesh has {count} separate parts; {where} leave a rigid motion of the part of {nodes[b]} "
+                    f"nodes through the node at {_point(p[:, point])} free ({motion})"
+                    f"{f' (and of {loose.size - 1} more)' if loose.size > 1 else ''}: add boundary.dirichlet "
+                    f"entries on it, or join it to the rest of the mesh")
+
+
+def _rigid_motion(combination: np.ndarray, centroid: np.ndarray, size: float) -> str:
+    """A rigid motion in words, from its coefficients on the modes of :mod:`vpcontact.fem.rigid_modes`:
+    d translations, then the rotations in the planes xy (2D), or xy, yz, zx (3D), about ``centroid``
+    and scaled by ``size``: "a translation along (…)", "a rotation about (…)" (2D) or "a rotation about
+    the axis through (…) along (…)" (3D)."""
+    d = centroid.size
+    combination = combination * np.sign(combination[np.argmax(np.abs(combination))])
+    translation, rotation = combination[:d], combination[d:]
+    if np.linalg.norm(rotation) < 1e-9:
+        return f"a translation along {_point(translation / np.linalg.norm(translation), '.3g')}"
+    if d == 2:  # u = t + ω e_z × (x − c)/size vanishes at x = c + size (−t_y, t_x)/ω
+        center = centroid + size * np.array([-translation[1], translation[0]]) / rotation[0]
+        return f"a rotation about {_point(np.round(center / size, 9) * size)}"
+    axis = rotation[[1, 2, 0]]  # rotations in the planes yz, zx, xy: the axis components x, y, z
+    point = centroid + size * np.cross(axis, translation) / (axis @ axis)
+    return (f"a rotation about the axis through {_point(np.round(point / size, 9) * size)} along "
+            f"{_point(axis / np.linalg.norm(axis), '.3g')}")
+
+
+def _point(x: np.ndarray, style: str = ".6g") -> str:
+    """(x, y[, z]) with the given format, without signed zeros."""
+    return f"({', '.join(format(c + 0.0, style) for c in np.round(x, 12))})"
+
+
+def check_first_history(basis: Basis, initial: InitialState, written, strain0: np.ndarray, z0: np.ndarray,
+                        G: Callable | None, law_name: str, k: float) -> None:
+    """Refuse initial data whose first step cannot be finite: 𝒢(σ_0, ε(u_0)) (of the shape of σ, finite),
+    the history z_1 = σ_0 − ℰε(u_0) + k 𝒢(σ_0, ε(u_0)) of (2.28) and its nodal forces Bᵀz_1 in the
+    right-hand side. ``written``: initial.stress as the case gives it (for the message)."""
+    if G is None and not np.any(z0 != 0.0):
+        return
+    sigma = initial.stress
+    rate = 0.0
+    call = "G(initial.stress, 0)" if not initial.moves else "G(initial.stress, strain(initial.displacement))"
+    if G is not None:
+        rate = tried(law_name, call, G, sigma.copy(), strain0.copy())
+        check_returned(law_name, call, rate, sigma.shape)
+    with np.errstate(all="ignore"):  # an overflow is reported below
+        z = z0 + k * np.asarray(rate, dtype=float)
+        force = stress_force(basis, z) if np.all(np.isfinite(z)) else None
+    if force is None:
+        elastic = " - E strain(initial.displacement)" if initial.moves else ""
+        raise CaseError(f"{law_name}: the history after the first step, initial.stress{elastic} + k {call}, is not "
+                        f"finite: is the time step k = {k:g} small against the law's relaxation time?")
+    if not np.all(np.isfinite(force)):
+        source = initial.names["stress"]
+        if source == "initial.stress":
+            source += f" = {brief(written)}"
+        raise CaseError(f"{source}: its nodal forces are not finite in float64; state the stresses in other units")

@@ -1,0 +1,109 @@
+"""The plan of a run, made before its first step: its sizes, the step method and why, the memory and the time
+it will take, and the refusals of what cannot run.
+
+:func:`plan_run` computes it once from a problem and the output options; the time loop makes its step solver
+by it (:class:`~vpcontact.timeloop.loop.TimeLoop`: the method, its reason and the augmentation r of the plan)
+and ``vpcontact check`` prints it (:mod:`vpcontact.drivers.check`), so that the two cannot disagree. Every
+refusal before the first step is made here, each one line (CaseError), in this order:
+
+1. the outputs kept until they are written would not fit in the memory available
+   (:func:`~vpcontact.results.footprint.check_memory`);
+2. ``solver.augmentation`` far from the normal stiffness at the contact nodes
+   (:func:`~vpcontact.solvers.augmentation_parameter`);
+3. the chosen method's own algebra would not fit: the condensed method's dense algebra
+   (:func:`~vpcontact.solvers.condensed.check_condensed_memory`) or the iterative method's peak
+   (:func:`~vpcontact.solvers.choice.check_iterative_memory`).
+
+The method for ``solver.method = "auto"`` is the choice of :func:`~vpcontact.solvers.choice.chosen_method`, from the
+sizes and the memory available when the plan is made. Not planned: the step solver's set-up itself (the
+factorization of the stiffness, the condensed operator, the multigrid hierarchy), which the time estimate
+(:mod:`vpcontact.solvers.time_estimate`) estimates, and whose failures the solver reports as it is made.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..memory import available_memory
+from ..problem.build import Problem
+from ..results.footprint import check_memory, memory_needed
+from ..results.steps import field_step_numbers
+from ..solvers import augmentation_parameter
+from ..solvers.choice import check_iterative_memory, chosen_method, iterative_memory
+from ..solvers.condensed import check_condensed_memory, condensed_memory
+from ..solvers.time_estimate import estimate_seconds
+
+
+@dataclass(frozen=True)
+class RunPlan:
+    """What a run of a problem will be. Sizes are counts (``dofs``: all, ``free_dofs``: those no Dirichlet
+    condition fixes); the time grid t_n = ``start`` + n ``k``, n = 1, …, ``steps`` up to ``T``, with the fields kept
+    at ``field_steps`` of its steps; ``method`` the step method that runs and ``method_reason`` why (summary.json's
+    solver_reason), ``augmentation`` its Alart–Curnier r; ``memory_bytes``: the outputs kept until written, by
+    part (:func:`~vpcontact.results.footprint.memory_needed`: "history rows", "contact rows", "fields", "writing"),
+    and the step method's own algebra ("solver": the condensed method's dense algebra or the iterative method's
+    peak; None for the full method, not estimated), against ``memory_available_bytes`` when the plan was made;
+    ``time_seconds``: "build" (mesh, assembly, checks) as measured, "solver setup", "time loop" and "total"
+    estimated (:mod:`vpcontact.solvers.time_estimate`; None for a problem without a measured build)."""
+
+    dim: int
+    nodes: int
+    elements: int
+    dofs: int
+    free_dofs: int
+    contact_nodes: int
+    start: float
+    T: float
+    steps: int
+    k: float
+    field_steps: int
+    method: str
+    method_reason: str
+    augmentation: float
+    memory_bytes: dict[str, int | None]
+    memory_available_bytes: int
+    time_seconds: dict[str, float] | None
+
+    @property
+    def setup_seconds(self) -> float | None:
+        """The seconds the step solver's set-up is expected to take (None without a time estimate)."""
+        return None if self.time_seconds is None else self.time_seconds["solver setup"]
+
+
+def free_operators(problem: Problem) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """The stiffness A and the contact operator N on the free dofs: what the step solver is made of."""
+    free = problem.free
+    return problem.A[free][:, free].tocsr(), problem.surface.operator[:, free].tocsr()
+
+
+def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix) -> RunPlan:
+    """The plan of a run of ``problem`` with the output options ``output`` (``output.field_steps`` and
+    ``output.error_estimate``), whose stiffness and contact operator on the free dofs are A and N
+    (:func:`free_operators`); CaseError for a run that cannot be made (see the module's docstring)."""
+    mesh, surface, times = problem.mesh, problem.surface, problem.times
+    nodes, elements = mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
+    history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
+    check_memory(len(times), output, nodes, elements, surface.size, history, mesh.dim)
+    r = augmentation_parameter(A, N, problem.solver.augmentation)
+    method, reason = chosen_method(problem.solver.method, A, N, mesh.dim)
+    solver_memory = None
+    if method == "condensed":
+        check_condensed_memory(N, A.shape[0])
+        solver_memory = condensed_memory(N, A.shape[0])
+    elif method == "iterative":
+        check_iterative_memory(A)
+        solver_memory = iterative_memory(A)
+    field_steps = len(field_step_numbers(output.field_steps, len(times)))
+    outputs = memory_needed(len(times), field_steps, nodes, elements, surface.size, history, mesh.dim,
+                            estimate=output.error_estimate)
+    build = problem.timings.get("build")
+    return RunPlan(
+        dim=mesh.dim, nodes=nodes, elements=elements, dofs=int(problem.basis.N), free_dofs=problem.free.size,
+        contact_nodes=surface.size, start=float(times.start), T=float(times.T), steps=len(times), k=float(times.k),
+        field_steps=field_steps, method=method, method_reason=reason, augmentation=r,
+        memory_bytes={**outputs, "solver": solver_memory}, memory_available_bytes=available_memory(),
+        time_seconds=None if build is None else estimate_seconds(method, mesh.dim, problem.free.size, len(times),
+                                                                 history, build))
