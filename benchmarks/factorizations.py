@@ -54,7 +54,7 @@ def h_for_dofs(target: float) -> float:
 def build_matrix(h: float):
     """A0 (CSC, SPD), N (CSR, m × n) and the assembly time, exactly as the condensed solver sees them."""
     from vpcontact.fem.assembly import displacement_basis, stiffness
-    from vpcontact.laws.contact import contact_surface
+    from vpcontact.fem.contact_surface import contact_surface
     from vpcontact.laws.elasticity import Elasticity
     from vpcontact.mesh import half_disc
 

@@ -11,7 +11,8 @@ import pytest
 import vpcontact
 from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree, solved
 from vpcontact import adapt
-from vpcontact.estimate.adapt import ESTIMATORS, dorfler, solve_and_estimate
+from vpcontact.estimate.adapt import dorfler, solve_and_estimate
+from vpcontact.estimate.estimators import ESTIMATORS
 from vpcontact.case.run import AdaptSection
 from vpcontact.case.translate import adapt_options, output_options
 from vpcontact.estimate.indicators import Level

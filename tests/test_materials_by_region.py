@@ -16,7 +16,7 @@ from conftest import assert_refused, run_cli
 
 from vpcontact import build_problem, load_case, solve
 from vpcontact.errors import CaseError
-from vpcontact.laws.elasticity import Perzyna
+from vpcontact.laws.viscoplastic.perzyna import Perzyna
 from vpcontact.laws.materials import RegionalViscoplastic
 from vpcontact.timeloop.loop import TimeLoop
 

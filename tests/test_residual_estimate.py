@@ -15,8 +15,10 @@ from conftest import assert_refused, half_disc_case, rectangle_case, resumed_aft
 from vpcontact.estimate.indicators import Level
 from vpcontact.results.norms import element_energies, energy_norm, transfer
 from vpcontact.estimate.residual import TERMS, ResidualEstimator, estimate
-from vpcontact.results.columns import ESTIMATE_COLUMNS, history_columns
+from vpcontact.results.columns import estimate_columns, history_columns
 from vpcontact.results.footprint import memory_needed
+
+ESTIMATE_COLUMNS = estimate_columns(TERMS)  # the history columns of the residual estimate
 
 E, NU = 1000.0, 0.3
 MU = E / (2 * (1 + NU))

@@ -16,7 +16,8 @@ import tomli_w
 
 import vpcontact
 from vpcontact.drivers.cli import main
-from vpcontact.laws.elasticity import Perzyna, deviator, tensor_norm, von_mises_projection
+from vpcontact.laws.elasticity import deviator, tensor_norm
+from vpcontact.laws.viscoplastic.perzyna import Perzyna, von_mises_projection
 from conftest import half_disc_case
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "viscoplastic_ball.toml"

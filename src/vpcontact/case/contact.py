@@ -1,46 +1,18 @@
 """``[contact]``: the contact condition (2.5) on Γ3, a soft layer of thickness g on a rigid base, on one
-part or on several (``contact.parts``), with its stiffness law K (2.18) and its law p."""
+part or on several (``contact.parts``), with its stiffness law K (2.18) and its law p (their tables:
+:mod:`vpcontact.case.law_sections`)."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Collection
-from typing import Annotated, Any, Literal, Optional, Union
+from typing import Annotated, Any, Optional
 
 from pydantic import AfterValidator, Field, ValidationInfo, model_validator
 
 from ..errors import brief
-from .values import (Exponent, Expression, LayerValue, NonNegativeFloat, NonNegativeLayerValue, Part, Section,
-                     Thickness, finite, show)
-
-
-class PowerStiffnessSection(Section):
-    """K(ξ) = c_v (1 + α ξ)^β (the paper's law)."""
-
-    law: Literal["power"]
-    c_v: NonNegativeLayerValue
-    alpha: NonNegativeLayerValue
-    beta: LayerValue
-
-
-class ConstantStiffnessSection(Section):
-    """K(ξ) = value; 0 gives the Signorini condition with gap g."""
-
-    law: Literal["constant"]
-    value: NonNegativeLayerValue
-
-
-class ExponentialStiffnessSection(Section):
-    """K(ξ) = c_v exp(α ξ)."""
-
-    law: Literal["exponential"]
-    c_v: NonNegativeLayerValue
-    alpha: LayerValue
-
-
-Stiffness = Annotated[
-    Union[PowerStiffnessSection, ConstantStiffnessSection, ExponentialStiffnessSection], Field(discriminator="law")
-]
+from .law_sections import COMPLIANCE_KEYS, Stiffness, check_compliance, with_compliance
+from .values import Expression, NonNegativeFloat, Part, Section, Thickness, finite, show
 
 
 #: The lengths a vector contact.normal may have: only its direction counts (it is divided by its length), and
@@ -70,19 +42,23 @@ def _normal(value):
 
 
 #: The keys of one layer: stated in [contact] for one contact part, in each entry of contact.parts for several.
-LAYER_KEYS = ("part", "g", "gap", "p", "exponent", "stiffness")
+LAYER_KEYS = ("part", "g", "gap", *COMPLIANCE_KEYS, "stiffness")
 #: The keys of the whole contact, one value for all its parts.
 GLOBAL_CONTACT_KEYS = ("rho", "probe", "normal")
 
 
-class ContactPartSection(Section):
-    """One part of Γ3 with its own layer (an entry of contact.parts)."""
+class _PartLayer(Section):
+    """The keys of a contact part's layer before those of its law p (contact.p and its parameters, see
+    :func:`~vpcontact.case.law_sections.with_compliance`)."""
 
     part: Part
     g: Thickness
     gap: Expression = 0.0
-    p: Literal["positive_part", "power"] = "positive_part"
-    exponent: Optional[Exponent] = None
+
+
+class ContactPartSection(with_compliance(_PartLayer, "positive_part")):
+    """One part of Γ3 with its own layer (an entry of contact.parts)."""
+
     stiffness: Stiffness
 
     @model_validator(mode="before")
@@ -96,17 +72,21 @@ class ContactPartSection(Section):
         return data
 
 
-class ContactSection(Section):
+class _ContactLayer(Section):
+    """The keys of the one-part form's layer before those of its law p (contact.p, default "positive_part" with
+    part, and its parameters)."""
+
+    part: Optional[Part] = None
+    g: Thickness = None
+    gap: Optional[Expression] = None  # default 0 with part
+
+
+class ContactSection(with_compliance(_ContactLayer, None)):
     """The contact condition (2.5) on Γ3: soft layer of thickness g on a rigid base. Γ3 is one part
     (``part`` and its layer's keys here) or several (``parts``: a list of parts, each with its layer); a
     node where two parts meet takes the layer of the one listed first. rho, probe and normal are the
     whole contact's."""
 
-    part: Optional[Part] = None
-    g: Thickness = None
-    gap: Optional[Expression] = None  # default 0 with part
-    p: Optional[Literal["positive_part", "power"]] = None  # default "positive_part" with part
-    exponent: Optional[Exponent] = None
     rho: NonNegativeFloat = 1.0
     probe: Optional[Annotated[list[float], Field(min_length=2, max_length=3)]] = None
     normal: Annotated[Any, AfterValidator(_normal)] = "body"
@@ -123,10 +103,7 @@ class ContactSection(Section):
         else:
             self._several_parts()
         for key, layer in self.layers():
-            if layer.p == "power" and layer.exponent is None:
-                raise ValueError(f"missing required value '{key}.exponent' (needed by {key}.p = \"power\")")
-            if layer.p != "power" and layer.exponent is not None:
-                raise ValueError(f"{key}.exponent is only used with {key}.p = \"power\" ({key}.p = \"{layer.p}\")")
+            check_compliance(key, layer)
         return self
 
     def _one_part(self, python_laws: Collection[str]) -> None:
@@ -151,7 +128,7 @@ class ContactSection(Section):
 
     def layers(self) -> list[tuple[str, "ContactSection | ContactPartSection"]]:
         """(key, layer) of each contact part, in order: ("contact", self) for one part, else
-        ("contact.parts[j]", entry); a layer has the attributes part, g, gap, p, exponent, stiffness."""
+        ("contact.parts[j]", entry); a layer has the attributes LAYER_KEYS."""
         if self.parts is None:
             return [("contact", self)]
         return [(f"contact.parts[{j}]", entry) for j, entry in enumerate(self.parts)]

@@ -1,4 +1,5 @@
-"""``[material]``: isotropic elasticity, optionally a viscoplastic law, for the whole body or by region."""
+"""``[material]``: isotropic elasticity, optionally a viscoplastic law (its table:
+:mod:`vpcontact.case.law_sections`), for the whole body or by region."""
 
 from __future__ import annotations
 
@@ -7,27 +8,8 @@ from typing import Annotated, Any, Literal, Optional, Union
 from pydantic import AfterValidator, Discriminator, Field, Tag
 
 from ..errors import brief
-from .values import Expression, NonNegativeFloat, PositiveFloat, Section, finite
-
-
-class PerzynaSection(Section):
-    """𝒢(σ, ε) = −(1/η) (σ − P(σ)), P the projection onto {τ ∈ S² : ‖dev τ‖ ≤ yield_stress}."""
-
-    law: Literal["perzyna"]
-    eta: PositiveFloat  # viscosity η: the Lipschitz constant of 𝒢 is 1/η
-    yield_stress: NonNegativeFloat  # σ_y; 0: the whole deviator relaxes
-
-
-class RelaxationSection(Section):
-    """𝒢(σ, ε) = −μ (σ − 𝒞ε), 𝒞 isotropic (E_inf, nu_inf) with the material's hypothesis."""
-
-    law: Literal["relaxation"]
-    mu: PositiveFloat  # relaxation rate μ (1/time)
-    E_inf: PositiveFloat
-    nu_inf: float
-
-
-Viscoplastic = Annotated[Union[PerzynaSection, RelaxationSection], Field(discriminator="law")]
+from .law_sections import Viscoplastic, poisson_ratios
+from .values import Expression, Section, finite
 
 
 def _check_poisson_ratio(key: str, nu: float, hypothesis: str | None) -> None:
@@ -74,12 +56,13 @@ class MaterialSection(Section):
     region: Optional[Annotated[Any, AfterValidator(_region_names)]] = None
 
     def check_poisson_ratios(self, key: str) -> None:
-        """ValueError unless ν (a number) and the relaxed ν_inf are admissible for the hypothesis; ``key``
-        names the entry in the message ("material" or "material[i]")."""
+        """ValueError unless ν (a number) and the Poisson ratios of the viscoplastic law (relaxation's ν_inf) are
+        admissible for the hypothesis; ``key`` names the entry in the message ("material" or "material[i]")."""
         if not isinstance(self.nu, str):
             _check_poisson_ratio(f"{key}.nu", self.nu, self.hypothesis)
-        if isinstance(self.viscoplastic, RelaxationSection):
-            _check_poisson_ratio(f"{key}.viscoplastic.nu_inf", self.viscoplastic.nu_inf, self.hypothesis)
+        if self.viscoplastic is not None:
+            for name, value in poisson_ratios(self.viscoplastic):
+                _check_poisson_ratio(f"{key}.viscoplastic.{name}", value, self.hypothesis)
 
     @property
     def regions(self) -> list[str]:

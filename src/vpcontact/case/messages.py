@@ -10,6 +10,7 @@ import typing
 from pydantic import BaseModel
 
 from ..errors import shown
+from .law_sections import LAW_TAGS
 from .model import Case
 from .values import show
 
@@ -25,9 +26,6 @@ _TYPE_WORDS = {
     "model_attributes_type": "expected a table",
     "finite_number": "expected a finite number",
 }
-_STIFFNESS_TAGS = ("power", "constant", "exponential")
-_VISCOPLASTIC_TAGS = ("perzyna", "relaxation")
-_LAW_TAGS = {"stiffness": _STIFFNESS_TAGS, "viscoplastic": _VISCOPLASTIC_TAGS}  # tagged unions by section name
 _FORM_TAGS = {"material": ("table", "list")}  # a section given as one table or a list of them
 
 
@@ -43,7 +41,7 @@ def _clean_loc(loc) -> tuple:
     material.list.0.E -> material[0].E)."""
     cleaned = []
     for item in loc:
-        tags = (*_LAW_TAGS.get(cleaned[-1], ()), *_FORM_TAGS.get(cleaned[-1], ())) if cleaned else ()
+        tags = (*LAW_TAGS.get(cleaned[-1], ()), *_FORM_TAGS.get(cleaned[-1], ())) if cleaned else ()
         if item in tags or (cleaned and cleaned[-1] in ("part", "region") and item in ("str", "int")):
             continue  # a law's or a form's tag, or the member of the union str | int of a part or region name
         cleaned.append(item)
@@ -69,7 +67,7 @@ def describe(error: dict) -> str:
             return key + message[len(name):]
         return f"{key}: {message}"
     if kind in ("union_tag_invalid", "union_tag_not_found"):
-        laws = ", ".join(f'"{t}"' for t in _LAW_TAGS.get(loc[-1] if loc else "", _STIFFNESS_TAGS))
+        laws = ", ".join(f'"{t}"' for t in LAW_TAGS.get(loc[-1] if loc else "", LAW_TAGS["stiffness"]))
         given = ctx.get("tag")
         if kind == "union_tag_not_found":
             return f"missing required value '{key}.law' (one of {laws})"
@@ -88,7 +86,7 @@ def describe(error: dict) -> str:
 
 def _law_tag(raw_loc) -> str | None:
     """The law a tagged union was validated as (the last tag pydantic inserts after "stiffness" etc.)."""
-    tags = [item for before, item in zip(raw_loc, raw_loc[1:]) if item in _LAW_TAGS.get(before, ())]
+    tags = [item for before, item in zip(raw_loc, raw_loc[1:]) if item in LAW_TAGS.get(before, ())]
     return tags[-1] if tags else None
 
 

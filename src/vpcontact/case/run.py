@@ -8,6 +8,7 @@ from typing import Annotated, Any, Literal, Optional
 from pydantic import Field, field_validator, model_validator
 
 from ..errors import brief
+from ..estimate.estimators import ESTIMATORS
 from ..problem.time_grid import check_time_span
 from ..solvers.factorization import FACTORIZATIONS
 from .values import MAX_STEPS, NonNegativeFloat, PositiveFloat, Section, show
@@ -92,4 +93,4 @@ class AdaptSection(Section):
     theta: Annotated[float, Field(gt=0, le=1)] = 0.5
     max_dofs: Annotated[int, Field(gt=0)] = 1_000_000
     functional: Literal["max", "l2"] = "max"  # max over the steps of η_K²(t_n), or Σ_n k_n η_K²(t_n)
-    estimator: Literal["residual", "recovery"] = "residual"  # the keys of vpcontact.estimate.adapt.ESTIMATORS
+    estimator: Literal[ESTIMATORS.names] = "residual"  # vpcontact.estimate.estimators.ESTIMATORS

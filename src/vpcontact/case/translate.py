@@ -21,6 +21,7 @@ from ..problem.options import (Boundary, BodyForce, ContactOptions, Dirichlet, I
 from ..results.output_options import OutputOptions
 from .body import BoundarySection, InitialSection, MeshSection
 from .contact import ContactSection
+from .law_sections import compliance_parameters
 from .load import section
 from .material import MaterialSection
 from .model import Case, Model
@@ -78,7 +79,8 @@ def mesh_source(mesh: MeshSection, base_dir: str = ".") -> MeshSource:
 
 
 def _law(law: Section) -> LawChoice:
-    """A law table (``{"law": "power", "c_v": ..., ...}``) as the law's name and its parameters."""
+    """A law table (``{"law": "power", "c_v": ..., ...}``, :mod:`vpcontact.case.law_sections`) as the law's name
+    and its parameters."""
     return LawChoice(law.law, law.model_dump(exclude={"law"}))
 
 
@@ -97,7 +99,8 @@ def _boundary(boundary: BoundarySection) -> Boundary:
 
 
 def _contact(contact: ContactSection) -> ContactOptions:
-    layers = tuple(Layer(key, layer.part, layer.g, layer.gap, layer.p, layer.exponent,
+    layers = tuple(Layer(key, layer.part, layer.g, layer.gap,
+                         None if layer.p is None else LawChoice(layer.p, compliance_parameters(layer)),
                          None if layer.stiffness is None else _law(layer.stiffness))
                    for key, layer in contact.layers())
     normal = contact.normal if isinstance(contact.normal, str) else list(contact.normal)

@@ -45,16 +45,17 @@ Expression = Annotated[Any, AfterValidator(_expression_value)]
 Part = Union[str, int]
 
 
-def _layer_value(minimum: float | None):
-    """A layer parameter: a number (at least ``minimum`` when given) or an expression in the coordinates,
-    evaluated at the contact nodes (its values there are checked against ``minimum`` when the problem is
-    built)."""
+def layer_value(minimum: float | None = None, strict: bool = False):
+    """A parameter of the layer's laws (K(x, ξ) of (2.18), p(x, r) of (2.19): they may vary along Γ3): a number (at
+    least ``minimum`` when given, more than it when ``strict``) or an expression in the coordinates, evaluated at
+    the contact nodes (its values there are checked against ``minimum`` when the problem is built)."""
 
     def check(value):
         value = _expression_value(value)
-        if isinstance(value, (int, float)) and minimum is not None and not value >= minimum:
-            raise ValueError(f"expected a number >= {minimum:g} or an expression in the coordinates, got "
-                             f"{brief(value)}")
+        if isinstance(value, (int, float)) and minimum is not None and not (value > minimum if strict else
+                                                                             value >= minimum):
+            raise ValueError(f"expected a number {'>' if strict else '>='} {minimum:g} or an expression in the "
+                             f"coordinates, got {brief(value)}")
         return value
 
     return Annotated[Any, AfterValidator(check)]
@@ -83,13 +84,6 @@ def _thickness(value):
 
 
 Thickness = Annotated[Any, BeforeValidator(_infinite), AfterValidator(_thickness)]
-
-
-#: Layer parameters that may vary along Γ3 (the paper's K(x, ξ), (2.18)).
-NonNegativeLayerValue = _layer_value(0.0)
-LayerValue = _layer_value(None)
-#: The exponent m ≥ 1 of p = power, which may vary along Γ3 too (the paper's p(x, r), (2.19)).
-Exponent = _layer_value(1.0)
 
 
 class Section(BaseModel):

@@ -2,7 +2,7 @@
 
 Each cycle c = 1, 2, … solves the problem's whole history on the current mesh (the ordinary ``TimeLoop``
 path, the problem built again on each refined mesh by ``Problem.on``: every option of a case works) and, as the steps go, folds the element indicators
-η_K²(t_n) of the estimator (``adapt.estimator``, one of ESTIMATORS: "residual" or "recovery") at
+η_K²(t_n) of the estimator (``adapt.estimator``, one of :data:`~vpcontact.estimate.estimators.ESTIMATORS`) at
 every step into one value per element, the time functional (``adapt.functional``):
 
     "max":  F_K = max_n η_K²(t_n),        "l2":  F_K = Σ_n k η_K²(t_n)   (k the time step);
@@ -23,25 +23,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import recovery as recovery_estimate
 from ..errors import CaseError
 from .adapt_options import AdaptOptions
-from .indicators import Indicators, Level
+from .estimators import ESTIMATORS
+from .indicators import Level
 from ..mesh.core import Mesh
 from ..problem.build import Problem, checked_problem
 from ..progress import SILENT, Progress, duration, reporting
 from ..mesh.refinement import refine
-from .residual import ResidualEstimator
 from ..results.output_options import OutputOptions
 from ..results.result import Result
 from ..timeloop.loop import TimeLoop
 
-#: The estimators ``adapt.estimator`` names: each prepares, for a problem, the map from its time levels to
-#: their squared element indicators (the residual one computes the mesh's facet geometry once).
-ESTIMATORS: dict[str, Callable[[Problem], Callable[[Level], Indicators]]] = {
-    "residual": ResidualEstimator,
-    "recovery": lambda problem: recovery_estimate.estimate,
-}
 #: The columns of adapt.csv, one row per cycle.
 COLUMNS = ("cycle", "dofs", "contact_nodes", "estimate", "wall_time_s")
 
@@ -105,7 +98,7 @@ def solve_and_estimate(problem: Problem, settings: AdaptOptions, output: OutputO
     ``settings.estimator`` at each step into the time functional ``settings.functional`` (see the module
     docstring): (the run, F_K per element); ``progress`` hears of the solver's set-up and of the steps
     (``label``: their name on a terminal's bar)."""
-    estimator = ESTIMATORS[settings.estimator](problem)
+    estimator = ESTIMATORS[settings.estimator].prepare(problem)
     loop = TimeLoop(problem, output, progress)
     wanted = loop.result.field_steps
     loop.result.field_steps = range(1, len(problem.times) + 1)  # every step's fields, dropped once folded

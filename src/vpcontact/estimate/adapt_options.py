@@ -10,7 +10,8 @@ from dataclasses import dataclass
 class AdaptOptions:
     """Up to ``cycles`` solves of the whole history, each on the mesh refined from the one before by Dörfler
     marking of the fraction ``theta`` of the time functional ``functional`` ("max" or "l2") of the indicators of
-    ``estimator`` (a key of :data:`vpcontact.estimate.adapt.ESTIMATORS`), none with more than ``max_dofs`` dofs."""
+    ``estimator`` (a name of :data:`vpcontact.estimate.estimators.ESTIMATORS`), none with more than ``max_dofs``
+    dofs."""
 
     cycles: int
     theta: float

@@ -2,8 +2,8 @@
 
 An estimator maps a converged time level (`Level`: the problem, t_n, the discrete fields u_h and σ_h
 and the contact state at t_n) to squared element indicators η_K² by term (`Indicators`); the
-estimate of the level is η(t_n) = (Σ_K η_K²)^{1/2}. Every estimator of the package has the form
-``estimate(level) -> Indicators``.
+estimate of the level is η(t_n) = (Σ_K η_K²)^{1/2}. The estimators, by name, are those of
+:data:`~vpcontact.estimate.estimators.ESTIMATORS`.
 """
 
 from __future__ import annotations

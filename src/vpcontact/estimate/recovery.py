@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .estimators import Estimator
 from .indicators import Indicators, Level
 from ..mesh.simplex import barycentric_gradients
 
@@ -71,3 +72,11 @@ def estimate(level: Level) -> Indicators:
     difference = recovered_stress(mesh.p, cells, stress, problem.materials.owner) - stress[None]
     lam, mu = problem.elasticity.lame
     return Indicators({"recovery": energy_indicators(mesh.p, cells, difference, lam, mu)})
+
+
+ESTIMATOR = Estimator(
+    name="recovery",
+    summary="The recovery (Zienkiewicz–Zhu) estimator: the energy norm of σ* − σ_h, σ* the averaged stress.",
+    terms=("recovery",),
+    prepare=lambda problem: estimate,
+)

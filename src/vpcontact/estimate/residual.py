@@ -37,12 +37,12 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import Basis, ElementTetP1, ElementTriP1, FacetBasis, MeshTet1
 
+from .estimators import Estimator
 from .indicators import Indicators, Level
-from ..results.columns import ESTIMATE_TERMS
 from ..fem.space import component, coordinates
 
 #: The terms of the estimate, in the order of the outputs.
-TERMS = ESTIMATE_TERMS
+TERMS = ("body_force", "jump", "neumann", "contact_tangential", "contact_normal", "complementarity")
 #: The degree of the quadrature of the loads (that of the load vector).
 LOAD_ORDER = 4
 
@@ -227,3 +227,11 @@ def _contact_terms(level: Level, geometry: _Geometry, traction: np.ndarray, per_
         "contact_normal": per_element(elements, compliance * h * _p1_square(normal_part, measure)),
         "complementarity": per_element(elements, _p1_product(contact["pressure_rigid"][corners], room[corners], measure)),
     }
+
+
+ESTIMATOR = Estimator(
+    name="residual",
+    summary="The residual estimator: the element, jump, Neumann and contact residuals of σ_h and the complementarity.",
+    terms=TERMS,
+    prepare=ResidualEstimator,
+)

@@ -1,4 +1,5 @@
-"""The finite elements: the P1 displacement space, assembly of the stiffness and the loads, rigid motions."""
+"""The finite elements: the P1 displacement space, assembly of the stiffness and the loads, rigid motions, the contact
+nodes of Γ3 (their normals, weights and gaps)."""
 
 from .. import submodule
 

@@ -1,4 +1,7 @@
-"""The laws of the model: elasticity ℰ, the viscoplastic 𝒢, the materials by region, the contact laws K(ξ) and p(r)."""
+"""The laws of the model: elasticity ℰ (``elasticity``), the viscoplastic 𝒢 (``viscoplastic``), the materials by
+region (``materials``), the layer's stiffness K(ξ) (``stiffness``) and compliance p(r) (``compliance``) and the
+contact law they make (``contact``). The laws a case names are plug-ins: one module each, declared by a
+:class:`~vpcontact.laws.spec.Law` and found by name in its family's registry."""
 
 from .. import submodule
 

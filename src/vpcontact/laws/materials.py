@@ -18,7 +18,8 @@ import numpy as np
 
 from ..errors import CaseError, quoted
 from ..expressions.parse import values_at
-from .elasticity import Elasticity, Perzyna, Relaxation
+from .elasticity import Elasticity
+from .viscoplastic import VISCOPLASTIC
 from ..mesh.core import Mesh
 from ..fem.space import coordinates
 
@@ -87,7 +88,7 @@ def body_materials(materials: Sequence, mesh: Mesh) -> Materials:
             E[mine] = _coefficient(f"{key}.E", entry.E, centroids[:, mine], minimum=0.0)
             nu[mine] = _coefficient(f"{key}.nu", entry.nu, centroids[:, mine], hypothesis=hypothesis)
         elasticity = Elasticity(E, nu, hypothesis)
-    laws = [(np.flatnonzero(owner == i), _viscoplastic_law(entry, hypothesis))
+    laws = [(np.flatnonzero(owner == i), _viscoplastic_law(entry.viscoplastic, hypothesis))
             for i, (_, entry) in enumerate(entries) if entry.viscoplastic is not None]
     if not laws:
         viscoplastic = None
@@ -98,12 +99,10 @@ def body_materials(materials: Sequence, mesh: Mesh) -> Materials:
     return Materials(owner, elasticity, viscoplastic)
 
 
-def _viscoplastic_law(entry, hypothesis: str | None) -> Callable:
-    """𝒢 of an entry's viscoplastic law (its name and parameters)."""
-    law, v = entry.viscoplastic.law, entry.viscoplastic.parameters
-    if law == "perzyna":
-        return Perzyna(v["eta"], v["yield_stress"])
-    return Relaxation(v["mu"], Elasticity(v["E_inf"], v["nu_inf"], hypothesis))
+def _viscoplastic_law(choice, hypothesis: str | None) -> Callable:
+    """𝒢 of a material's viscoplastic law ``choice`` (:class:`~vpcontact.problem.options.LawChoice`: a name of
+    VISCOPLASTIC and its parameters by name) under the material's 2D ``hypothesis``."""
+    return VISCOPLASTIC[choice.law].made(lambda parameter: choice.parameters[parameter.name], hypothesis=hypothesis)
 
 
 def _owners(entries: list[tuple[str, object]], mesh: Mesh) -> np.ndarray:

@@ -80,7 +80,7 @@ def parameters_in_words(function: Callable) -> str:
 
 def required_arguments(function: Callable) -> list[str]:
     """The names of the positional arguments ``function`` requires, from its signature; none when Python
-    cannot tell (a NumPy ufunc) or when it takes any number (*args)."""
+    cannot tell (a NumPy ufunc) or when it takes any number (``*args``)."""
     try:
         parameters = list(inspect.signature(function).parameters.values())
     except (TypeError, ValueError):

@@ -19,8 +19,11 @@ from skfem import Basis
 from ..errors import CaseError, brief
 from ..expressions.parse import parse_expression
 from ..fem.assembly import Density, LoadVector, displacement_basis, element_strain, stiffness
+from ..fem.contact_surface import ContactSurface, contact_surface, empty_surface
 from ..fem.space import CELLS, component, coordinates
-from ..laws.contact import ConstantStiffness, ContactLaw, ContactSurface, PositivePart, contact_surface, empty_surface
+from ..laws.compliance.positive_part import PositivePart
+from ..laws.contact import ContactLaw
+from ..laws.stiffness.constant import ConstantStiffness
 from ..laws.elasticity import Elasticity
 from ..laws.materials import Materials, body_materials
 from ..laws.python_laws import api_law, api_viscoplastic

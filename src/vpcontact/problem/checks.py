@@ -15,7 +15,7 @@ from ..expressions.parse import parse_expression
 from ..fem.assembly import stress_force
 from ..fem.rigid_modes import RigidModes
 from ..fem.space import component, coordinates
-from ..laws.contact import ContactSurface
+from ..fem.contact_surface import ContactSurface
 from ..laws.python_laws import check_returned, tried
 from ..mesh import core as meshes
 from .initial import InitialState

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..laws.contact import ContactSurface
+from ..fem.contact_surface import ContactSurface
 from ..laws.elasticity import Elasticity
 from ..laws.materials import Materials
 from ..mesh.core import Mesh

@@ -28,10 +28,11 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import Basis
 
-from ..laws.contact import ContactLaw, ContactSurface
 from ..errors import CaseError, brief, quoted
 from ..expressions.parse import values_at
+from ..fem.contact_surface import ContactSurface
 from ..inputs import check_regular_file
+from ..laws.contact import ContactLaw
 from ..mesh.core import Mesh
 from ..fem.space import CELLS, component, coordinates
 from .options import ProblemOptions

@@ -16,8 +16,9 @@ from pathlib import Path
 
 @dataclass(frozen=True)
 class LawChoice:
-    """A law a case names by ``law`` ("perzyna", "relaxation"; "power", "constant", "exponential") and its
-    ``parameters`` by name (numbers; the layer's may be expressions in the coordinates)."""
+    """A law a case names: ``law``, its name in its family's registry (:mod:`vpcontact.laws.stiffness`,
+    :mod:`vpcontact.laws.compliance`, :mod:`vpcontact.laws.viscoplastic`), and its ``parameters`` by name (numbers;
+    a contact law's may be expressions in the coordinates)."""
 
     law: str
     parameters: dict
@@ -72,15 +73,16 @@ class Boundary:
 @dataclass(frozen=True)
 class Layer:
     """The soft layer on one contact part (2.5): its thickness g (a number, inf, or an expression in the
-    coordinates), the initial gap g0, the law p ("positive_part" or "power" with ``exponent``) and the
-    stiffness law K (2.18); p and K are None where a Python law of the API replaces them."""
+    coordinates), the initial gap g0, the law p (2.19) and the stiffness law K (2.18) (a law of
+    :data:`~vpcontact.laws.compliance.COMPLIANCE` and of :data:`~vpcontact.laws.stiffness.STIFFNESS`, each
+    parameter a number or an expression in the coordinates); p and K are None where a Python law of the API
+    replaces them."""
 
     key: str
     part: str | int
     g: float | str
     gap: float | str
-    p: str | None
-    exponent: float | str | None
+    p: LawChoice | None
     stiffness: LawChoice | None
 
 

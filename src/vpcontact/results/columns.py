@@ -19,13 +19,14 @@ def history_columns(dim: int) -> tuple[str, ...]:
             "nodes_in_compliance", "nodes_at_limit", *(f"contact_force_{c}" for c in coordinates(dim)), "substep", "k")
 
 
+def estimate_columns(terms: tuple[str, ...]) -> tuple[str, ...]:
+    """The history columns of an error estimate of ``terms`` at every level (``output.error_estimate``): η(t) =
+    (Σ_K η_K²)^½ and each term's share (Σ_K η_K,term²)^½; none without terms (no estimate)."""
+    return ("error_estimate", *(f"error_estimate_{term}" for term in terms)) if terms else ()
+
+
 #: The history columns of a 2D body (the paper's case).
 HISTORY_COLUMNS = history_columns(2)
-#: The terms of the residual error estimate (:mod:`vpcontact.estimate.residual`).
-ESTIMATE_TERMS = ("body_force", "jump", "neumann", "contact_tangential", "contact_normal", "complementarity")
-#: The history columns a run with ``output.error_estimate`` adds: η(t) = (Σ_K η_K²)^½ and each term's share
-#: (Σ_K η_K,term²)^½.
-ESTIMATE_COLUMNS = ("error_estimate", *(f"error_estimate_{term}" for term in ESTIMATE_TERMS))
 #: History columns holding integers (the others are floats).
 INTEGER_COLUMNS = ("step", "newton_iterations", "nodes_separated", "nodes_in_compliance", "nodes_at_limit", "substep")
 #: The per-node contact arrays of a level: d, ξ, K, the two pressures and the node status (an index in

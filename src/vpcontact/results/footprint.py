@@ -8,14 +8,14 @@ from __future__ import annotations
 
 from ..errors import CaseError, quoted, shown
 from ..memory import available_memory
-from .columns import CONTACT_ARRAYS, ESTIMATE_COLUMNS, history_columns
+from .columns import CONTACT_ARRAYS, history_columns
 from .steps import field_step_numbers
 
 #: Bytes of one history row in memory: a dict of the HISTORY_COLUMNS and its time (CPython 3.11, measured).
 HISTORY_ROW_BYTES = 1100
-#: Bytes the ESTIMATE_COLUMNS add to a history row in memory (7 float objects and the larger dict; CPython 3.11,
-#: measured).
-ESTIMATE_ROW_BYTES = 900
+#: Bytes the columns of the estimate of output.error_estimate add to a history row in memory, and their number (the
+#: residual estimator's η and six terms: 7 float objects and the larger dict; CPython 3.11, measured).
+ESTIMATE_ROW_BYTES, ESTIMATE_ROW_COLUMNS = 900, 7
 #: Bytes of a NumPy array object besides its data.
 ARRAY_BYTES = 112
 #: Bytes the writers add while they write, whatever the run's length (contact.csv is written in blocks).
@@ -26,10 +26,10 @@ def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, conta
                   history: bool, dim: int = 2, estimate: bool = False) -> dict[str, int]:
     """Bytes a run of ``steps`` steps keeps for its outputs until they are written, by part: the history
     rows, the per-node contact rows and the fields at ``field_steps`` steps (``history``: with the
-    viscoplastic history z; ``estimate``: with the ESTIMATE_COLUMNS in every row and η_K in the fields),
+    viscoplastic history z; ``estimate``: with the estimate's columns in every row and η_K in the fields),
     each with the copy a checkpoint or solution.npz makes of them, and what the writers add. A step cut
     into sub-steps adds rows: this is the least a run needs."""
-    columns = len(history_columns(dim)) + (len(ESTIMATE_COLUMNS) if estimate else 0)
+    columns = len(history_columns(dim)) + (ESTIMATE_ROW_COLUMNS if estimate else 0)
     copies = 8 * columns
     row = HISTORY_ROW_BYTES + (ESTIMATE_ROW_BYTES if estimate else 0)
     contact = len(CONTACT_ARRAYS) * ARRAY_BYTES + 2 * (8 * (len(CONTACT_ARRAYS) - 1) + 1) * contact_nodes

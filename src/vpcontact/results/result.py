@@ -24,7 +24,7 @@ from ..errors import CaseError, shown
 from ..fem.space import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from ..problem.discretization import Discretization
-from .columns import CONTACT_ARRAYS, ESTIMATE_COLUMNS, ESTIMATE_TERMS, INTEGER_COLUMNS, history_columns
+from .columns import CONTACT_ARRAYS, INTEGER_COLUMNS, estimate_columns, history_columns
 from .steps import end_of_step_rows, field_step_numbers, step_ends
 
 #: Most characters of a run's message that ``repr(result)`` shows (on its second line).
@@ -107,20 +107,21 @@ class Result:
     completed_steps: int = 0  # time steps t_n reached
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
-    error_estimate: bool = False  # output.error_estimate: the rows have the ESTIMATE_COLUMNS
+    estimate_terms: tuple[str, ...] = ()  # output.error_estimate: the estimator's terms (the rows' estimate_columns)
     output: object = None  # the OutputOptions the run was made with (what the writers write)
 
     @classmethod
-    def start(cls, discretization: Discretization, dofs: int, solver, output) -> "Result":
+    def start(cls, discretization: Discretization, dofs: int, solver, output,
+              estimate_terms: tuple[str, ...] = ()) -> "Result":
         """The empty result of a run on ``discretization`` with ``dofs`` unknowns by the step ``solver`` (its
-        method, why it runs, its augmentation r), with the options ``output`` (the fields kept, the error
-        estimate, and what the writers write)."""
+        method, why it runs, its augmentation r), with the options ``output`` (the fields kept and what the writers
+        write), whose levels record the error estimate of ``estimate_terms`` (none: no estimate)."""
         mesh = discretization.mesh
         wanted = field_step_numbers(output.field_steps, len(discretization.times))
         return cls(dofs=dofs, elements=mesh.mesh.t.shape[1], nodes=mesh.mesh.p.shape[1],
                    contact_nodes=discretization.surface.size, dim=mesh.dim, probe=discretization.probe,
                    field_steps=wanted, augmentation=solver.r, method=solver.name, method_reason=solver.reason,
-                   discretization=discretization, output=output, error_estimate=output.error_estimate)
+                   discretization=discretization, output=output, estimate_terms=tuple(estimate_terms))
 
     # --- filling in ------------------------------------------------------------------------------
     def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status, substep: int = 1,
@@ -166,10 +167,10 @@ class Result:
 
     def record_estimate(self, indicators, fields: Fields) -> None:
         """Add the error estimate (:class:`~vpcontact.estimate.indicators.Indicators`) of the last recorded level to
-        its history row (ESTIMATE_COLUMNS) and its η_K to that level's ``fields``."""
+        its history row (the estimate_columns of its terms) and its η_K to that level's ``fields``."""
         self.rows[-1].update({"error_estimate": indicators.total,
                               **{f"error_estimate_{term}": float(np.sqrt(indicators.terms[term].sum()))
-                                 for term in ESTIMATE_TERMS}})
+                                 for term in self.estimate_terms}})
         fields.error_indicator = np.sqrt(indicators.squared)
 
     def fail(self, message: str) -> None:
@@ -222,8 +223,8 @@ class Result:
     @property
     def columns(self) -> tuple[str, ...]:
         """The history columns (history.csv) of this run's dimension, and with ``output.error_estimate``
-        the ESTIMATE_COLUMNS."""
-        return history_columns(self.dim) + (ESTIMATE_COLUMNS if self.error_estimate else ())
+        the estimate_columns of the estimator's terms."""
+        return history_columns(self.dim) + estimate_columns(self.estimate_terms)
 
     @property
     def steps(self) -> int:
@@ -287,7 +288,7 @@ class Result:
                                                  "penetration_probe", "normal_stress_probe", "nodes_separated",
                                                  "nodes_in_compliance", "nodes_at_limit")}
             final["contact_force"] = [last[f"contact_force_{c}"] for c in coordinates(self.dim)]
-            if self.error_estimate:
+            if self.estimate_terms:
                 final["error_estimate"] = last["error_estimate"]
         return {
             "status": self.status, "message": self.message, "dofs": self.dofs, "elements": self.elements,

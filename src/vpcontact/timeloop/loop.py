@@ -27,8 +27,9 @@ solver's kept state, the counters of work and the result so far it is the loop's
 (``TimeLoop.snapshot``, :class:`~vpcontact.timeloop.snapshot.LoopSnapshot`), all a checkpoint needs:
 ``TimeLoop.restore`` continues from one as if the loop had never stopped.
 
-With ``output.error_estimate`` the fields are computed at every level and the residual estimator
-(:mod:`vpcontact.estimate.residual`) adds η(t) and its terms to the level's history row and η_K to its fields.
+With ``output.error_estimate`` the fields are computed at every level and the estimator of every level
+(:data:`~vpcontact.estimate.estimators.EVERY_LEVEL`, the residual one) adds η(t) and its terms to the level's history
+row and η_K to its fields.
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ from ..estimate.indicators import Level
 from ..problem.build import Problem, checked_problem
 from ..problem.discretization import Discretization
 from ..progress import SILENT, Progress, StepReport, reporting
-from ..estimate.residual import ResidualEstimator
+from ..estimate.estimators import ESTIMATORS, EVERY_LEVEL
 from ..results.output_options import OutputOptions
 from ..results.result import Fields, Result
 from ..fem.rigid_modes import RigidModes
@@ -97,8 +98,10 @@ class TimeLoop:
                                   expected_seconds=plan.setup_seconds)
         self.max_cuts = options.max_step_cuts
         self._loads = problem.loads.on(free)  # F(t) at the free dofs
-        self.result = Result.start(Discretization.of(problem), problem.basis.N, self.solver, output)
-        self.estimator = ResidualEstimator(problem) if output.error_estimate else None
+        estimator = ESTIMATORS[EVERY_LEVEL] if output.error_estimate else None
+        self.result = Result.start(Discretization.of(problem), problem.basis.N, self.solver, output,
+                                   () if estimator is None else estimator.terms)
+        self.estimator = None if estimator is None else estimator.prepare(problem)
         self._created = started
         self.setup_time = clock.perf_counter() - started
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
