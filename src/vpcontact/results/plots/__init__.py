@@ -7,9 +7,9 @@ Each function takes a :class:`~vpcontact.results.result.Result` and returns a `m
 (no pyplot: no global state, so it renders headless, and a notebook shows it as it is). matplotlib
 is imported when a figure is drawn: ``import vpcontact`` does not load it. A run directory holds
 these figures as PNG files with ``output.figures = true`` (:func:`run_figures`, written by
-:mod:`vpcontact.io.figures`). One module per family: :mod:`.contact` (on Γ3), :mod:`.body` (the deformed
-body), :mod:`.history` (time series), :mod:`.figures` (a run directory's), :mod:`.curves` (order and arc
-length along Γ3), :mod:`.layout` (colours, panels).
+:mod:`vpcontact.io.figures`). One module per family: ``contact`` (on Γ3), ``body`` (the deformed body),
+``history`` (time series), ``figures`` (a run directory's), ``curves`` (order and arc length along Γ3),
+``layout`` (colours, panels).
 """
 
 from .body import body_field, body_fields, deformed_body, magnification
