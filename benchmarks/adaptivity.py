@@ -75,7 +75,7 @@ class Reference:
 
     def __init__(self, result):
         self.snapshots = {step: result.snapshot(step) for step in TIMES}
-        self.lame = result.problem.elasticity.lame
+        self.lame = result.discretization.elasticity.lame
 
     def errors(self, result) -> dict[str, float]:
         found = {}

@@ -59,10 +59,12 @@ def load(h: float, **overrides):
 
 
 def solved(case):
-    result = vpcontact.solve(case)
+    """(problem, result) of a run of ``case`` that completes (else SystemExit)."""
+    problem = build_problem(case)
+    result = vpcontact.solve(problem, output=case.output)
     if result.status != "complete":
         raise SystemExit(f"the run failed: {result.message}")
-    return result
+    return problem, result
 
 
 def with_lame(result, step: int):
@@ -70,18 +72,18 @@ def with_lame(result, step: int):
     snapshot = result.snapshot(step)
     elements = snapshot.elements.shape[1]
     lame = np.array([np.broadcast_to(np.asarray(value, dtype=float), (elements,))
-                     for value in result.problem.elasticity.lame])
+                     for value in result.discretization.elasticity.lame])
     return dataclasses.replace(snapshot, lame=lame)
 
 
-def measured(result, references: dict) -> dict:
-    """dofs, contact nodes, and per time η(t), the energy error, V and the effectivity of one run."""
-    estimator = ResidualEstimator(result.problem)
+def measured(problem, result, references: dict) -> dict:
+    """dofs, contact nodes, and per time η(t), the energy error, V and the effectivity of one run of ``problem``."""
+    estimator = ResidualEstimator(problem)
     row = {"dofs": int(result.dofs), "contact_nodes": int(result.contact_nodes),
-           "elements": int(result.problem.mesh.mesh.t.shape[1])}
+           "elements": int(result.elements)}
     for t, step in STEPS.items():
         found = differences(result.snapshot(step), references[t])
-        eta = float(estimator(Level.of(result, step)).total)
+        eta = float(estimator(Level.of(result, step, problem)).total)
         row[f"t={t:g}"] = {"estimate": eta, "error": found["energy"], "V": found["V"],
                            "effectivity": eta / found["energy"]}
     return row
@@ -140,7 +142,7 @@ def main(argv=None) -> int:
     levels, cycles = setting["levels"], arguments.cycles or setting["cycles"]
     started = time.perf_counter()
 
-    reference = solved(load(setting["reference"], **{"solver.method": "condensed"}))
+    _, reference = solved(load(setting["reference"], **{"solver.method": "condensed"}))
     references = {t: with_lame(reference, step) for t, step in STEPS.items()}
     reference_s = time.perf_counter() - started
     print(f"reference h = {setting['reference']:g}: {reference.dofs} dofs, {reference_s:.0f} s", file=sys.stderr)
@@ -149,21 +151,23 @@ def main(argv=None) -> int:
     uniform = []
     for h in levels:
         begun = time.perf_counter()
-        result = solved(load(h))
-        uniform.append({"h": h, **measured(result, references), "wall_time_s": time.perf_counter() - begun})
+        problem, result = solved(load(h))
+        uniform.append({"h": h, **measured(problem, result, references), "wall_time_s": time.perf_counter() - begun})
         print(line(uniform[-1]), file=sys.stderr, flush=True)
     finest = result
 
     adaptive = []
 
     def record(cycle) -> None:
-        adaptive.append({"cycle": cycle.number, **measured(cycle.result, references),
+        problem = start.on(cycle.result.discretization.mesh)  # the cycle's problem, built again on its mesh
+        adaptive.append({"cycle": cycle.number, **measured(problem, cycle.result, references),
                          "cycle_estimate": cycle.estimate, "wall_time_s": cycle.wall_time_s})
         print(line(adaptive[-1]), file=sys.stderr, flush=True)
 
     case = load(levels[0], **{"adapt.cycles": cycles, "adapt.theta": arguments.theta, "adapt.functional": "max",
                               "adapt.max_dofs": int(reference.dofs) // 2})
-    adaptation = adapt(build_problem(case), case.adapt, case.output, after_cycle=record)
+    start = build_problem(case)
+    adaptation = adapt(start, case.adapt, case.output, after_cycle=record)
     if adaptation.status != "complete":
         raise SystemExit(f"the adaptation failed: {adaptation.message}")
 
@@ -180,7 +184,7 @@ def main(argv=None) -> int:
         "dofs_ratio": {t: None if dofs is None else dofs / target["dofs"] for t, dofs in reached.items()},
         "contact_nodes_off_sphere": float(np.abs(np.linalg.norm(bottom - np.array([[0.0], [0.0], [1.0]]), axis=0)
                                                  - 1.0).max()),
-        "sizes": {"last_cycle": sizes(adaptation.mesh.mesh), "finest_uniform": sizes(finest.problem.mesh.mesh)},
+        "sizes": {"last_cycle": sizes(adaptation.mesh.mesh), "finest_uniform": sizes(finest.discretization.mesh.mesh)},
         "message": adaptation.message,
         "wall_time_s": time.perf_counter() - started,
     }

@@ -32,7 +32,7 @@ import tomli_w
 from scipy.optimize import curve_fit
 
 from vpcontact.mesh.ball import CELLS_PER_RADIUS
-from vpcontact.io.run_reader import read_table
+from vpcontact.io.csv_format import read_table
 from vpcontact.drivers.studies import load_study, norm_column, run_study
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"

@@ -69,10 +69,12 @@ CASES = {"paper": (paper_case, (1.0, -1.0)), "punch": (punch_case, (None,))}
 
 
 def _solve(case):
-    result = vpcontact.solve(case)
+    """(problem, result) of a run of ``case`` that completes (else SystemExit)."""
+    problem = vpcontact.build_problem(case)
+    result = vpcontact.solve(problem, output=case.output)
     if result.status != "complete":
         raise SystemExit(f"the run failed: {result.message}")
-    return result
+    return problem, result
 
 
 def local_errors(level_mesh, reference_mesh, error_energy: np.ndarray) -> np.ndarray:
@@ -90,21 +92,21 @@ def study(name: str, levels: tuple[int, ...], reference: int, times: tuple[float
         grid = make(levels[0], beta, []).time  # every level's and the reference's: t_n = n T / steps
         steps = [int(round(t / grid.T * grid.steps)) for t in times]
         started = time.perf_counter()
-        ref = _solve(make(reference, beta, steps))
+        _, ref = _solve(make(reference, beta, steps))
         ref_time = time.perf_counter() - started
-        ref_mesh = ref.problem.mesh.mesh
-        lame = ref.problem.elasticity.lame
+        ref_mesh = ref.discretization.mesh.mesh
+        lame = ref.discretization.elasticity.lame
         for n in levels:
             started = time.perf_counter()
-            result = _solve(make(n, beta, steps))
-            estimator = ResidualEstimator(result.problem)
+            problem, result = _solve(make(n, beta, steps))
+            estimator = ResidualEstimator(problem)
             for t, step in zip(times, steps):
-                indicators = estimator(Level.of(result, step))
+                indicators = estimator(Level.of(result, step, problem))
                 mine = result.snapshot(step)
                 theirs = ref.snapshot(step)
                 moved = transfer(mine, theirs.points, theirs.elements)
                 energy = element_energies(theirs.points, theirs.elements, moved.displacement - theirs.displacement, lame)
-                local = local_errors(result.problem.mesh.mesh, ref_mesh, energy)
+                local = local_errors(result.discretization.mesh.mesh, ref_mesh, energy)
                 error = float(np.sqrt(energy.sum()))
                 eta = indicators.total
                 correlation = float(np.corrcoef(np.log(indicators.squared + 1e-300), np.log(local + 1e-300))[0, 1])
@@ -115,7 +117,7 @@ def study(name: str, levels: tuple[int, ...], reference: int, times: tuple[float
                     "local_log_correlation": correlation,
                     "nodes_at_limit": int(result.series("nodes_at_limit", substeps=False)[step - 1]),
                     "solve_s": time.perf_counter() - started, "reference_solve_s": ref_time,
-                    "_local": (result.problem.mesh.mesh, indicators.squared, local),
+                    "_local": (result.discretization.mesh.mesh, indicators.squared, local),
                 })
     return rows
 

@@ -38,7 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
-from vpcontact.io.run_reader import read_contact, read_solution, read_summary
+from vpcontact.io.contact_csv import read_contact
+from vpcontact.io.solution import read_solution
+from vpcontact.io.summary import read_summary
 
 HERE = Path(__file__).resolve().parent
 EXAMPLE = HERE.parent / "examples" / "paper_ball.toml"

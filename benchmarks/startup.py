@@ -77,7 +77,8 @@ def phases(case_path: str, overrides: dict, out: Path) -> dict:
     """The phases of one run of the case, in this process (seconds)."""
     started = time.perf_counter()
     import vpcontact.drivers.cli  # noqa: F401  (what `vpcontact run` imports)
-    from vpcontact.io import checkpoint, writers
+    from vpcontact.io import checkpoint, contact_csv, figures, history_csv, solution, summary, vtu
+    from vpcontact.io.run import write_resolved_case
     from vpcontact.case.load import load_case
     from vpcontact import build_problem
     from vpcontact.case.translate import output_options
@@ -99,17 +100,15 @@ def phases(case_path: str, overrides: dict, out: Path) -> dict:
     result = loop.run(progress=False)
     seconds |= {name: result.timings.get(name, 0.0) for name in ("factorization", "condensation", "time_loop")}
     out.mkdir(parents=True, exist_ok=True)
-    timed("case.resolved.toml", lambda: writers.write_resolved_case(case.to_toml(), out))
-    timed("history.csv", lambda: writers._write_history(result, out / "history.csv"))
-    timed("contact.csv", lambda: writers._write_contact(result, out / "contact.csv"))
-    timed("fields", lambda: writers._write_fields(result, out / "fields"))  # VTU, PVD and solution.npz
-    timed("solution.npz", lambda: writers.write_solution(result, out / "solution.npz"))
-    seconds["fields"] -= seconds["solution.npz"]  # the VTU and PVD files alone
-    timed("summary.json", lambda: writers.write_text(
-        out / "summary.json", json.dumps(writers.json_safe({**result.summary(), "versions": writers.versions()}))))
+    timed("case.resolved.toml", lambda: write_resolved_case(case.to_toml(), out))
+    timed("history.csv", lambda: history_csv.write(result, out))
+    timed("contact.csv", lambda: contact_csv.write(result, out))
+    timed("fields", lambda: vtu.write(result, out))  # the VTU and PVD files
+    timed("solution.npz", lambda: solution.write(result, out))
+    timed("summary.json", lambda: summary.write(result, out))
     seconds["outputs"] = sum(seconds[name] for name in ("case.resolved.toml", "history.csv", "contact.csv", "fields",
                                                         "solution.npz", "summary.json"))
-    timed("figures (if asked for)", lambda: writers._write_figures(result, out / "figures"))
+    timed("figures (if asked for)", lambda: figures.write(result, out))
     timed("checkpoint (if due)", lambda: checkpoint.save(loop, out))
     return {"dofs": int(result.dofs), "contact_nodes": int(result.contact_nodes), "steps": result.steps,
             "field_steps": len(result.fields), "seconds": seconds}

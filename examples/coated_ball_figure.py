@@ -45,7 +45,7 @@ def variants(overrides: list[str]) -> dict:
 
 def summary(result) -> dict:
     """The numbers of one run at its last step."""
-    x = result.problem.surface.coordinates[0]
+    x = result.discretization.surface.coordinates[0]
     on_strip = (x > STRIP[0]) & (x < STRIP[1])
     beside = (x > STRIP[1]) & (x < STRIP[1] + (STRIP[1] - STRIP[0]))
     pressure = result.contact_history("pressure_compliance")[-1] + result.contact_history("pressure_rigid")[-1]
@@ -64,7 +64,7 @@ def main() -> None:
     args = parser.parse_args()
     results = {label: vpcontact.solve(case) for label, case in variants(args.overrides).items()}
     figure = along_contact(results, ("pressure", "K", "xi"))
-    surface = next(iter(results.values())).problem.surface
+    surface = next(iter(results.values())).discretization.surface
     order, s, _ = arc_length(surface.coordinates, surface.facets)  # x grows along the bottom arc
     x = surface.coordinates[0, order]
     strip = np.interp(STRIP, x, s)  # the strip's x range as arc lengths along Γ3

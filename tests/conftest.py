@@ -56,6 +56,17 @@ def block_3d_case():
     }
 
 
+def solved(case, **laws):
+    """(problem, result): the problem of ``case`` (a Case, or what load_case takes) and the result of its run,
+    as ``vpcontact.solve(case, **laws)`` computes it; for the tests that compare a run with its problem's
+    operators, loads or laws (a result holds no problem)."""
+    import vpcontact
+
+    case = case if isinstance(case, vpcontact.Case) else vpcontact.load_case(case)
+    problem = vpcontact.build_problem(case, **laws)
+    return problem, vpcontact.solve(problem, output=case.output)
+
+
 @pytest.fixture
 def deep_copy():
     return copy.deepcopy

@@ -20,6 +20,7 @@ import pytest
 from scipy.optimize import root
 
 import vpcontact
+from conftest import solved
 from test_half_disc_independent import signorini_by_its_dual
 from test_uniform_block import C_V, Q_RATE, scalar_recursion
 
@@ -128,8 +129,7 @@ def test_signorini_on_the_quarter_ball_matches_the_quadratic_program():
         max_{λ ≥ 0}  −½ (b − Nᵀλ)ᵀ A⁺ (b − Nᵀλ) − gᵀλ   subject to  eᵀ(b − Nᵀλ) = 0
     is solved by SLSQP. Its active set then gives the KKT system [A Nₐᵀ; Nₐ 0] (u, λₐ) = (b, g), solved
     exactly; λₐ ≥ 0 and N u ≤ g off the active set certify that solution (a convex QP)."""
-    result = vpcontact.solve(ball_case(load=11.4443, stiffness={"law": "constant", "value": 0.0}))
-    problem = result.problem
+    problem, result = solved(ball_case(load=11.4443, stiffness={"law": "constant", "value": 0.0}))
     nodes, w, N = independent_contact_data(problem)
     np.testing.assert_array_equal(nodes, problem.surface.nodes)
     A = problem.A[problem.free][:, problem.free].toarray()
@@ -226,8 +226,7 @@ def test_compliance_with_the_rigid_limit_matches_a_generic_root_finder(beta, loa
     """K = 100 (1 + 20 ξ)^β, g = 0.2, nodes in compliance and at the limit, against
     `compliance_with_the_limit` with contact nodes, normals and weights rebuilt here."""
     stiffness = {"law": "power", "c_v": C_V, "alpha": ALPHA, "beta": beta}
-    result = vpcontact.solve(ball_case(load=load, stiffness=stiffness))
-    problem = result.problem
+    problem, result = solved(ball_case(load=load, stiffness=stiffness))
     _, w, N = independent_contact_data(problem)
     g = 0.2
     d, lam, u, xi = compliance_with_the_limit(problem, N, w, C_V, ALPHA, beta, g)
@@ -322,7 +321,7 @@ def viscoplastic_block(law, initial, steps, T=1.0, method="auto"):
 
 def homogeneous(result, steps):
     """(e_n, σ_n, z_n) of every element at every step, checked homogeneous: u = (0, 0, e z) at the nodes."""
-    z = result.problem.mesh.mesh.p[2]
+    z = result.discretization.mesh.mesh.p[2]
     e, sigma, history = [], [], []
     for n in range(1, steps + 1):
         fields = result.fields[n]

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-import vpcontact
+from conftest import solved
 
 E, NU, R = 1000.0, 0.3, 1.0
 E_STAR = E / (1 - NU**2)
@@ -51,9 +51,9 @@ def hertz_case() -> dict:
 
 
 def test_a_sphere_on_a_rigid_plane_follows_hertz():
-    result = vpcontact.solve(hertz_case())
+    problem, result = solved(hertz_case())
     assert result.status == "complete"
-    problem, surface = result.problem, result.problem.surface
+    surface = problem.surface
     pressure = result.contact_history("pressure_rigid")[-1]
     np.testing.assert_array_equal(result.contact_history("pressure_compliance")[-1], 0.0)  # K ≡ 0
     force = pressure * surface.weights

@@ -224,7 +224,7 @@ def test_the_galerkin_projection_of_the_prism_is_the_plane_strain_problem(folder
     and stronger: the rows of an interior layer are h times the 2D rows (z rows: 0), the end faces'
     rows are not h/2 times them (the split)."""
     layers = 6
-    plane = plane_result(0.3).problem
+    plane = vpcontact.build_problem(vpcontact.load_case(plane_case(0.3)))
     prism = vpcontact.build_problem(vpcontact.load_case(prism_case(0.3, prism_file(layers, folder))))
     n = plane.mesh.mesh.p.shape[1]
     P = prolongation(plane, prism)
@@ -263,7 +263,7 @@ def split_prism_residual(plane_run, t: float) -> np.ndarray:
     edge e of the section (length ℓ) moves ℓh/12 of its face's share, +ℓh/12 to its lower-index node
     and −ℓh/12 from the other, for the normal stresses of the triangles on it, minus the traction on
     it (the upper arc), plus the contact force of each of its nodes (its pressure p along ν)."""
-    plane = plane_run.problem
+    plane = plane_run.discretization
     mesh, p = plane.mesh.mesh, plane.mesh.mesh.p
     edges = np.sort(mesh.facets, axis=0)
     tangent = p[:, edges[1]] - p[:, edges[0]]
@@ -296,7 +296,7 @@ def test_the_extruded_plane_strain_solution_is_out_of_balance_only_on_the_end_fa
     docstring (±ℓh/12 × the normal-stress jump at each edge), opposite on the two faces."""
     layers = 6
     plane_run = plane_result(0.3)
-    plane = plane_run.problem
+    plane = vpcontact.build_problem(vpcontact.load_case(plane_case(0.3)))
     prism = vpcontact.build_problem(vpcontact.load_case(prism_case(0.3, prism_file(layers, folder))))
     n = plane.mesh.mesh.p.shape[1]
     P = prolongation(plane, prism)
@@ -328,7 +328,7 @@ def mid_plane_differences(plane_run, prism_run) -> dict[str, float]:
     """The largest differences between the prism's mid-plane (its nodes, the contact nodes on it, the
     tetrahedra of the layer above it) and the 2D solution over all steps, each relative to the 2D
     quantity's largest value at that step (the contact quantities: to the largest of their kind)."""
-    plane, prism = plane_run.problem, prism_run.problem
+    plane, prism = plane_run.discretization, prism_run.discretization
     n = plane.mesh.mesh.p.shape[1]
     layers = prism.mesh.mesh.p.shape[1] // n - 1
     mid = layers // 2
@@ -394,7 +394,7 @@ def test_with_the_papers_poisson_ratio_the_far_field_adds_a_uniform_axial_strain
     lengthening leaves in a prism held at u_z = 0 at both ends: ε0 L does not depend on L, and the
     mid-plane's in-plane difference is the Poisson response to it, ∝ 1/L, not exponential."""
     plane_run = plane_result(0.3)
-    n = plane_run.problem.mesh.mesh.p.shape[1]
+    n = plane_run.discretization.mesh.mesh.p.shape[1]
     strain, moved = {}, {}
     for layers in (96, 128):
         prism_run = prism_result(0.3, layers, folder)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import vpcontact
-from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree
+from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree, solved
 from vpcontact import adapt
 from vpcontact.estimate.adapt import dorfler, solve_and_estimate
 from vpcontact.estimate.estimators import ESTIMATORS
@@ -49,10 +49,10 @@ def test_the_time_functional_folds_every_steps_indicators(functional, estimator)
     case = paper_case(functional=functional, estimator=estimator)
     result, folded = solve_and_estimate(build_problem(case), adapt_options(case.adapt), output_options(case.output))
     assert sorted(result.fields) == [3, 11]  # the other steps' fields were dropped once folded
-    every = vpcontact.solve(case.model_copy(update={"output": case.output.model_copy(update={"field_steps": "all"})}))
+    problem, every = solved(case.model_copy(update={"output": case.output.model_copy(update={"field_steps": "all"})}))
     estimate = {"residual": residual_estimate, "recovery": recovery_estimate}[estimator]
-    squared = np.array([estimate(Level.of(every, n)).squared for n in range(1, 12)])
-    expected = squared.max(axis=0) if functional == "max" else every.problem.k * squared.sum(axis=0)
+    squared = np.array([estimate(Level.of(every, n, problem)).squared for n in range(1, 12)])
+    expected = squared.max(axis=0) if functional == "max" else problem.k * squared.sum(axis=0)
     np.testing.assert_allclose(folded, expected, rtol=1e-10)
     assert folded.max() > 0.0
 
@@ -68,7 +68,7 @@ def test_the_cycles_refine_where_the_indicators_are_large_and_the_estimate_falls
     # the estimate falls at least like the uniform rate N^(-1/2) (measured: about N^(-0.45) from 4 cycles)
     rate = -np.polyfit(np.log(dofs), np.log(estimates), 1)[0]
     assert rate > 0.35
-    first, last = seen[0].result.problem.mesh, seen[-1].result.problem.mesh
+    first, last = seen[0].result.discretization.mesh, seen[-1].result.discretization.mesh
     assert last.regions == {} and last.part_names == first.part_names
     assert np.abs(np.hypot(*(last.mesh.p[:, last.nodes("bottom_arc")] - [[0.0], [1.0]])) - 1.0).max() < 1e-15
     assert seen[-1].result.contact_nodes > seen[0].result.contact_nodes

@@ -31,7 +31,7 @@ def energy_error(result, reference) -> float:
     theirs = reference.snapshot(11)
     moved = transfer(result.snapshot(11), theirs.points, theirs.elements)
     return float(np.sqrt(element_energies(theirs.points, theirs.elements, moved.displacement - theirs.displacement,
-                                          reference.problem.elasticity.lame).sum()))
+                                          reference.discretization.elasticity.lame).sum()))
 
 
 def test_the_residual_adaptive_mesh_beats_the_uniform_mesh_of_about_the_same_dofs():

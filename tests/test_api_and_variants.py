@@ -14,7 +14,7 @@ import tomli_w
 import vpcontact
 from vpcontact.laws.contact import CallableLaw
 from vpcontact.mesh import rectangle
-from conftest import half_disc_case, rectangle_case, run_cli
+from conftest import half_disc_case, rectangle_case, run_cli, solved
 
 
 def test_python_callables_give_the_built_in_laws():
@@ -121,9 +121,9 @@ def test_plain_functions_are_laws():
     """p and K as plain functions (no derivative): wrapped in CallableLaw, the same solution as the built-in
     laws to the accuracy of its central difference."""
     reference = vpcontact.solve(half_disc_case(h=0.2, load=40.0))
-    result = vpcontact.solve(half_disc_case(h=0.2, load=40.0), p=lambda r: np.maximum(r, 0.0),
+    problem, result = solved(half_disc_case(h=0.2, load=40.0), p=lambda r: np.maximum(r, 0.0),
                              stiffness_law=lambda xi: 100.0 * (1.0 + 20.0 * xi))
-    assert isinstance(result.problem.law.stiffness, CallableLaw) and isinstance(result.problem.law.p, CallableLaw)
+    assert isinstance(problem.law.stiffness, CallableLaw) and isinstance(problem.law.p, CallableLaw)
     np.testing.assert_allclose(result.contact_history("K"), reference.contact_history("K"), rtol=1e-9)
 
 
@@ -136,8 +136,8 @@ def test_a_law_with_a_derivative_is_used_as_it_is():
             return np.full_like(xi, 2000.0)
 
     law = Linear()
-    result = vpcontact.solve(half_disc_case(h=0.2, load=40.0), stiffness_law=law)
-    assert result.problem.law.stiffness is law and result.status == "complete"
+    problem, result = solved(half_disc_case(h=0.2, load=40.0), stiffness_law=law)
+    assert problem.law.stiffness is law and result.status == "complete"
 
 
 @pytest.mark.parametrize("arguments, words", [
@@ -183,19 +183,19 @@ def test_the_documented_submodules_come_with_import_vpcontact():
     (``import vpcontact`` does not load norms, so the command line starts as fast as before)."""
     code = ("import sys, vpcontact; assert 'vpcontact.results.norms' not in sys.modules; "
             "print(vpcontact.results.norms.differences.__name__, vpcontact.laws.contact.CallableLaw.__name__, "
-            "vpcontact.drivers.studies.run_study.__name__, vpcontact.io.writers.write_run.__name__); vpcontact.nothing")
+            "vpcontact.drivers.studies.run_study.__name__, vpcontact.io.run.write_run.__name__); vpcontact.nothing")
     process = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert process.stdout.split() == ["differences", "CallableLaw", "run_study", "write_run"], process.stderr
     assert "AttributeError: module 'vpcontact' has no attribute 'nothing'" in process.stderr
 
 
 def test_a_result_is_shown_in_one_short_line():
-    result = vpcontact.solve(rectangle_case())
+    problem, result = solved(rectangle_case())
     text = repr(result)
     assert len(text) < 300 and "\n" not in text, text
     assert text == (f"Result(complete, 2D, 90 dofs, 9 contact nodes, 11/11 steps, method {result.method}, "
                     f"{result.wall_time_s:.3g} s)")
-    assert repr(result.problem) == ("Problem(dofs=90, free_dofs=80, elements=64, nodes=45, contact_nodes=9, steps=11, "
+    assert repr(problem) == ("Problem(dofs=90, free_dofs=80, elements=64, nodes=45, contact_nodes=9, steps=11, "
                                     "k=0.1)")
     assert repr(result.final) == "Fields(displacement(45, 2), stress(64, 2, 2), stress33(64,), von_mises(64,))"
 
@@ -220,19 +220,19 @@ def test_times_are_an_array():
     result = vpcontact.solve(rectangle_case())
     assert isinstance(result.times, np.ndarray) and result.times.dtype == np.float64
     np.testing.assert_array_equal(result.times, result.series("t"))
-    np.testing.assert_array_equal(result.times, result.problem.times)
+    np.testing.assert_array_equal(result.times, result.discretization.times)
 
 
 def test_a_result_writes_its_files(tmp_path):
     result = vpcontact.solve(rectangle_case())
-    assert result.write(tmp_path / "run") == tmp_path / "run"
+    assert vpcontact.write_run(result, tmp_path / "run") == tmp_path / "run"
     assert {p.name for p in (tmp_path / "run").iterdir()} >= {"summary.json", "history.csv", "contact.csv",
                                                               "case.resolved.toml"}
     rows = (tmp_path / "run" / "history.csv").read_text().splitlines()
     assert len(rows) == 12 and rows[0].startswith("step,t,")
     with pytest.raises(FileExistsError):
-        result.write(tmp_path / "run")
-    result.write(tmp_path / "run", overwrite=True)
+        vpcontact.write_run(result, tmp_path / "run")
+    vpcontact.write_run(result, tmp_path / "run", overwrite=True)
     assert (tmp_path / "run" / "summary.json").is_file()
 
 

@@ -338,7 +338,7 @@ def test_an_out_the_file_system_cannot_hold_is_refused_before_the_run(tmp_path, 
 ])
 def test_result_write_refuses_a_bad_path_or_flag(solved, tmp_path, monkeypatch, out, overwrite, words):
     monkeypatch.chdir(tmp_path)
-    refused_by_api(lambda: solved.write(out, overwrite=overwrite), *words)
+    refused_by_api(lambda: vpcontact.write_run(solved, out, overwrite=overwrite), *words)
     assert os.listdir(tmp_path) == []
 
 
@@ -350,7 +350,7 @@ def earlier_run(tmp_path_factory):
     case["time"] = {"T": 0.4, "steps": 4}
     case["output"] = {"field_steps": [2, 4]}
     folder = tmp_path_factory.mktemp("earlier") / "run"
-    vpcontact.solve(case).write(folder)
+    vpcontact.write_run(vpcontact.solve(case), folder)
     with np.load(folder / "solution.npz") as solution:
         arrays = dict(solution)
     return folder, arrays

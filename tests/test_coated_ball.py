@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 import vpcontact
+from conftest import solved
 from vpcontact.results.plots import along_contact
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -32,12 +33,13 @@ def applied_force(problem) -> float:
 
 def test_the_four_cases_balance_the_same_load():
     cases = coated_ball_figure.variants(COARSE)
-    results = {label: vpcontact.solve(case) for label, case in cases.items()}
-    for label, result in results.items():
+    solved_cases = {label: solved(case) for label, case in cases.items()}
+    results = {label: result for label, (_, result) in solved_cases.items()}
+    for label, (problem, result) in solved_cases.items():
         assert result.status == "complete", (label, result.message)
         force = result.series("contact_force_y")[-1]
-        assert abs(force - applied_force(result.problem)) < 1e-9 * force, label
-    coated = results["coated ball, hard strip"].problem
+        assert abs(force - applied_force(problem)) < 1e-9 * force, label
+    coated, _ = solved_cases["coated ball, hard strip"]
     assert set(np.unique(coated.materials.E[coated.mesh.regions["core"]])) == {1000.0}
     assert set(np.unique(coated.materials.E[coated.mesh.regions["coating"]])) == {100.0}
     figure = along_contact(results, ("pressure", "K"))

@@ -115,8 +115,8 @@ def test_a_piecewise_constant_layer_equals_two_contact_parts(tmp_path, dim, fami
     one = vpcontact.solve(one_part_form(dict(case), part, a, LAYERS[family]))
     two = vpcontact.solve(two_parts_form(dict(case), part, LAYERS[family]))
     assert one.status == two.status == "complete", (one.message, two.message)
-    assert two.problem.surface.parts == (f"{part}_below", f"{part}_above")
-    np.testing.assert_array_equal(one.problem.surface.nodes, two.problem.surface.nodes)
+    assert two.discretization.surface.parts == (f"{part}_below", f"{part}_above")
+    np.testing.assert_array_equal(one.discretization.surface.nodes, two.discretization.surface.nodes)
     scale = np.abs(one.final.displacement).max()
     np.testing.assert_allclose(two.final.displacement, one.final.displacement, rtol=0, atol=1e-12 * scale)
     for name in HISTORIES:
@@ -126,7 +126,7 @@ def test_a_piecewise_constant_layer_equals_two_contact_parts(tmp_path, dim, fami
     np.testing.assert_array_equal(two.contact_history("status"), one.contact_history("status"))
     _, in_compliance, at_limit = states(one)[-1]
     assert in_compliance > 0 and at_limit > 0, (in_compliance, at_limit)
-    below = one.problem.surface.coordinates[0] <= a  # both layers carry the load
+    below = one.discretization.surface.coordinates[0] <= a  # both layers carry the load
     assert one.contact_history("K")[-1][below].max() > 0 and one.contact_history("K")[-1][~below].max() > 0
 
 

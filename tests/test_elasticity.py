@@ -5,6 +5,7 @@ import pytest
 from skfem import Basis
 
 import vpcontact
+from conftest import solved
 from vpcontact.laws.elasticity import Elasticity
 
 E, NU, S = 1000.0, 0.3, 5.0
@@ -29,7 +30,7 @@ def test_uniaxial_tension_is_reproduced_exactly(hypothesis):
                  traction=[{"part": "right", "value": [S, 0]}])
     result = vpcontact.solve(case)
     E_, nu_ = (E / (1 - NU**2), NU / (1 - NU)) if hypothesis == "plane_strain" else (E, NU)
-    x, y = result.problem.mesh.mesh.p
+    x, y = result.discretization.mesh.mesh.p
     exact = np.column_stack([S / E_ * x, -nu_ * S / E_ * y])
     np.testing.assert_allclose(result.final.displacement, exact, rtol=0, atol=1e-13)
     np.testing.assert_allclose(result.final.stress[:, 0, 0], S, rtol=1e-12)
@@ -48,9 +49,9 @@ def _manufactured(hypothesis):
     return f1, f2
 
 
-def _energy_error(result) -> tuple[float, float]:
+def _energy_error(problem, result) -> tuple[float, float]:
     """‖ε(u_h) − ε(u)‖_{L²} and ‖ε(u)‖_{L²} with a 4th-order quadrature."""
-    basis = Basis(result.problem.mesh.mesh, result.problem.basis.elem, intorder=4)
+    basis = Basis(problem.mesh.mesh, problem.basis.elem, intorder=4)
     u = np.zeros(basis.N)
     u[basis.nodal_dofs.T.ravel()] = result.final.displacement.ravel()
     grad = np.asarray(basis.interpolate(u).grad)
@@ -69,8 +70,8 @@ def test_manufactured_solution_converges_at_first_order_in_energy(hypothesis):
     clamped = [{"part": p} for p in ("left", "right", "bottom", "top")]
     errors = []
     for h in (1 / 8, 1 / 16, 1 / 32):
-        result = vpcontact.solve(block(hypothesis, h, clamped, body_force=[{"value": list(_manufactured(hypothesis))}]))
-        error, exact = _energy_error(result)
+        problem, result = solved(block(hypothesis, h, clamped, body_force=[{"value": list(_manufactured(hypothesis))}]))
+        error, exact = _energy_error(problem, result)
         errors.append(error / exact)
     rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
     assert np.all(np.abs(rates - 1.0) < 0.05), (errors, rates)

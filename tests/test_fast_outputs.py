@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 import vpcontact
-from conftest import half_disc_case
+from conftest import half_disc_case, solved
 from test_contact_parts import LAYERS, split_case, two_parts_form
 from vpcontact.laws.contact import STATUS_NAMES
-from vpcontact.results.result import CONTACT_ARRAYS
+from vpcontact.results.columns import CONTACT_ARRAYS
 from vpcontact.io.vtu import Grid, write_vtu
-from vpcontact.io.writers import write_run
+from vpcontact.io.run import write_run
 
 
 def test_a_vtu_file_reads_back_as_the_arrays_written(tmp_path):
@@ -53,12 +53,12 @@ def two_part_result(tmp_path, dim):
     case, part, _ = split_case(tmp_path, dim)
     case = two_parts_form(dict(case), part, LAYERS["two families"])
     case["output"] = {"field_steps": "all"}
-    return vpcontact.solve(case)
+    return solved(case)
 
 
-def contact_csv_row_by_row(result) -> bytes:
+def contact_csv_row_by_row(problem, result) -> bytes:
     """contact.csv as csv.writer writes the rows one at a time (the writer before it was vectorized)."""
-    surface, problem = result.problem.surface, result.problem
+    surface = problem.surface
     layer = problem.law.parameters(surface.size)  # from the problem's law, not from the result's view of it
     if len(surface.parts) > 1:
         layer["part"] = np.asarray(surface.parts)[surface.owner]
@@ -86,11 +86,11 @@ def contact_csv_row_by_row(result) -> bytes:
 def test_the_run_directory_holds_the_arrays_of_the_run(tmp_path, dim):
     """contact.csv byte for byte as csv.writer writes it row by row (floats as repr, empty cells, the part
     names); the body and contact VTU files of every field step and solution.npz hold the run's arrays."""
-    result = two_part_result(tmp_path, dim)
+    problem, result = two_part_result(tmp_path, dim)
     out = write_run(result, tmp_path / "run")
-    assert (out / "contact.csv").read_bytes() == contact_csv_row_by_row(result)
+    assert (out / "contact.csv").read_bytes() == contact_csv_row_by_row(problem, result)
     assert len(result.fields) == 11
-    surface, mesh = result.problem.surface, result.problem.mesh.mesh
+    surface, mesh = result.discretization.surface, result.discretization.mesh.mesh
     solution = np.load(out / "solution.npz")
     for k, (step, fields) in enumerate(sorted(result.fields.items())):
         body = meshio.read(out / "fields" / f"body_{step:05d}.vtu")
@@ -100,7 +100,7 @@ def test_the_run_directory_holds_the_arrays_of_the_run(tmp_path, dim):
         stress = body.cell_data["stress"][0].reshape(-1, 3, 3)
         assert np.array_equal(stress[:, :dim, :dim], fields.stress)
         assert np.array_equal(body.cell_data["von_mises"][0], fields.von_mises)
-        assert np.array_equal(body.cell_data["E"][0], result.problem.materials.E)
+        assert np.array_equal(body.cell_data["E"][0], result.discretization.materials.E)
         contact = meshio.read(out / "fields" / f"contact_{step:05d}.vtu")
         assert np.array_equal(contact.points[:, :dim], surface.coordinates.T)
         row = np.flatnonzero(result.ends_step() & (result.series("step") == step))[0]
@@ -119,7 +119,7 @@ def test_only_the_field_steps_asked_for_are_written(tmp_path):
     result = vpcontact.solve(case)
     out = write_run(result, tmp_path / "none")
     assert not (out / "fields").exists() and not (out / "solution.npz").exists()
-    assert (out / "contact.csv").read_text().count("\n") == 1 + 11 * result.problem.surface.size
+    assert (out / "contact.csv").read_text().count("\n") == 1 + 11 * result.discretization.surface.size
     case["output"] = {"field_steps": [3, 11]}
     out = write_run(vpcontact.solve(case), tmp_path / "two")
     assert sorted(p.name for p in (out / "fields").iterdir()) == [

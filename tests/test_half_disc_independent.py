@@ -7,8 +7,7 @@ import math
 import numpy as np
 from scipy.optimize import minimize, root
 
-import vpcontact
-from conftest import half_disc_case
+from conftest import half_disc_case, solved
 
 
 def independent_contact_data(problem):
@@ -31,8 +30,7 @@ def independent_contact_data(problem):
 
 def test_classical_normal_compliance_with_history_matches_a_generic_root_finder():
     """g = ∞, K = 100 (1 + 20 ξ): each step solved by MINPACK's hybrid method on the full system."""
-    result = vpcontact.solve(half_disc_case(g=math.inf, load=40.0))
-    problem = result.problem
+    problem, result = solved(half_disc_case(g=math.inf, load=40.0))
     nodes, w, N = independent_contact_data(problem)
     A = problem.A[problem.free][:, problem.free].toarray()
     k, xi, u = problem.k, np.zeros(nodes.size), np.zeros(problem.free.size)
@@ -85,8 +83,7 @@ def test_signorini_matches_the_dual_quadratic_program():
     With the roller on the axis A is singular (free vertical translation e); its dual is
         max_{λ ≥ 0}  −½ (b − Nᵀλ)ᵀ A⁺ (b − Nᵀλ) − gᵀλ   subject to  eᵀ(b − Nᵀλ) = 0,
     solved here by SLSQP; u = A⁺(b − Nᵀλ) + c e with c from an active constraint."""
-    result = vpcontact.solve(half_disc_case(g=0.2, load=60.0, stiffness={"law": "constant", "value": 0.0}))
-    problem = result.problem
+    problem, result = solved(half_disc_case(g=0.2, load=60.0, stiffness={"law": "constant", "value": 0.0}))
     _, w, N = independent_contact_data(problem)
     A = problem.A[problem.free][:, problem.free].toarray()
     e = np.zeros(problem.basis.N)

@@ -9,24 +9,33 @@ from vpcontact.estimate.indicators import Indicators, Level
 
 
 @pytest.fixture(scope="module")
-def result():
-    case = vpcontact.load_case("examples/paper_ball.toml", {"mesh.h": 0.25, "time.steps": 4,
+def case():
+    return vpcontact.load_case("examples/paper_ball.toml", {"mesh.h": 0.25, "time.steps": 4,
                                                            "output.field_steps": [2, 4]})
-    return vpcontact.solve(case)
 
 
-def test_a_level_holds_the_fields_and_the_contact_row_of_its_step(result):
-    level = Level.of(result, 2)
-    assert level.t == pytest.approx(result.problem.times[1])
+@pytest.fixture(scope="module")
+def problem(case):
+    return vpcontact.build_problem(case)
+
+
+@pytest.fixture(scope="module")
+def result(problem, case):
+    return vpcontact.solve(problem, output=case.output)
+
+
+def test_a_level_holds_the_fields_and_the_contact_row_of_its_step(result, problem):
+    level = Level.of(result, 2, problem)
+    assert level.t == pytest.approx(problem.times[1])
     assert level.fields is result.fields[2]
     row = np.flatnonzero(result.series("step") == 2)[-1]
     for name, values in level.contact.items():
         np.testing.assert_array_equal(values, result.contact_history(name)[row])
 
 
-def test_a_step_without_kept_fields_is_refused_naming_the_kept_ones(result):
+def test_a_step_without_kept_fields_is_refused_naming_the_kept_ones(result, problem):
     with pytest.raises(CaseError, match="no fields kept at step 3 .*steps kept: 2, 4"):
-        Level.of(result, 3)
+        Level.of(result, 3, problem)
 
 
 def test_indicators_sum_their_terms():

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import vpcontact
-from conftest import assert_refused, half_disc_case, rectangle_case, resumed_after, run_cli, snapshot_tree
+from conftest import assert_refused, half_disc_case, rectangle_case, resumed_after, run_cli, snapshot_tree, solved
 from test_3d_runs import ball_case
 from test_robustness import write
 from vpcontact.fem.assembly import element_strain
@@ -132,7 +132,7 @@ def test_time_start_shifts_the_step_times(tmp_path):
     later["time"] = {"T": 1.6, "steps": 11, "start": 0.5}
     whole, shifted = vpcontact.solve(load_case(case)), vpcontact.solve(load_case(later))
     np.testing.assert_array_equal(shifted.times, np.linspace(0.5, 1.6, 12)[1:])
-    assert shifted.problem.k == (1.6 - 0.5) / 11
+    assert shifted.discretization.times.k == (1.6 - 0.5) / 11
     np.testing.assert_allclose(shifted.times, whole.times[5:], rtol=1e-15)
     for column in ("max_penetration", "contact_force_y", "nodes_at_limit"):
         np.testing.assert_allclose(shifted.series(column), whole.series(column)[5:], rtol=1e-12, atol=0)
@@ -146,12 +146,12 @@ def test_a_uniform_initial_stress_as_expressions_is_bitwise_the_number_form(dim)
     case["time"]["steps"] = 4
     numbers = [[2.0, 0.5], [0.5, -3.0]] if dim == 2 else [[2.0, 0.5, 0.0], [0.5, -3.0, 1.0], [0.0, 1.0, 4.0]]
     case["initial"] = {"stress": numbers}
-    by_numbers = vpcontact.solve(load_case(case))
+    numbers_problem, by_numbers = solved(load_case(case))
     case["initial"] = {"stress": [[f"{v!r}" if (i + j) % 2 else f"4*{v / 4!r}" for j, v in enumerate(row)]
                                   for i, row in enumerate(numbers)]}
-    by_expressions = vpcontact.solve(load_case(case))
+    expressions_problem, by_expressions = solved(load_case(case))
     assert isinstance(load_case(case).initial.stress[0][0], str)
-    np.testing.assert_array_equal(by_expressions.problem.initial.stress, by_numbers.problem.initial.stress)
+    np.testing.assert_array_equal(expressions_problem.initial.stress, numbers_problem.initial.stress)
     assert by_expressions.rows == by_numbers.rows
     for name in ("displacement", "stress", "z"):
         np.testing.assert_array_equal(getattr(by_expressions.final, name), getattr(by_numbers.final, name))

@@ -12,7 +12,7 @@ import tomli_w
 import vpcontact
 from vpcontact.case.translate import output_options
 from vpcontact.problem.time_grid import TimeGrid
-from vpcontact.results.result import memory_needed
+from vpcontact.results.footprint import memory_needed
 from vpcontact.memory import available_memory
 from conftest import assert_refused, rectangle_case, run_cli, snapshot_tree
 
@@ -302,7 +302,7 @@ def test_the_estimate_covers_what_a_run_holds_and_writes(tmp_path):
         result = loop.run()
         held, _ = tracemalloc.get_traced_memory()
         peaks = []
-        for write in (lambda: vpcontact.io.checkpoint.save(loop, tmp_path), lambda: result.write(tmp_path / "out")):
+        for write in (lambda: vpcontact.io.checkpoint.save(loop, tmp_path), lambda: vpcontact.write_run(result, tmp_path / "out")):
             tracemalloc.reset_peak()
             write()
             peaks.append(tracemalloc.get_traced_memory()[1])

@@ -9,7 +9,7 @@ import pytest
 import tomli_w
 
 import vpcontact
-from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree
+from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree, solved
 from test_3d import ball_case, compliance_with_the_limit, full_vector, states
 
 #: a strip of Γ3 (|x| < 0.3) four times as stiff, a hardening that grows away from the axis, and a
@@ -33,9 +33,9 @@ def test_a_layer_varying_along_the_surface_matches_a_generic_root_finder(dim):
     the same P1 matrices with the parameters computed here at each node."""
     case = copy.deepcopy(CASES[dim])  # each test changes its own copy
     case["contact"]["stiffness"] = dict(zip(("c_v", "alpha", "beta"), LAYER), law="power")
-    result = vpcontact.solve(case)
+    problem, result = solved(case)
     assert result.status == "complete", result.message
-    problem, surface = result.problem, result.problem.surface
+    surface = problem.surface
     c_v, alpha, beta = layer_values(surface.coordinates[0])
     assert len(set(c_v)) == 2 and len(set(beta)) == 2  # both stiffnesses and both exponents are on Γ3
     N = surface.operator[:, problem.free].toarray()
@@ -63,9 +63,9 @@ def test_a_layer_of_varying_thickness_matches_a_generic_root_finder(dim):
     case = copy.deepcopy(CASES[dim])  # each test changes its own copy
     case["contact"]["g"] = THICKNESS
     case["contact"]["stiffness"] = {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0}
-    result = vpcontact.solve(case)
+    problem, result = solved(case)
     assert result.status == "complete", result.message
-    problem, surface = result.problem, result.problem.surface
+    surface = problem.surface
     g = 0.2 - 0.15 * surface.coordinates[0] ** 2
     N = surface.operator[:, problem.free].toarray()
     d, lam, u, xi = compliance_with_the_limit(problem, N, surface.weights, 100.0, 20.0, -1.0, g)
@@ -126,9 +126,9 @@ def test_a_compliance_exponent_varying_along_the_surface_matches_a_generic_root_
     computed here at each node; the nodes where m > 1 penetrate further, some to the rigid base."""
     case = copy.deepcopy(CASES[dim])  # each test changes its own copy
     case["contact"].update(p="power", exponent=EXPONENT)
-    result = vpcontact.solve(case)
+    problem, result = solved(case)
     assert result.status == "complete", result.message
-    problem, surface = result.problem, result.problem.surface
+    surface = problem.surface
     m = 1 + 1.5 * surface.coordinates[0] ** 2
     assert m.min() == 1.0 and m.max() > 2.0
     N = surface.operator[:, problem.free].toarray()

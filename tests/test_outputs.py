@@ -10,7 +10,7 @@ import tomli_w
 
 import vpcontact
 from vpcontact.drivers.cli import main
-from conftest import half_disc_case
+from conftest import half_disc_case, solved
 
 SUMMARY_FINAL = {"t", "max_penetration", "mean_penetration", "K_min", "K_max", "K_probe", "penetration_probe",
                  "normal_stress_probe", "nodes_separated", "nodes_in_compliance", "nodes_at_limit", "contact_force"}
@@ -70,11 +70,11 @@ def test_run_directory_contract(tmp_path, capsys):
     # the resolved case reproduces the run bit for bit
     resolved = vpcontact.load_case(out / "case.resolved.toml")
     assert resolved.contact.stiffness.beta == -1.0 and resolved.solver.augmentation is None
-    again = vpcontact.solve(resolved)
+    problem, again = solved(resolved)
     assert [float(r["K_probe"]) for r in rows] == again.series("K_probe").tolist()
     np.testing.assert_array_equal(body.point_data["displacement"][:, :2], again.final.displacement)
     # equilibrium in y (the roller on the axis carries no vertical force): contact force = −applied load
-    applied = again.problem.loads(1.1)[again.problem.basis.nodal_dofs[1]].sum()
+    applied = problem.loads(1.1)[problem.basis.nodal_dofs[1]].sum()
     np.testing.assert_allclose(summary["final"]["contact_force"][1], -applied, rtol=1e-9)
 
     # an existing result is not overwritten without --overwrite

@@ -19,7 +19,7 @@ from vpcontact.results import plots
 from vpcontact.drivers.cli import main
 from vpcontact.laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from vpcontact.errors import CaseError
-from vpcontact.io.writers import write_outputs
+from vpcontact.io.outputs import write_outputs
 from conftest import assert_refused, block_3d_case, half_disc_case, run_cli, snapshot_tree
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -92,7 +92,7 @@ def test_contact_patch_3d(run_3d):
     rows = [step_row(run_3d, n) for n in steps]
     assert [ax.get_title().splitlines()[0] for ax in panels] == [f"t = {run_3d.times[r]:g}" for r in rows]
     pressure, status = pressures(run_3d)[rows], run_3d.contact_history("status")[rows]
-    x, y = run_3d.problem.surface.coordinates[:2]
+    x, y = run_3d.discretization.surface.coordinates[:2]
     for ax, p, s in zip(panels, pressure, status):
         (patch,) = [c for c in ax.collections if isinstance(c, TriMesh)]
         np.testing.assert_array_equal(patch.get_array(), p)
@@ -120,7 +120,7 @@ def test_a_contact_patch_is_seen_along_the_axis_of_its_normal():
     (ax,) = figure.axes
     assert "seen along x, on the (y, z) plane" in figure.get_suptitle()
     assert (ax.get_xlabel(), ax.get_ylabel()) == ("y", "z")
-    y, z = result.problem.surface.coordinates[1:]
+    y, z = result.discretization.surface.coordinates[1:]
     pressed = pressures(result)[-1] > 0
     (y0, y1), (z0, z1) = ax.get_xlim(), ax.get_ylim()
     assert pressed.any() and np.all((y[pressed] >= y0) & (y[pressed] <= y1) & (z[pressed] >= z0) & (z[pressed] <= z1))
@@ -131,7 +131,7 @@ def test_contact_profile_2d(run_2d):
     panels = figure.axes
     assert len(panels) == 2
     rows = [step_row(run_2d, 3), step_row(run_2d, 11)]
-    surface = run_2d.problem.surface
+    surface = run_2d.discretization.surface
     for ax, row in zip(panels, rows):
         (line,) = ax.get_lines()
         s, p = line.get_xdata(), line.get_ydata()
@@ -164,7 +164,7 @@ def test_deformed_body_3d(run_3d):
     figure.savefig(io.BytesIO(), format="png")  # the facets are projected when drawn
     body, bar = figure.axes
     (surface,) = [c for c in body.collections if isinstance(c, Poly3DCollection)]
-    mesh, fields = run_3d.problem.mesh.mesh, run_3d.fields[11]
+    mesh, fields = run_3d.discretization.mesh.mesh, run_3d.fields[11]
     boundary = mesh.boundary_facets()
     assert len(surface.get_paths()) == boundary.size
     assert bar.get_ylim() == (fields.von_mises.min(), fields.von_mises.max())
@@ -192,7 +192,7 @@ def test_deformed_body_2d_is_the_mesh_moved_by_the_magnified_displacement(run_2d
     figure = plots.deformed_body(run_2d, step=5, scale=7.0)
     body = figure.axes[0]
     (cells,) = [c for c in body.collections if isinstance(c, PolyCollection)]
-    mesh, fields = run_2d.problem.mesh.mesh, run_2d.fields[5]
+    mesh, fields = run_2d.discretization.mesh.mesh, run_2d.fields[5]
     moved = mesh.p.T + 7.0 * fields.displacement
     np.testing.assert_allclose(np.array([path.vertices[:3] for path in cells.get_paths()]), moved[mesh.t.T],
                                rtol=1e-14, atol=1e-14)
@@ -253,8 +253,8 @@ def test_along_contact_draws_each_run_at_its_nodes(run_2d, run_3d):
     assert [len(ax.get_lines()) for ax in figure.axes] == [2, 2]
     figure = plots.along_contact({"3D": run_3d}, "K")
     line = figure.axes[0].get_lines()[0]
-    surface = run_3d.problem.surface
-    distance = np.linalg.norm(surface.coordinates - surface.coordinates[:, [run_3d.problem.probe]], axis=0)
+    surface = run_3d.discretization.surface
+    distance = np.linalg.norm(surface.coordinates - surface.coordinates[:, [run_3d.discretization.probe]], axis=0)
     assert np.allclose(line.get_xdata(), np.sort(distance))
     assert np.allclose(np.sort(line.get_ydata()), np.sort(run_3d.contact_history("K")[-1]))
 
@@ -269,7 +269,7 @@ def test_along_contact_refuses_what_it_cannot_draw(run_2d, run_3d):
 
 
 def test_importing_vpcontact_does_not_load_matplotlib():
-    code = ("import sys, vpcontact, vpcontact.results.plots, vpcontact.io.writers, vpcontact.drivers.rundir; "
+    code = ("import sys, vpcontact, vpcontact.results.plots, vpcontact.io.run, vpcontact.drivers.rundir; "
             "assert 'matplotlib' not in sys.modules, 'matplotlib loaded'")
     subprocess.run([sys.executable, "-c", code], check=True)
 

@@ -10,8 +10,11 @@ import pytest
 
 import vpcontact
 from conftest import half_disc_case
-from vpcontact.results.result import CONTACT_ARRAYS, step_ends
-from vpcontact.io.run_reader import read_contact, read_summary, snapshots_at
+from vpcontact.results.columns import CONTACT_ARRAYS
+from vpcontact.results.steps import step_ends
+from vpcontact.io.contact_csv import read_contact
+from vpcontact.io.solution import snapshots_at
+from vpcontact.io.summary import read_summary
 
 PACKAGE = Path(vpcontact.__file__).parent
 SUBPACKAGE = "vpcontact.reproduction"
@@ -85,7 +88,7 @@ def failed_run(tmp_path_factory):
     case["output"] = {"field_steps": [1, 2, 3]}
     result = vpcontact.solve(case)
     out = tmp_path_factory.mktemp("failed") / "run"
-    result.write(out)
+    vpcontact.write_run(result, out)
     return result, out
 
 
@@ -94,8 +97,8 @@ def test_the_step_rows_are_those_at_the_step_times(failed_run):
     result, _ = failed_run
     assert result.status == "failed" and result.steps == 3 and result.step_cuts > 0
     ends = result.ends_step()
-    np.testing.assert_array_equal(result.times[ends], result.problem.times[:3])
-    assert np.all(result.times[~ends] != result.problem.times.at(result.series("step")[~ends]))
+    np.testing.assert_array_equal(result.times[ends], result.discretization.times[:3])
+    assert np.all(result.times[~ends] != result.discretization.times.at(result.series("step")[~ends]))
     assert list(result.end_of_step_rows()) == [1, 2, 3]
 
 
@@ -104,15 +107,15 @@ def test_a_run_directory_reads_back_as_the_run(failed_run):
     assert read_summary(out)["steps"] == 3
     for step in (1, 2, 3):
         contact = read_contact(out, step)
-        assert contact["t"].tolist() == [result.problem.times[step - 1]] * result.contact_nodes
-        np.testing.assert_array_equal(contact["node"], result.problem.surface.nodes)
-        np.testing.assert_array_equal(contact["normals"], result.problem.surface.normals)
+        assert contact["t"].tolist() == [result.discretization.times[step - 1]] * result.contact_nodes
+        np.testing.assert_array_equal(contact["node"], result.discretization.surface.nodes)
+        np.testing.assert_array_equal(contact["normals"], result.discretization.surface.normals)
         for name in CONTACT_ARRAYS:
             np.testing.assert_array_equal(contact[name], result.contact_history(name, substeps=False)[step - 1])
     np.testing.assert_array_equal(read_contact(out)["xi"], read_contact(out, 3)["xi"])  # default: the last step
     with pytest.raises(KeyError, match="step 4 was not reached"):
         read_contact(out, 4)
-    snapshot = snapshots_at(out, [result.problem.times[1]])[result.problem.times[1]]
+    snapshot = snapshots_at(out, [result.discretization.times[1]])[result.discretization.times[1]]
     np.testing.assert_array_equal(snapshot.displacement, result.fields[2].displacement)
     np.testing.assert_array_equal(snapshot.stress, result.fields[2].stress)
 

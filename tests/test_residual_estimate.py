@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 
 import vpcontact
-from conftest import assert_refused, half_disc_case, rectangle_case, resumed_after, run_cli, snapshot_tree
+from conftest import assert_refused, half_disc_case, rectangle_case, resumed_after, run_cli, snapshot_tree, solved
 from vpcontact.estimate.indicators import Level
 from vpcontact.results.norms import element_energies, energy_norm, transfer
 from vpcontact.estimate.residual import TERMS, ResidualEstimator, estimate
-from vpcontact.results.result import estimate_columns, history_columns, memory_needed
+from vpcontact.results.columns import estimate_columns, history_columns
+from vpcontact.results.footprint import memory_needed
 
 ESTIMATE_COLUMNS = estimate_columns(TERMS)  # the history columns of the residual estimate
 
@@ -24,8 +25,8 @@ MU = E / (2 * (1 + NU))
 
 
 def solve(data: dict, **overrides):
-    case = vpcontact.Case.model_validate(copy.deepcopy(data))
-    return vpcontact.solve(case, **overrides)
+    """(problem, result) of the case ``data``."""
+    return solved(vpcontact.Case.model_validate(copy.deepcopy(data)), **overrides)
 
 
 def with_fields(data: dict, steps="all") -> dict:
@@ -54,17 +55,17 @@ def energy_error(result, reference, step: int) -> float:
     mine, theirs = result.snapshot(step), reference.snapshot(step)
     moved = transfer(mine, theirs.points, theirs.elements)
     return energy_norm(theirs.points, theirs.elements, moved.displacement - theirs.displacement,
-                       reference.problem.elasticity.lame)
+                       reference.discretization.elasticity.lame)
 
 
 # --- exactness: a uniform state that P1 × P0 represents exactly ----------------------------------------
 @pytest.mark.parametrize("beta", [1.0, -1.0])  # both reach the rigid base: its multiplier enters
 def test_the_estimate_vanishes_on_the_uniform_block_in_2d(beta):
     data = with_fields(rectangle_case(stiffness={"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": beta}))
-    result = solve(data)
+    problem, result = solve(data)
     energy = 0.5 * (100 * 1.1) ** 2 / (2 * MU)  # ‖σ‖² / 2μ of the final state: the units of η²
     for step in (1, 6, 11):
-        indicators = estimate(Level.of(result, step))
+        indicators = estimate(Level.of(result, step, problem))
         assert set(indicators.terms) == set(TERMS)
         # η² at rounding level: the complementarity term is linear in the room g − d (0 to rounding at
         # the nodes at the limit), the others are squares of residuals that vanish to rounding
@@ -75,11 +76,11 @@ def test_the_estimate_vanishes_on_the_uniform_block_in_2d(beta):
 
 
 def test_the_estimate_vanishes_on_the_uniform_block_in_3d():
-    result = solve(block_3d())
+    problem, result = solve(block_3d())
     assert result.series("nodes_at_limit")[-1] == result.contact_nodes
     energy = 0.5 * (100 * 1.1) ** 2 / (2 * MU)
     for step in (3, 11):
-        indicators = estimate(Level.of(result, step))
+        indicators = estimate(Level.of(result, step, problem))
         assert indicators.total**2 < 1e-14 * energy
         assert max(indicators.terms[term].sum() for term in TERMS if term != "complementarity") < 1e-24 * energy
 
@@ -89,8 +90,8 @@ def test_a_shear_stress_added_to_the_uniform_block_shows_on_the_free_components_
     """σ_xy = δ added everywhere: no jump; σ_h n − f2 = δ in the free component of every facet of the top
     (x), of the rollers left and right (y: x is fixed there) and σ_τ = δ on Γ3, so with facets of length
     h: neumann = (W + 2H) h δ² / 2μ, contact_tangential = W h δ² / 2μ, contact_normal = 0."""
-    result = solve(with_fields(rectangle_case(), [11]))
-    level = Level.of(result, 11)
+    problem, result = solve(with_fields(rectangle_case(), [11]))
+    level = Level.of(result, 11, problem)
     delta, h, W, H = 3.0, 0.125, 1.0, 0.5
     stress = level.fields.stress.copy()
     stress[:, 0, 1] += delta
@@ -104,8 +105,8 @@ def test_a_shear_stress_added_to_the_uniform_block_shows_on_the_free_components_
 
 def test_the_normal_term_is_the_gap_between_the_normal_stress_and_the_layer_pressure():
     """σ_yy lowered by δ: −σ_ν,h ≠ the layer's pressure by δ on Γ3, and the top's traction by δ."""
-    result = solve(with_fields(rectangle_case(), [11]))
-    level = Level.of(result, 11)
+    problem, result = solve(with_fields(rectangle_case(), [11]))
+    level = Level.of(result, 11, problem)
     delta, h, W = 2.0, 0.125, 1.0
     stress = level.fields.stress.copy()
     stress[:, 1, 1] -= delta
@@ -123,7 +124,8 @@ def test_the_body_force_term_is_h_squared_times_the_force_and_scales_as_h():
         data = with_fields(rectangle_case(), [11])
         data["mesh"]["h"] = h
         data["boundary"]["body_force"] = [{"value": ["0", "-10"]}]
-        body = estimate(Level.of(solve(data), 11)).terms["body_force"]
+        problem, result = solve(data)
+        body = estimate(Level.of(result, 11, problem)).terms["body_force"]
         assert body.sum() == pytest.approx(2 * h**2 * 0.5 * 100 / (2 * MU), rel=1e-9)
         values[h] = np.sqrt(body.sum())
     assert values[0.0625] / values[0.125] == pytest.approx(0.5, rel=1e-9)
@@ -132,10 +134,10 @@ def test_the_body_force_term_is_h_squared_times_the_force_and_scales_as_h():
 def test_the_complementarity_term_is_the_rigid_pressure_times_the_room_left_between_nodes():
     """On one Γ3 segment with the rigid pressure a at one end and the room g − d = b at the other (and 0,
     0 at the opposite ends): ∫ λ_h (g − d_h)⁺ = |E| (0 + a·b) / 6."""
-    result = solve(with_fields(half_disc_case(h=0.25, stiffness={"law": "power", "c_v": 100.0, "alpha": 20.0,
-                                                                     "beta": -1.0}, load=40.0), [11]))
-    level = Level.of(result, 11)
-    surface = result.problem.surface
+    problem, result = solve(with_fields(half_disc_case(h=0.25, stiffness={"law": "power", "c_v": 100.0, "alpha": 20.0,
+                                                                              "beta": -1.0}, load=40.0), [11]))
+    level = Level.of(result, 11, problem)
+    surface = result.discretization.surface
     contact = {name: values.copy() for name, values in level.contact.items()}
     i, j = surface.facets[:, 0]
     contact["pressure_rigid"][:] = 0.0
@@ -155,15 +157,16 @@ def test_the_effectivity_on_the_paper_example_stays_in_the_measured_band(beta):
     def run(n):
         case = vpcontact.load_case("examples/paper_ball.toml", {"mesh.h": 1 / n, "contact.stiffness.beta": beta,
                                                                "output.field_steps": [5, 11]})
-        return vpcontact.solve(case)
+        return solved(case)
 
-    reference = run(32)
+    _, reference = run(32)
     effectivities = []
     for n in (4, 8):
-        result = run(n)
-        estimator = ResidualEstimator(result.problem)
+        problem, result = run(n)
+        estimator = ResidualEstimator(problem)
         for step in (5, 11):
-            effectivities.append(estimator(Level.of(result, step)).total / energy_error(result, reference, step))
+            eta = estimator(Level.of(result, step, problem)).total
+            effectivities.append(eta / energy_error(result, reference, step))
     assert 3.0 < min(effectivities) and max(effectivities) < 4.2, effectivities
     assert max(effectivities) / min(effectivities) < 1.25, effectivities
 
@@ -174,18 +177,17 @@ def test_the_local_indicators_follow_the_local_error():
     from vpcontact.mesh.locate import containing_elements
 
     def run(n):
-        return vpcontact.solve(vpcontact.load_case("examples/paper_ball.toml", {"mesh.h": 1 / n,
-                                                                                "output.field_steps": [11]}))
+        return solved(vpcontact.load_case("examples/paper_ball.toml", {"mesh.h": 1 / n, "output.field_steps": [11]}))
 
-    reference, result = run(32), run(8)
+    (_, reference), (problem, result) = run(32), run(8)
     theirs = reference.snapshot(11)
     moved = transfer(result.snapshot(11), theirs.points, theirs.elements)
     energy = element_energies(theirs.points, theirs.elements, moved.displacement - theirs.displacement,
-                              reference.problem.elasticity.lame)
-    mesh = result.problem.mesh.mesh
+                              reference.discretization.elasticity.lame)
+    mesh = result.discretization.mesh.mesh
     owner = containing_elements(mesh.p, mesh.t, theirs.points[:, theirs.elements].mean(axis=1))
     local = np.bincount(owner, weights=energy, minlength=mesh.t.shape[1])
-    eta = estimate(Level.of(result, 11)).squared
+    eta = estimate(Level.of(result, 11, problem)).squared
     assert np.corrcoef(np.log(eta), np.log(local))[0, 1] > 0.85
 
 
@@ -193,13 +195,13 @@ def test_the_3d_quarter_ball_estimate_has_every_term_and_a_bounded_effectivity()
     """examples/quarter_ball.toml at h = 0.6 and 0.4 against 0.2: effectivity measured 5.8 and 5.3."""
     def run(h):
         case = vpcontact.load_case("examples/quarter_ball.toml", {"mesh.h": h, "output.field_steps": [11]})
-        return vpcontact.solve(case)
+        return solved(case)
 
-    reference = run(0.2)
+    _, reference = run(0.2)
     values = []
     for h in (0.6, 0.4):
-        result = run(h)
-        indicators = estimate(Level.of(result, 11))
+        problem, result = run(h)
+        indicators = estimate(Level.of(result, 11, problem))
         assert all(np.all(np.isfinite(v)) and np.all(v >= 0) for v in indicators.terms.values())
         for term in ("jump", "neumann", "contact_tangential", "contact_normal"):
             assert indicators.terms[term].sum() > 0, term
@@ -209,11 +211,11 @@ def test_the_3d_quarter_ball_estimate_has_every_term_and_a_bounded_effectivity()
 
 def test_the_energy_norm_of_a_linear_field_is_exact():
     """u = (a x + b y, c x): ε constant, ∫ ℰε:ε = |Ω| (λ (tr ε)² + 2μ ε:ε)."""
-    result = solve(with_fields(rectangle_case(), [11]))
-    mesh = result.problem.mesh.mesh
+    _, result = solve(with_fields(rectangle_case(), [11]))
+    mesh = result.discretization.mesh.mesh
     a, b, c = 0.01, 0.02, -0.005
     u = np.column_stack([a * mesh.p[0] + b * mesh.p[1], c * mesh.p[0]])
-    lam, mu = result.problem.elasticity.lame
+    lam, mu = result.discretization.elasticity.lame
     strain = np.array([[a, (b + c) / 2], [(b + c) / 2, 0.0]])
     expected = 0.5 * (lam * np.trace(strain) ** 2 + 2 * mu * (strain**2).sum())
     assert energy_norm(mesh.p, mesh.t, u, (lam, mu)) ** 2 == pytest.approx(expected, rel=1e-12)
@@ -223,18 +225,18 @@ def test_the_energy_norm_of_a_linear_field_is_exact():
 def test_the_run_records_the_estimate_of_every_step_when_asked():
     data = half_disc_case(h=0.25, stiffness={"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0}, load=40.0)
     data["output"] = {"field_steps": [5, 11], "error_estimate": True}
-    result = solve(data)
+    problem, result = solve(data)
     assert result.columns == history_columns(2) + ESTIMATE_COLUMNS
     eta = result.series("error_estimate")
     assert eta.size == result.steps and np.all(eta > 0)
     shares = np.array([result.series(f"error_estimate_{term}") for term in TERMS])
     np.testing.assert_allclose(np.sqrt((shares**2).sum(axis=0)), eta, rtol=1e-12)
     for step in (5, 11):
-        indicators = estimate(Level.of(result, step))
+        indicators = estimate(Level.of(result, step, problem))
         assert eta[step - 1] == pytest.approx(indicators.total, rel=1e-12)
         np.testing.assert_allclose(result.fields[step].error_indicator, np.sqrt(indicators.squared), rtol=1e-12)
     data["output"]["error_estimate"] = False
-    plain = solve(data)
+    _, plain = solve(data)
     assert plain.columns == history_columns(2)
     assert plain.fields[11].error_indicator is None
 
@@ -307,13 +309,13 @@ def estimating_half_disc(max_iterations: int = 50) -> dict:
 def test_a_sub_step_gets_the_estimate_of_its_own_time():
     """With Newton limited to 4 iterations step 4 is cut (as in tests/test_robustness.py): its sub-steps have
     rows with their own η, and the step's last row is the estimate of the level at t_4."""
-    result = solve(estimating_half_disc(max_iterations=4))
+    problem, result = solve(estimating_half_disc(max_iterations=4))
     assert result.status == "complete" and result.step_cuts > 0
     eta = result.series("error_estimate")
     assert eta.size == len(result.rows) > result.steps and np.all(eta > 0)
     ends = result.ends_step()
-    np.testing.assert_allclose(eta[ends], [estimate(Level.of(result, n)).total for n in range(1, result.steps + 1)],
-                               rtol=1e-12)
+    np.testing.assert_allclose(eta[ends], [estimate(Level.of(result, n, problem)).total
+                                            for n in range(1, result.steps + 1)], rtol=1e-12)
     inner = np.flatnonzero(~ends)
     assert np.all(np.diff(result.series("t")[inner[0]:inner[-1] + 2]) > 0)  # the sub-steps' rows, in time order
 
@@ -331,7 +333,8 @@ def test_a_resumed_run_keeps_the_estimate_columns_and_indicators(tmp_path):
 def test_a_3d_run_records_the_estimate():
     case = vpcontact.load_case("examples/quarter_ball.toml", {"mesh.h": 0.6, "output.field_steps": [11],
                                                              "output.error_estimate": True})
-    result = vpcontact.solve(case)
+    problem, result = solved(case)
     assert result.columns == history_columns(3) + ESTIMATE_COLUMNS
-    assert result.series("error_estimate")[-1] == pytest.approx(estimate(Level.of(result, 11)).total, rel=1e-12)
+    level = Level.of(result, 11, problem)
+    assert result.series("error_estimate")[-1] == pytest.approx(estimate(level).total, rel=1e-12)
     assert result.fields[11].error_indicator.shape == (result.elements,)

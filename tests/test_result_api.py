@@ -1,6 +1,6 @@
 """Looking at a result from Python, in 2D and 3D: repr, the history and contact tables (pandas) against the
 files the writers write and against Result.series / contact_history, result.plot's figures against the
-numbers they draw, result.to_pyvista, and result.write with the refusals of `vpcontact run --out`."""
+numbers they draw, result.to_pyvista, and vpcontact.write_run with the refusals of `vpcontact run --out`."""
 
 import io
 import subprocess
@@ -18,7 +18,8 @@ import vpcontact
 from vpcontact.case.translate import output_options
 from vpcontact.results import plots
 from vpcontact.laws.contact import STATUS_NAMES
-from vpcontact.results.result import INTEGER_COLUMNS, REPR_MESSAGE
+from vpcontact.results.columns import INTEGER_COLUMNS
+from vpcontact.results.result import REPR_MESSAGE
 from conftest import block_3d_case, half_disc_case, snapshot_tree
 
 
@@ -49,9 +50,9 @@ def run_3d():
 
 @pytest.fixture(scope="module")
 def written(run_2d, run_3d, tmp_path_factory):
-    """The run directories of both runs, written by result.write."""
+    """The run directories of both runs, written by vpcontact.write_run."""
     folder = tmp_path_factory.mktemp("written")
-    return {2: run_2d.write(folder / "2d"), 3: run_3d.write(folder / "3d")}
+    return {2: vpcontact.write_run(run_2d, folder / "2d"), 3: vpcontact.write_run(run_3d, folder / "3d")}
 
 
 @pytest.fixture(params=[2, 3])
@@ -76,7 +77,8 @@ def test_repr_is_one_short_line_of_the_run(run, dim):
     text = repr(run)
     assert "\n" not in text and len(text) < 160, text
     cuts = f", {run.step_cuts} step cut" if run.step_cuts else ""
-    assert text == (f"Result(complete, {dim}D, {run.problem.basis.N} dofs, {run.problem.surface.size} contact nodes, "
+    view = run.discretization
+    assert text == (f"Result(complete, {dim}D, {view.mesh.mesh.p.size} dofs, {view.surface.size} contact nodes, "
                     f"11/11 steps{cuts}, method {run.method}, {run.wall_time_s:.3g} s)")
     assert run.method in ("condensed", "full", "iterative")
 
@@ -105,7 +107,7 @@ def test_history_rows_at_the_step_times_are_those_of_series(run_2d):
     at_steps = table[run_2d.ends_step()]
     assert len(table) > len(at_steps) == run_2d.steps == 11  # a step was cut: one row more
     assert at_steps["step"].tolist() == list(range(1, 12))
-    np.testing.assert_array_equal(at_steps["t"], run_2d.problem.times.at(np.arange(1, 12)))
+    np.testing.assert_array_equal(at_steps["t"], run_2d.discretization.times.at(np.arange(1, 12)))
     for column in table.columns:
         np.testing.assert_array_equal(at_steps[column], run_2d.series(column, substeps=False), err_msg=column)
         np.testing.assert_array_equal(table[column], run_2d.series(column), err_msg=column)
@@ -145,7 +147,7 @@ def test_contact_table_agrees_with_the_history_and_contact_history(run, dim):
         assert [counts[name] for name in STATUS_NAMES] == [run.series(c)[row] for c in
                                                           ("nodes_separated", "nodes_in_compliance", "nodes_at_limit")]
     assert list(table["status"].cat.categories) == list(STATUS_NAMES)
-    np.testing.assert_array_equal(table["node"], run.problem.surface.nodes)
+    np.testing.assert_array_equal(table["node"], run.discretization.surface.nodes)
     assert ("arc_length" in table.columns) == (dim == 2)
 
 
@@ -174,7 +176,7 @@ def test_contact_table_names_the_part_of_each_node(tmp_path):
     table = result.contact_table()
     assert list(table["part"].cat.categories) == ["bottom_arc_below", "bottom_arc_above"]
     assert set(table["part"]) == {"bottom_arc_below", "bottom_arc_above"}
-    csv = pd.read_csv(result.write(tmp_path / "out") / "contact.csv")
+    csv = pd.read_csv(vpcontact.write_run(result, tmp_path / "out") / "contact.csv")
     assert table["part"].astype(str).tolist() == csv[csv["step"] == 11]["part"].tolist()
 
 
@@ -249,7 +251,7 @@ def facet_colors(values, everything):
 @pytest.mark.parametrize("field", ["sigma_xy", "displacement_y", "z_yy", "error_indicator", "sigma_zz"])
 def test_the_deformed_2d_body_is_coloured_by_the_field_asked_for(run_2d, field):
     figure = run_2d.plot.deformed(step=5, field=field, scale=4.0)
-    fields, mesh = run_2d.fields[5], run_2d.problem.mesh.mesh
+    fields, mesh = run_2d.fields[5], run_2d.discretization.mesh.mesh
     expected = {"sigma_xy": fields.stress[:, 0, 1], "displacement_y": fields.displacement[:, 1],
                 "z_yy": fields.z[:, 1, 1], "error_indicator": fields.error_indicator,
                 "sigma_zz": fields.stress33}[field]
@@ -271,7 +273,7 @@ def test_the_deformed_3d_body_is_coloured_by_the_field_asked_for(run_3d, field):
     figure = run_3d.plot.deformed(field=field)
     figure.savefig(io.BytesIO(), format="png")  # the facets are projected when drawn
     (surface,) = [c for c in figure.axes[0].collections if isinstance(c, Poly3DCollection)]
-    fields, mesh = run_3d.fields[11], run_3d.problem.mesh.mesh
+    fields, mesh = run_3d.fields[11], run_3d.discretization.mesh.mesh
     boundary = mesh.boundary_facets()
     if field == "displacement":  # per node: each facet has the mean of its three nodes
         values = np.linalg.norm(fields.displacement, axis=1)
@@ -308,7 +310,7 @@ def test_to_pyvista_holds_the_fields_of_the_step(run, dim):
     pyvista = pytest.importorskip("pyvista")  # the extra "pyvista" (140 MB of VTK) is not in "test"
     grid = run.to_pyvista(step=5)
     assert isinstance(grid, pyvista.UnstructuredGrid)
-    fields, mesh = run.fields[5], run.problem.mesh.mesh
+    fields, mesh = run.fields[5], run.discretization.mesh.mesh
     points = np.zeros((mesh.p.shape[1], 3))
     points[:, :dim] = mesh.p.T
     np.testing.assert_array_equal(grid.points, points)
@@ -344,13 +346,13 @@ def test_write_refuses_a_directory_that_is_not_empty_and_deletes_nothing(run_2d,
     (out / "case.toml").write_text("# my case")
     before = snapshot_tree(out)
     with pytest.raises(vpcontact.CaseError) as error:
-        run_2d.write(out)
+        vpcontact.write_run(run_2d, out)
     assert isinstance(error.value, FileExistsError)  # as before, for code that catches that
     assert "\n" not in str(error.value) and f"'{out}' is not empty" in str(error.value)
     assert "overwrite=True" in str(error.value)
     assert snapshot_tree(out) == before
     # overwrite=True writes the outputs beside the user's files, which stay as they are
-    assert run_2d.write(out, overwrite=True) == out
+    assert vpcontact.write_run(run_2d, out, overwrite=True) == out
     after = snapshot_tree(out)
     assert {name: after[name] for name in before} == before
     assert {"summary.json", "history.csv", "contact.csv", "solution.npz", "fields/body.pvd"} <= set(after)
@@ -368,7 +370,7 @@ def test_write_refuses_what_stands_in_the_way_before_writing(run_2d, tmp_path, m
     before = snapshot_tree(out)
     for overwrite in (False, True):
         with pytest.raises(vpcontact.CaseError) as error:
-            run_2d.write(out, overwrite=overwrite)
+            vpcontact.write_run(run_2d, out, overwrite=overwrite)
         assert "\n" not in str(error.value)
         for word in words:
             assert word in str(error.value), (word, str(error.value))
@@ -377,7 +379,7 @@ def test_write_refuses_what_stands_in_the_way_before_writing(run_2d, tmp_path, m
 
 # --- imports ---------------------------------------------------------------------------------------
 def test_the_modules_of_the_tables_figures_and_grids_load_pandas_matplotlib_pyvista_only_when_used():
-    code = ("import sys, vpcontact.results.tables, vpcontact.results.result_plots, vpcontact.io.pyvista_grid\n"
+    code = ("import sys, vpcontact.results.tables, vpcontact.results.result_plots, vpcontact.results.pyvista_grid\n"
             "print(sorted({'pandas', 'pyvista', 'matplotlib'} & set(sys.modules)))")
     process = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert process.returncode == 0, process.stderr

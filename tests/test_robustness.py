@@ -19,7 +19,7 @@ import vpcontact.timeloop.loop
 from vpcontact.io import directory
 from vpcontact.drivers import rundir
 from vpcontact.drivers.cli import main
-from vpcontact.results.result import INTEGER_COLUMNS
+from vpcontact.results.columns import INTEGER_COLUMNS
 from vpcontact.solvers import StepSolution
 from conftest import half_disc_case
 
@@ -198,17 +198,17 @@ def test_a_signal_stops_the_run_at_the_end_of_a_step(tmp_path, reference, number
 def test_outputs_are_atomic_and_summary_json_comes_last(tmp_path, monkeypatch):
     case = creeping_case(steps=20, h=0.1)
     out = tmp_path / "run"
-    real = vpcontact.io.writers.write_solution
+    real = vpcontact.io.solution.write
 
     def disk_full(*args):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(vpcontact.io.writers, "write_solution", disk_full)
+    monkeypatch.setattr(vpcontact.io.solution, "write", disk_full)
     with pytest.raises(OSError):
         rundir.run(vpcontact.load_case(case), out)
     assert not (out / "summary.json").exists() and not list(out.rglob(".*tmp-*"))
     assert len(read_csv(out / "history.csv")[1]) == 20 and checkpoint_step(out) == 20
-    monkeypatch.setattr(vpcontact.io.writers, "write_solution", real)
+    monkeypatch.setattr(vpcontact.io.solution, "write", real)
     outcome = rundir.run(vpcontact.load_case(case), out, resume=True)  # the loop has nothing left to do
     assert outcome.status == "complete" and outcome.result.resumed_at == [20]
     assert json.loads((out / "summary.json").read_text())["status"] == "complete"
@@ -229,7 +229,7 @@ def test_resume_without_a_checkpoint(tmp_path):
     case = vpcontact.load_case(creeping_case(steps=10, h=0.2))
     out = tmp_path / "run"
     out.mkdir()
-    vpcontact.io.writers.write_resolved_case(case.to_toml(), out)
+    vpcontact.io.run.write_resolved_case(case.to_toml(), out)
     (out / ".history.tmp-99999.csv").write_text("half a file")  # a writer killed midway
     with pytest.raises(vpcontact.CaseError, match=r"different case \(material.E = 1000.0 in the run, 900.0 now\)"):
         rundir.run(vpcontact.load_case(creeping_case(steps=10, h=0.2), {"material.E": 900.0}), out, resume=True)
@@ -279,7 +279,7 @@ def test_a_cut_step_is_the_same_scheme_on_a_finer_grid(monkeypatch):
     assert cut.series("substep").tolist() == [1, 2] * 20 and np.all(cut.series("k") == 0.05)
     assert cut.ends_step().tolist() == [False, True] * 20
     np.testing.assert_allclose(cut.series("t"), uniform.series("t"), rtol=1e-15)
-    np.testing.assert_array_equal(cut.series("t", substeps=False), cut.problem.times)
+    np.testing.assert_array_equal(cut.series("t", substeps=False), cut.discretization.times)
     assert cut.series("newton_iterations").tolist() == uniform.series("newton_iterations").tolist()
     for name in ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid"):
         np.testing.assert_allclose(cut.contact_history(name), uniform.contact_history(name), rtol=1e-10, atol=1e-12,
@@ -310,7 +310,7 @@ def test_a_step_newton_cannot_do_whole_is_cut_and_the_run_completes():
     four = result.series("step") == 4
     assert result.series("k")[four].sum() == pytest.approx(0.1, abs=1e-15)  # ... into sub-steps that add up to k
     assert result.series("k")[four].min() == 0.1 / 8  # down to the 3rd halving
-    np.testing.assert_array_equal(result.series("t", substeps=False), result.problem.times)
+    np.testing.assert_array_equal(result.series("t", substeps=False), result.discretization.times)
     assert np.all(np.diff(result.series("t")) > 0)
     assert result.series("newton_iterations").max() <= 4
     # the same solution where no step was cut; close to it after the cut step

@@ -18,7 +18,11 @@ import pytest
 import tomli_w
 
 import vpcontact
-from vpcontact.io import checkpoint, directory, writers
+import vpcontact.io.solution
+from vpcontact.io import checkpoint, directory
+from vpcontact.io.files import write_text
+from vpcontact.io.outputs import write_outputs
+from vpcontact.io.run import remove_outputs, write_resolved_case, write_run
 from vpcontact.drivers.cli import main
 from vpcontact import build_problem
 from vpcontact.case.translate import output_options
@@ -109,26 +113,26 @@ def test_the_list_of_outputs_names_every_file_a_run_writes(tmp_path):
     out = tmp_path / "run"
     out.mkdir()
     checkpoint.save(loop, out)
-    writers.write_resolved_case(case.to_toml(), out)
-    writers.write_outputs(result, out)
+    write_resolved_case(case.to_toml(), out)
+    write_outputs(result, out)
     for path in list(out.rglob("*")):
         if path.is_file():
             (path.parent / f".{path.stem}.tmp-12345{path.suffix}").write_text("half a file")
     assert {p.parent.name for p in out.rglob("*.npz")} == {"run", "checkpoint"} and len(list(out.rglob("*"))) > 40
-    writers.remove_outputs(out)
+    remove_outputs(out)
     assert list(out.iterdir()) == []
 
 
 def test_write_run_with_overwrite_keeps_the_users_files(tmp_path):
     result = vpcontact.solve(rectangle_case())
     out = tmp_path / "run"
-    writers.write_run(result, out)
+    write_run(result, out)
     mine = put_user_files(out)
-    writers.write_run(result, out, overwrite=True)
+    write_run(result, out, overwrite=True)
     assert_user_files_intact(out, mine)
     assert json.loads((out / "summary.json").read_text())["status"] == "complete"
     with pytest.raises(FileExistsError):
-        writers.write_run(result, out)
+        write_run(result, out)
 
 
 # --- 4. an unusable --out: exit 2, one line, nothing written, nothing computed ------------------------
@@ -287,9 +291,9 @@ def killed_run(folder, steps_done=5):
     loop.run(stop=lambda: "killed" if loop.state.step >= steps_done else None)
     out = Path(folder) / "run"
     out.mkdir()
-    writers.write_resolved_case(loaded.to_toml(), out)
+    write_resolved_case(loaded.to_toml(), out)
     checkpoint.save(loop, out)
-    writers.write_outputs(loop.result, out, history_only=True)
+    write_outputs(loop.result, out, history_only=True)
     return path, out
 
 
@@ -452,14 +456,14 @@ def test_the_held_directory_is_checked_before_each_write(tmp_path):
     new directory stays as it is (its lock file too); the lock file goes from the directory locked."""
     out = tmp_path / "run"
     held = directory.acquire(out)
-    writers.write_text(out / "history.csv", "step\n")
+    write_text(out / "history.csv", "step\n")
     out.rename(tmp_path / "moved")
     out.mkdir()
     (out / directory.LOCK).write_text("")  # a lock file of another run now there
-    for write in (lambda: writers.write_text(out / "summary.json", "{}"),
+    for write in (lambda: write_text(out / "summary.json", "{}"),
                   lambda: directory.mkdir(out / "fields"),
-                  lambda: writers.write_text(out / "fields" / "body.pvd", ""),
-                  lambda: writers.remove_outputs(out)):
+                  lambda: write_text(out / "fields" / "body.pvd", ""),
+                  lambda: remove_outputs(out)):
         with pytest.raises(directory.DirectoryReplaced, match="replaced by another directory"):
             write()
     held.release()
@@ -472,7 +476,7 @@ def test_a_swap_between_the_check_and_the_write_still_misses_the_new_directory(t
     swap the check does not see (the check disabled here) leaves the new directory untouched."""
     out = tmp_path / "run"
     held = directory.acquire(out)
-    writers.write_text(out / "summary.json", "{}")
+    write_text(out / "summary.json", "{}")
     out.rename(tmp_path / "moved")
     out.mkdir()
     (out / "summary.json").write_text("the user's")
@@ -480,7 +484,7 @@ def test_a_swap_between_the_check_and_the_write_still_misses_the_new_directory(t
     directory.unlink(out / "summary.json")
     directory.mkdir(out / "fields")
     with pytest.raises(directory.DirectoryReplaced, match="is not the file vpcontact created"):
-        writers.write_text(out / "history.csv", "step\n")  # the temporary was written in the new directory
+        write_text(out / "history.csv", "step\n")  # the temporary was written in the new directory
     held.release()
     assert contents(out) == {"summary.json": b"the user's"} and [p.name for p in out.iterdir()] == ["summary.json"]
     assert sorted(p.name for p in (tmp_path / "moved").iterdir()) == ["fields"]
@@ -488,10 +492,10 @@ def test_a_swap_between_the_check_and_the_write_still_misses_the_new_directory(t
 
 def test_a_write_that_fails_ends_the_run_with_one_line(tmp_path, monkeypatch, capsys):
     """A full disk (say) during the run: exit 4 and one line naming the file and the reason."""
-    def disk_full(result, path):
-        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+    def disk_full(result, out):
+        raise OSError(errno.ENOSPC, "No space left on device", str(out / "solution.npz"))
 
-    monkeypatch.setattr(writers, "write_solution", disk_full)
+    monkeypatch.setattr(vpcontact.io.solution, "write", disk_full)
     out = tmp_path / "run"
     assert main(["run", str(write_case(tmp_path)), "--out", str(out), "--quiet"]) == 4
     stderr = capsys.readouterr().err
@@ -606,11 +610,11 @@ def test_result_write_refuses_a_link_in_its_directory(tmp_path):
     """The Python API's Result.write (write_run) as the command line: CaseError, nothing changed."""
     result = vpcontact.solve(rectangle_case())
     out = tmp_path / "run"
-    result.write(out)
+    vpcontact.write_run(result, out)
     link = link_in(out, "fields", tmp_path)
     before = everything(tmp_path)
     with pytest.raises(vpcontact.CaseError, match=f"'{link}' is a symbolic link"):
-        result.write(out, overwrite=True)
+        vpcontact.write_run(result, out, overwrite=True)
     assert everything(tmp_path) == before
 
 
@@ -632,26 +636,26 @@ def test_no_single_write_goes_through_a_link_made_after_the_start(tmp_path):
     out = tmp_path / "run"
     held = directory.acquire(out)
     try:
-        writers.write_text(out / "history.csv", "mine\n")
+        write_text(out / "history.csv", "mine\n")
         folder, table = user_folder(tmp_path), user_file(tmp_path)
         (out / "fields").symlink_to(folder, target_is_directory=True)
         (out / "summary.json").symlink_to(table)
         before = everything(tmp_path)
         for attempt, link in [
-            (lambda: writers.write_text(out / "fields" / "body.pvd", "<VTKFile/>"), out / "fields"),
-            (lambda: writers.write_text(out / "fields" / "body.h5", "data"), out / "fields"),
+            (lambda: write_text(out / "fields" / "body.pvd", "<VTKFile/>"), out / "fields"),
+            (lambda: write_text(out / "fields" / "body.h5", "data"), out / "fields"),
             (lambda: directory.mkdir(out / "fields"), out / "fields"),
             (lambda: directory.mkdir(out / "fields" / "deeper"), out / "fields"),
             (lambda: directory.unlink(out / "fields" / "body.h5"), out / "fields"),
             (lambda: directory.rmdir(out / "fields"), out / "fields"),
-            (lambda: writers.write_text(out / "summary.json", "{}"), out / "summary.json"),
+            (lambda: write_text(out / "summary.json", "{}"), out / "summary.json"),
             (lambda: directory.unlink(out / "summary.json"), out / "summary.json"),
             (lambda: directory.create(out / "summary.json", out / "x.npz"), out / "summary.json"),  # as a temporary
         ]:
             with pytest.raises(directory.SymbolicLink, match=f"'{link}' is a symbolic link"):
                 attempt()
             assert everything(tmp_path) == before
-        writers.remove_outputs(out)  # removes the run's files, passes the links by
+        remove_outputs(out)  # removes the run's files, passes the links by
         assert sorted(p.name for p in out.iterdir()) == [directory.LOCK, "fields", "summary.json"]
         assert everything(folder) == {k[len("users_folder/"):]: v for k, v in before.items()
                                       if k.startswith("users_folder/")}

@@ -78,7 +78,7 @@ def test_other_units_give_the_same_solution(reference, L, s):
     iterations and the same numbers to rounding (1e-13 observed, asserted at 1e-9; the issue asks 1e-6)."""
     method, expected = reference
     result = vpcontact.solve(paper_case(L, s, beta=-1.0, method=method))
-    mesh, theirs = result.problem.mesh.mesh, expected.problem.mesh.mesh  # the built-in mesh scales exactly
+    mesh, theirs = result.discretization.mesh.mesh, expected.discretization.mesh.mesh  # the built-in mesh scales
     np.testing.assert_array_equal(mesh.t, theirs.t)
     np.testing.assert_allclose(mesh.p / L, theirs.p, rtol=0, atol=1e-15)
     assert_same_up_to_units(result, expected, L, s, rtol=1e-9)

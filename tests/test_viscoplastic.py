@@ -112,7 +112,7 @@ def block(law, steps, T=1.0, method="auto", initial=None):
 
 def homogeneous(result, steps):
     """(e_n, σ_n, z_n) of every element at every step, checked homogeneous; u = (0, e y) at the nodes."""
-    y = result.problem.mesh.mesh.p[1]
+    y = result.discretization.mesh.mesh.p[1]
     e, sigma, z = [], [], []
     for n in range(1, steps + 1):
         fields = result.fields[n]
@@ -325,6 +325,18 @@ def test_a_callable_of_the_wrong_shape_is_refused():
         vpcontact.solve(block(None, 2), viscoplastic=lambda s, e: np.zeros(3))
 
 
+def test_a_callable_whose_shape_changes_during_the_run_fails_the_step_in_one_line():
+    """A law of the right shape at t_0 (the check before the run: σ_0 = 0 there) that returns another shape
+    once the body is loaded: the step fails with one line naming both shapes, no exception escapes."""
+    def changing(sigma, strain):
+        return np.zeros_like(sigma) if not np.any(sigma) else np.zeros(3)
+
+    result = vpcontact.solve(block(None, 4), viscoplastic=changing)
+    assert result.status == "failed" and result.steps == 0 and "\n" not in result.message
+    assert result.message == ("step 1 (t = 0.25) failed: at t = 0.25 the viscoplastic law returned an array of shape "
+                              "(3,); expected (2, 2, 16) (d, d, elements), like its arguments")
+
+
 @pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
 def test_an_unstable_explicit_step_fails_cleanly():
     """k ≫ η: the explicit history blows up; the run stops with status "failed" and says why."""
@@ -345,7 +357,7 @@ def test_the_example_creeps_under_the_held_load():
     case = vpcontact.load_case(EXAMPLE, coarse)
     case.material.viscoplastic = None
     elastic = vpcontact.solve(case)
-    p = viscous.problem.mesh.mesh.p
+    p = viscous.discretization.mesh.mesh.p
     top, bottom = np.argmax(p[1]), np.argmin(np.abs(p[0]) + p[1])  # (0, 2) and (0, 0)
     held = np.flatnonzero(viscous.series("t") >= 0.5 - 1e-12) + 1  # the steps of the hold
 

@@ -14,7 +14,7 @@ own reader nor by meshio (which is lenient: it read the VTU files whose connecti
 
 The runs: 2D and 3D bodies of two materials (one viscoplastic, so z is written) with the error estimate,
 XDMF and all three contact states, through the command line; two contact parts of two layer families (a
-layer parameter a part has not: NaN) in 2D and 3D, written by ``result.write``; the 3D block without
+layer parameter a part has not: NaN) in 2D and 3D, written by ``vpcontact.write_run``; the 3D block without
 XDMF; an adaptive run (the fields of each cycle). And ``result.to_pyvista(step)`` is the body file VTK
 reads; the writer's every kind of array comes back from VTK as written."""
 
@@ -43,7 +43,7 @@ from conftest import block_3d_case, half_disc_case, run_cli
 from test_3d_runs import ball_case
 from test_contact_parts import LAYERS, split_case, two_parts_form
 from vpcontact.laws.contact import STATUS_NAMES
-from vpcontact.results.result import CONTACT_ARRAYS
+from vpcontact.results.columns import CONTACT_ARRAYS
 from vpcontact.io.vtu import Grid as VtuGrid, write_vtu
 
 #: VTK's cell types of the body and of the contact part, by dimension.
@@ -434,7 +434,7 @@ def test_vtk_reads_the_files_of_two_contact_parts(tmp_path, dim):
     case = two_parts_form(dict(case), part, LAYERS["two families"])
     case["output"] = {"field_steps": [2, 5, 11], "xdmf": True}
     result = vpcontact.solve(case)
-    out = result.write(tmp_path / "run")
+    out = vpcontact.write_run(result, tmp_path / "run")
     read = check_fields(out / "fields", dim, xdmf=True)
     check_against_result(read, result)
     contact = read[11][1].point_data
@@ -445,7 +445,7 @@ def test_vtk_reads_the_files_of_two_contact_parts(tmp_path, dim):
 
 def test_vtk_reads_the_files_of_a_3d_run_without_xdmf(tmp_path):
     result = vpcontact.solve(block_3d_case())
-    out = result.write(tmp_path / "run")
+    out = vpcontact.write_run(result, tmp_path / "run")
     read = check_fields(out / "fields", 3, xdmf=False)
     check_against_result(read, result)
     assert {"z", "error_indicator"}.isdisjoint(read[11][0].cell_data)  # elastic, without the estimate

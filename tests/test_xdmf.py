@@ -17,7 +17,7 @@ from test_3d_runs import ball_case
 def written(tmp_path, case: dict, name: str = "run"):
     """The result of ``case`` with ``output.xdmf`` and the folder it was written to."""
     result = vpcontact.solve({**case, "output": {**case["output"], "xdmf": True}})
-    return result, result.write(tmp_path / name)
+    return result, vpcontact.write_run(result, tmp_path / name)
 
 
 def read_series(path):
@@ -41,7 +41,7 @@ def test_the_series_holds_the_vtu_fields_at_every_step(tmp_path, dim):
         assert points.shape[1] == 3 and (dim == 3 or not points[:, 2].any())
         assert [c.type for c in cells] == [c.type for c in vtus[0].cells]
         np.testing.assert_array_equal(cells[0].data, vtus[0].cells[0].data)
-        assert [t for t, _, _ in steps] == [result.problem.times[n - 1] for n in (3, 7, 11)]
+        assert [t for t, _, _ in steps] == [result.discretization.times[n - 1] for n in (3, 7, 11)]
         for (t, point_data, cell_data), vtu in zip(steps, vtus):
             assert set(point_data) == set(vtu.point_data) and set(cell_data) == set(vtu.cell_data)
             for name, values in point_data.items():
@@ -89,6 +89,6 @@ def test_overwrite_replaces_the_series(tmp_path):
     case["output"]["field_steps"] = "final"
     _, out = written(tmp_path, case)
     assert {p.name for p in (out / "fields").glob("*.xdmf")} == {"body.xdmf", "contact.xdmf"}
-    vpcontact.solve(case).write(out, overwrite=True)
+    vpcontact.write_run(vpcontact.solve(case), out, overwrite=True)
     assert sorted(p.name for p in (out / "fields").iterdir()) == ["body.pvd", "body_00011.vtu", "contact.pvd",
                                                                   "contact_00011.vtu"]

@@ -62,7 +62,7 @@ def hertz_case(h: float) -> dict:
 measured = []
 for h in (0.04, 0.02, 0.01):
     result = vpcontact.solve(hertz_case(h))
-    surface = result.problem.surface
+    surface = result.discretization.surface
     pressure = result.contact_history("pressure_rigid")[-1]
     force = pressure * surface.weights
     x = surface.coordinates[0]

@@ -63,10 +63,10 @@ hardening = plots.contact_pressure(results[1.0], steps=[2, 5, 8, 11])
 # %%
 # The standard outputs of a run
 # -----------------------------
-# ``result.write(DIR)`` writes what ``vpcontact run`` writes (summary.json, history.csv, contact.csv,
+# ``vpcontact.write_run(result, DIR)`` writes what ``vpcontact run`` writes (summary.json, history.csv, contact.csv,
 # the ParaView files); here into a temporary directory.
 with tempfile.TemporaryDirectory() as folder:
-    written = results[-1.0].write(folder)
+    written = vpcontact.write_run(results[-1.0], folder)
     print(sorted(path.name for path in written.iterdir()))
 
 # %%

@@ -82,7 +82,7 @@ nodes.sort_values("z")[["x", "y", "z", "penetration", "xi", "K", "pressure_compl
 # The standard outputs of a run directory (ParaView series, CSV tables, ``summary.json``) are one call
 # away; here into a temporary directory:
 with tempfile.TemporaryDirectory() as folder:
-    written = result.write(Path(folder) / "quarter_ball")
+    written = vpcontact.write_run(result, Path(folder) / "quarter_ball")
     print(sorted(path.name for path in written.iterdir()))
 
 # %%

@@ -5,6 +5,7 @@ hardens or softens with the history of penetration (Barboteu, Han, Sofonea).
     >>> case = vpcontact.load_case("examples/paper_ball.toml", {"contact.stiffness.beta": -1})
     >>> result = vpcontact.solve(case)
     >>> result.series("K_probe")[-1]
+    >>> vpcontact.write_run(result, "results/beta-1")   # the files of a run directory, as `vpcontact run` writes
 
 The names of the API (``vpcontact.solve``, ``vpcontact.Case``, ...) and the submodules
 (``vpcontact.results.norms``, ``vpcontact.laws.contact``, ...) are loaded on first use: ``import vpcontact`` (and
@@ -24,7 +25,7 @@ except metadata.PackageNotFoundError:  # running from a source tree
 #: The names of the API, by the module that defines them.
 API = {"Case": "case.model", "Model": "case.model", "load_case": "case.load", "CaseError": "errors",
        "compose": "case.compose", "Problem": "problem.build", "build_problem": "api", "solve": "api", "adapt": "api",
-       "Result": "results.result"}
+       "Result": "results.result", "write_run": "io.run"}
 
 #: The packages a user may reach as ``vpcontact.<name>`` after ``import vpcontact`` (and their modules as
 #: ``vpcontact.<name>.<module>``), and the modules of the package itself.
@@ -58,4 +59,5 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(API) | set(SUBMODULES))
 
 
-__all__ = ["Case", "CaseError", "Model", "Problem", "Result", "adapt", "build_problem", "compose", "load_case", "solve"]
+__all__ = ["Case", "CaseError", "Model", "Problem", "Result", "adapt", "build_problem", "compose", "load_case", "solve",
+           "write_run"]

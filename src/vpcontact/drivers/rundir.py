@@ -24,7 +24,7 @@ full disk leaves the previous complete checkpoint: ``--resume`` continues from i
 room, to the same numbers as an uninterrupted run.
 
 The directory is held while the run writes (see :mod:`vpcontact.io.directory`); ``--overwrite`` removes
-the outputs of an earlier run (``writers.OUTPUTS``) and nothing else. A symbolic link where a run writes
+the outputs of an earlier run (``io.run.OUTPUTS``) and nothing else. A symbolic link where a run writes
 (``fields/``, ``checkpoint/``, ``history.csv``, ...) is the user's: the run refuses to start (exit 2,
 one line naming the link), with or without ``--overwrite`` and ``--resume``, and no write ever goes
 through one (see :mod:`vpcontact.io.directory`). ``--out`` itself may be a link to a folder.
@@ -51,10 +51,12 @@ from ..case.load import read_case
 from ..case.model import Case
 from ..case.translate import CaseOptions, translate
 from ..errors import CaseError
-from ..io import checkpoint, directory
-from ..io.run_reader import read_summary
-from ..io.writers import (check_room, json_safe, remove_files, remove_outputs, remove_temporaries, replacing,
-                          versions, write_outputs, write_resolved_case, write_text)
+from ..io import checkpoint, directory, paths
+from ..io.files import remove_files, replacing, write_text
+from ..io.outputs import write_outputs
+from ..io.run import check_room, remove_outputs, remove_temporaries, write_resolved_case
+from ..io.summary import json_safe, read_summary
+from ..io.versions import versions
 from ..mesh.gmsh import write_mesh
 from ..problem.build import Problem, build_problem
 from ..progress import Progress, reporting
@@ -95,7 +97,7 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
     if resume and case.adapt is not None:
         raise CaseError("--resume of an adaptive run ([adapt]) is not supported: it keeps no checkpoints; run it "
                         "again with --overwrite")
-    directory.usable(out)
+    paths.usable(out)
     check_room(out)
     if case.adapt is not None and (out / "cycles").exists() and not (out / "cycles").is_dir():
         raise CaseError(f"--out '{out}': '{out / 'cycles'}' is not a folder, and an adaptive run writes its cycles/ "
@@ -128,9 +130,9 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
                 with progress.phase("checkpoint", f"restoring {checkpoint.folder(out)}") as phase:
                     checkpoint.restore(loop, out)
                     phase.done(f"{loop.state.step:,} of {len(problem.times):,} steps done")
-                now = versions()
-                changed = [f"{name} {loop.stored_versions.get(name)} -> {version}" for name, version in now.items()
-                           if loop.stored_versions.get(name) != version]
+                now, stored = versions(), checkpoint.saved_versions(out)
+                changed = [f"{name} {stored.get(name)} -> {version}" for name, version in now.items()
+                           if stored.get(name) != version]
                 if changed:
                     print(f"vpcontact: warning: resuming with other versions ({', '.join(changed)}): the numbers "
                           f"may differ in the last digits from an uninterrupted run", file=sys.stderr)

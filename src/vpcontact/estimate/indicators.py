@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import CaseError
-from ..results.result import CONTACT_ARRAYS, Fields, Result
+from ..results.columns import CONTACT_ARRAYS
+from ..results.result import Fields, Result
 
 
 @dataclass(frozen=True, eq=False)
@@ -32,13 +33,10 @@ class Level:
     contact: dict[str, np.ndarray]
 
     @classmethod
-    def of(cls, result: Result, step: int) -> "Level":
-        """The level at the end of time step ``step`` of ``result``; its fields must have been kept
-        (``output.field_steps``; the last step's are always kept), and it must hold its problem (a result
-        sent from another process does not: estimate there, or build the problem again)."""
-        if result.problem is None:
-            raise CaseError("this result holds no problem (it was sent from the process that solved it): estimate "
-                            "the error where it was solved, or solve it again here")
+    def of(cls, result: Result, step: int, problem) -> "Level":
+        """The level at the end of time step ``step`` of ``result``, a run of ``problem`` (a result is data:
+        the problem's operators, loads and laws are not in it); its fields must have been kept
+        (``output.field_steps``; the last step's are always kept)."""
         fields = result.fields.get(step)
         if fields is None and step == result.steps and result.final is not None:
             fields = result.final
@@ -50,7 +48,7 @@ class Level:
         if row is None:
             raise CaseError(f"step {step} was not reached (the run reached step {result.steps})")
         contact = {name: np.asarray(result.contact[name][row]) for name in CONTACT_ARRAYS}
-        return cls(result.problem, step, float(result.times[row]), float(result.rows[row]["k"]), fields, contact)
+        return cls(problem, step, float(result.times[row]), float(result.rows[row]["k"]), fields, contact)
 
 
 @dataclass(frozen=True, eq=False)

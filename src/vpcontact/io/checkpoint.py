@@ -1,5 +1,5 @@
-"""Checkpoints of a run in progress: everything the time loop needs to continue as if it had never
-stopped.
+"""Checkpoints of a run in progress: the time loop's snapshot (:meth:`~vpcontact.timeloop.loop.TimeLoop.snapshot`,
+everything it needs to continue as if it had never stopped) in files, and back (``TimeLoop.restore``).
 
 Layout, inside the run directory:
 
@@ -16,18 +16,18 @@ not stored, and None again on restore. state.npz holds
 
 - ``case``: the resolved case (TOML) the run was started with, and ``mesh_digest``: a hash of the
   mesh, the free dofs and the contact nodes, both checked on resume;
-- the :class:`~vpcontact.timeloop.loop.LoopState`: the step reached, ξ, z and 𝒢 there (viscoplastic
+- the arrays of the :class:`~vpcontact.timeloop.snapshot.LoopSnapshot`: the loop state
+  (:class:`~vpcontact.timeloop.state.LoopState`: the step reached, ξ, z and 𝒢 there (viscoplastic
   history), and the last StepSolution (u at the free dofs for the full solver, λ, d, the active set,
   its report) and its trend (how u, λ and d changed since the level before): the next Newton
   iteration starts from the same prediction as in an uninterrupted run; ``rigid``, the body's
   position on the rigid motions only the contact holds (where a level that nothing presses leaves it,
-  :mod:`vpcontact.timeloop.resting`);
-- the history rows (one array per column) and the per-node contact arrays so far (rows × m);
-- ``meta`` (JSON): the field steps saved, step cuts, wall time and linear solves so far, the steps
-  where the run was resumed before, the versions;
-- ``solver_method`` and ``solver_*``: what the step solver carries from step to step (its ``kept()``:
-  the condensed method's solved span, kept inverse and choice of factor; the iterative method's
-  Newton matrix its AMG hierarchy was built on).
+  :mod:`vpcontact.timeloop.resting`)); the history rows (one array per column) and the per-node
+  contact arrays so far (rows × m); ``solver_method`` and ``solver_*``, what the step solver carries
+  from step to step (its ``kept()``: the condensed method's solved span, kept inverse and choice of
+  factor; the iterative method's Newton matrix its AMG hierarchy was built on);
+- ``meta`` (JSON): the snapshot's (the field steps saved, step cuts, wall time and the solver's counters
+  so far, the steps where the run was resumed before) and the versions.
 
 The step solver itself is rebuilt on resume (the condensed solver refactors A0 and rebuilds S) and
 given that state (``restore``): every method then continues exactly as an uninterrupted run, and
@@ -47,15 +47,15 @@ import numpy as np
 
 from . import directory
 from ..errors import CaseError, brief
-from ..results.result import CONTACT_ARRAYS, FIELD_NAMES, INTEGER_COLUMNS, Fields
-from ..solvers import StepSolution
-from ..timeloop.loop import COUNTERS, LoopState, TimeLoop, Trend
-from .writers import OUTPUTS, matching, remove_files, replacing, versions
+from ..timeloop.loop import TimeLoop
+from ..timeloop.snapshot import LoopSnapshot
+from .files import matching, remove_files, replacing
+from .versions import versions
 
 FOLDER = "checkpoint"
 STATE = "state.npz"
-FILES = tuple(pattern for pattern in OUTPUTS if pattern.startswith(f"{FOLDER}/"))
-"""state.npz and fields_NNNNN.npz, as listed among the outputs of a run directory."""
+FILES = (f"{FOLDER}/{STATE}", f"{FOLDER}/fields_*.npz")
+"""The files of a checkpoint in a run directory: state.npz and fields_NNNNN.npz."""
 FORMAT = 1
 #: Output keys that do not change the numbers: they may differ between a run and its resumption.
 FREE_KEYS = ("progress", "checkpoint_every_steps", "checkpoint_every_seconds", "figures")
@@ -112,61 +112,28 @@ def mesh_digest(problem) -> str:
 
 
 def save(loop: TimeLoop, out: Path) -> None:
-    """Write the checkpoint of ``loop`` (at the end of its last completed step) into ``out``."""
+    """Write the checkpoint of ``loop`` (its snapshot at the end of its last completed step) into ``out``:
+    the fields files it has not written yet, then state.npz."""
     target = folder(out)
     directory.mkdir(target)
-    result, state = loop.result, loop.state
-    saved = sorted(result.fields)
-    for n in saved:
+    snapshot = loop.snapshot()
+    for n, arrays in snapshot.fields.items():
         path = target / f"fields_{n:05d}.npz"
         if not path.exists():
-            fields = result.fields[n]
-            arrays = {name: getattr(fields, name) for name in FIELD_NAMES if getattr(fields, name) is not None}
             with replacing(path) as temporary:
                 np.savez(temporary, **arrays)
-    rows = len(result.rows)
-    arrays = {
-        "format": np.array(FORMAT),
-        "case": np.array(loop.problem.source or ""),
-        "mesh_digest": np.array(mesh_digest(loop.problem)),
-        "step": np.array(state.step),
-        "xi": state.xi,
-        "rigid": loop.rigid_position(),
-    }
-    if state.z is not None:
-        arrays["z"] = state.z
-    if state.rate is not None:
-        arrays["rate"] = state.rate
-    previous = state.previous
-    if previous is not None:
-        if previous.u is not None:
-            arrays["previous_u"] = previous.u
-        arrays.update(previous_lam=previous.lam, previous_d=previous.d, previous_active=previous.active,
-                      previous_report=np.array([previous.iterations, previous.residual, previous.complementarity]))
-    trend = state.trend
-    if trend is not None:
-        if trend.u is not None:
-            arrays["trend_u"] = trend.u
-        arrays.update(trend_lam=trend.lam, trend_d=trend.d)
-    for column in result.columns:
-        arrays[f"row_{column}"] = np.array([row[column] for row in result.rows],
-                                           dtype=np.int64 if column in INTEGER_COLUMNS else np.float64)
-    arrays["row_time"] = np.array(result.times, dtype=np.float64)
-    for name in CONTACT_ARRAYS:
-        arrays[f"contact_{name}"] = np.array(result.contact[name]).reshape(rows, result.contact_nodes)
-    meta = {"field_steps": saved, "step_cuts": result.step_cuts, "resumed_at": result.resumed_at,
-            "elapsed_s": loop.elapsed(), **loop.counts(),
-            "versions": versions()}
-    arrays["meta"] = np.array(json.dumps(meta))
-    arrays["solver_method"] = np.array(loop.solver.name)
-    arrays.update({f"solver_{key}": value for key, value in loop.solver.kept().items()})
+    problem = loop.problem
+    arrays = {"format": np.array(FORMAT), "case": np.array(problem.source or ""),
+              "mesh_digest": np.array(mesh_digest(problem)), **snapshot.arrays,
+              "meta": np.array(json.dumps({**snapshot.meta, "versions": versions()}))}
     with replacing(target / STATE) as temporary:
         np.savez(temporary, **arrays)
 
 
 def restore(loop: TimeLoop, out: Path) -> int:
-    """Load the checkpoint in ``out`` into a fresh ``loop`` (same case, same mesh: else ResumeError);
-    returns the step it continues after. Warns (stderr) when the versions differ."""
+    """Load the checkpoint in ``out`` into a fresh ``loop`` (same case, same mesh: else ResumeError; the
+    snapshot's arrays and the fields files it lists, handed to ``loop.restore``); returns the step it
+    continues after."""
     path = folder(out) / STATE
     arrays = _read(path)
     try:
@@ -190,38 +157,20 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
     if str(arrays["mesh_digest"]) != mesh_digest(problem):
         raise ResumeError(f"cannot resume: the mesh of the run in '{out}' differs from the mesh of the case now")
 
-    result = loop.result
-    previous = None
-    if "previous_lam" in arrays:
-        iterations, residual, complementarity = arrays["previous_report"]
-        previous = StepSolution(arrays.get("previous_u"), arrays["previous_lam"], arrays["previous_d"],
-                                arrays["previous_active"].astype(bool), int(iterations), float(residual),
-                                float(complementarity), True)
-    trend = Trend(arrays.get("trend_u"), arrays["trend_lam"], arrays["trend_d"]) if "trend_lam" in arrays else None
-    step = int(arrays["step"])
-    loop.state = LoopState(step, arrays["xi"], arrays.get("z"), arrays.get("rate"), previous, trend,
-                           rigid=arrays["rigid"])
-    columns = {column: arrays[f"row_{column}"] for column in result.columns}
-    rows = len(arrays["row_time"])
-    result.rows = [{column: (int(values[i]) if column in INTEGER_COLUMNS else np.float64(values[i]))
-                    for column, values in columns.items()} for i in range(rows)]
-    result.times = [np.float64(t) for t in arrays["row_time"]]
-    result.contact = {name: list(arrays[f"contact_{name}"]) for name in CONTACT_ARRAYS}
-    result.completed_steps = step
-    result.step_cuts = int(meta["step_cuts"])
-    result.resumed_at = [*meta["resumed_at"], step]
-    for n in meta["field_steps"]:
-        data = _read(folder(out) / f"fields_{n:05d}.npz")
-        result.fields[n] = Fields(**{name: data.get(name) for name in FIELD_NAMES})  # absent: None
-    if result.fields:
-        result.final = result.fields[max(result.fields)]
-    if "solver_method" in arrays and str(arrays["solver_method"]) == loop.solver.name:
-        loop.solver.restore({key[7:]: value for key, value in arrays.items()
-                             if key.startswith("solver_") and key != "solver_method"})
-    loop.earlier_time = float(meta["elapsed_s"])
-    loop.earlier_counts = {name: int(meta.get(name, 0)) for name in COUNTERS}
-    loop.stored_versions = meta.get("versions", {})
-    return step
+    fields = {n: _read(folder(out) / f"fields_{n:05d}.npz") for n in meta["field_steps"]}
+    loop.restore(LoopSnapshot(arrays, meta, fields))
+    return loop.state.step
+
+
+def saved_versions(out: Path) -> dict[str, str]:
+    """The versions the checkpoint in ``out`` was written with (empty when it does not say or cannot be
+    read): a resumed run warns when they differ from those installed."""
+    try:
+        with np.load(folder(out) / STATE, allow_pickle=False) as data:
+            versions = json.loads(str(data["meta"])).get("versions", {})
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):
+        return {}
+    return versions if isinstance(versions, dict) else {}
 
 
 RESTART = "the checkpoint cannot be used: start the run again with --overwrite"

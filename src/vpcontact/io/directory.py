@@ -2,8 +2,8 @@
 directory, a directory of ``write_run``).
 
 ``acquire(path)`` refuses, with a one-line CaseError naming the path and the reason, a path that
-cannot be a directory to write in (a symbolic link loop, a dangling link, a file in the way, a file
-system that refuses: read-only, /proc, no permission); otherwise it creates the directory (and its
+cannot be a directory to write in (:func:`vpcontact.io.paths.usable`: a symbolic link loop, a dangling
+link, a file in the way; a file system that refuses: read-only, /proc, no permission); otherwise it creates the directory (and its
 missing parents), takes an exclusive lock on it (``.vpcontact.lock``, ``flock``: two processes never
 write into one directory; the kernel releases it when a process dies), and opens it: its identity
 (device and inode) is remembered. All of this happens before any computation.
@@ -22,7 +22,7 @@ the way from the held directory to a file (``fields/``, ``checkpoint/``, ``cycle
 opened one by one without following a link (``O_NOFOLLOW``), and a file or folder that is a link is
 neither replaced, nor removed, nor created through: :class:`SymbolicLink` names it (vpcontact never
 makes links, so a link there is the user's, and so is what it leads to). The runs refuse such a link
-before they start (``writers.check_room``); this is the guard of every single write. The held
+before they start (``io.run.check_room``); this is the guard of every single write. The held
 directory itself may be reached through a link (``--out`` a link to a folder on another disk).
 """
 
@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import errno
 import itertools
-import math
 import os
 import stat
 from collections.abc import Iterator
@@ -42,7 +41,8 @@ try:
 except ImportError:  # not POSIX: no lock, and no operations relative to a directory
     fcntl = None
 
-from ..errors import CaseError, shown
+from ..errors import CaseError
+from .paths import reason, usable
 
 LOCK = ".vpcontact.lock"
 
@@ -135,69 +135,6 @@ _HELD: dict[str, Held] = {}
 """The directories this process holds, by absolute path."""
 
 
-def folder_path(value, label: str = "--out") -> Path:
-    """``value`` (a folder's name given from Python) as a Path; CaseError for another object, or a name with a
-    NUL character (which no file system holds)."""
-    if not isinstance(value, (str, os.PathLike)) or not isinstance(os.fspath(value), str) or "\0" in os.fspath(value):
-        name = os.fspath(value) if isinstance(value, os.PathLike) else value
-        raise CaseError(f"{label} = {shown(repr(name))}: expected a folder's name (a string or a path, without NUL "
-                        f"characters)")
-    return Path(value)
-
-
-def usable(path: Path, label: str = "--out") -> None:
-    """Refuse (CaseError) a path that cannot be a directory to write in, without writing anything: its
-    name must fit the file system (see ``_check_length``) and its nearest existing component must be a
-    directory (after following symbolic links)."""
-    path = folder_path(path, label)
-    existing = next(p for p in (path, *path.parents) if os.path.lexists(p))
-    _check_length(path, existing, label)
-    subject = f"{label} '{path}'" if existing == path else f"{label} '{path}': '{existing}'"
-    try:
-        mode = os.stat(existing).st_mode
-    except OSError as error:
-        if os.path.islink(existing) and error.errno == errno.ELOOP:
-            raise CaseError(f"{subject} is a symbolic link loop (it leads back to itself); remove it or give "
-                            f"another path") from None
-        if os.path.islink(existing) and error.errno == errno.ENOENT:
-            raise CaseError(f"{subject} is a symbolic link to '{os.readlink(existing)}', which does not exist; "
-                            f"create that directory or give another path") from None
-        raise CaseError(f"{subject}: cannot use it ({_reason(error)})") from None
-    if not stat.S_ISDIR(mode):
-        raise CaseError(f"{subject} exists and is not a directory")
-
-
-#: Room kept in a path for the names a run writes below its directory (fields/contact_00000011.vtu and
-#: the temporary files beside it, checkpoint/..., runs/<id>/... of a study).
-ROOM = 96
-
-
-def _check_length(path: Path, existing: Path, label: str) -> None:
-    """Refuse a path with a component longer than the file system's NAME_MAX (255 bytes on most), or too
-    long, with the names a run writes below it (ROOM), for its PATH_MAX (4096 bytes on Linux): the file
-    system would refuse the run's first write, after its computation."""
-    name_max, path_max = _limit(existing, "PC_NAME_MAX", 255), _limit(existing, "PC_PATH_MAX", 4096)
-    for part in path.parts:
-        size = len(os.fsencode(part))
-        if size > name_max:
-            raise CaseError(f"{label} '{shown(str(path))}': the name '{shown(part)}' has {size} bytes, more than "
-                            f"the {name_max} the file system allows: give a shorter name")
-    size = len(os.fsencode(path))
-    if size + ROOM > path_max:
-        raise CaseError(f"{label} '{shown(str(path))}' has {size} bytes and the names a run writes below it make "
-                        f"more than the {path_max} bytes of a path the file system allows: give a shorter path")
-
-
-def _limit(folder: Path, name: str, default: int) -> float:
-    """The file system's limit ``name`` at ``folder`` (os.pathconf); ``default`` where the system does not
-    tell, inf where it has none (-1)."""
-    try:
-        value = os.pathconf(folder, name)
-    except (OSError, ValueError, AttributeError):  # not POSIX, or not told
-        return default
-    return math.inf if value is None or value < 0 else value
-
-
 def holds_files(path: Path, label: str = "--out") -> bool:
     """Does the directory ``path`` exist and hold anything besides a lock file?"""
     try:
@@ -205,7 +142,7 @@ def holds_files(path: Path, label: str = "--out") -> bool:
     except FileNotFoundError:
         return False
     except OSError as error:
-        raise CaseError(f"{label} '{path}': cannot read the directory ({_reason(error)})") from None
+        raise CaseError(f"{label} '{path}': cannot read the directory ({reason(error)})") from None
 
 
 def acquire(path: Path, label: str = "--out") -> Held:
@@ -222,7 +159,7 @@ def acquire(path: Path, label: str = "--out") -> Held:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as error:
         _undo(missing, changed)
-        raise CaseError(f"{label} '{path}': cannot create the directory ({_reason(error)})") from None
+        raise CaseError(f"{label} '{path}': cannot create the directory ({reason(error)})") from None
     descriptor = None
     try:
         descriptor = os.open(path, os.O_RDONLY | os.O_DIRECTORY) if fcntl is not None else None
@@ -235,7 +172,7 @@ def acquire(path: Path, label: str = "--out") -> Held:
         if os.path.islink(path / LOCK):
             raise CaseError(f"{label} '{path}': '{path / LOCK}' is a symbolic link, and vpcontact writes its lock "
                             f"file there and never through a link: remove the link") from None
-        raise CaseError(f"{label} '{path}': cannot write in the directory ({_reason(error)})") from None
+        raise CaseError(f"{label} '{path}': cannot write in the directory ({reason(error)})") from None
     if fcntl is not None:
         try:
             fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -457,10 +394,3 @@ def _undo(created: list[Path], changed: tuple[Path, os.stat_result]) -> None:
         os.utime(folder, ns=(before.st_atime_ns, before.st_mtime_ns))
     except OSError:
         pass  # a folder we cannot write in: it did not change
-
-
-def _reason(error: OSError) -> str:
-    """The OS's reason; ENOENT where the folders exist means the file system refuses (/proc, ...)."""
-    if error.errno == errno.ENOENT:
-        return f"the file system refuses: {error.strerror}"
-    return error.strerror or str(error)

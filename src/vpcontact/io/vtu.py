@@ -1,11 +1,14 @@
-"""VTK XML unstructured grids (``.vtu``, read by ParaView, VTK and meshio), written with NumPy alone.
+"""The fields of a run as VTK files (ParaView, VTK, meshio), written with NumPy alone: in ``fields/``,
+``body_NNNNN.vtu`` and (with contact) ``contact_NNNNN.vtu`` at each field step n, the data of
+:mod:`vpcontact.results.frames`, and their ParaView collections ``body.pvd`` and ``contact.pvd``, one
+dataset per field step at its time t_n.
 
-Every array is written inline in VTK's uncompressed binary format: base64 of its length in bytes (a
-UInt64) followed by its little-endian bytes, header and data encoded together, as VTK's own writer
-does. Without compression, writing costs little more than copying the arrays to disk. (Raw appended
-data would be smaller, but meshio's reader can mix up its arrays.) The points and cells of a body are
-the same at every field step: a :class:`Grid` encodes them once, and each file written on it encodes
-only its data.
+A VTU file is a VTK XML unstructured grid whose arrays are written inline in VTK's uncompressed
+binary format: base64 of an array's length in bytes (a UInt64) followed by its little-endian bytes,
+header and data encoded together, as VTK's own writer does. Without compression, writing costs little
+more than copying the arrays to disk. (Raw appended data would be smaller, but meshio's reader can mix
+up its arrays.) The points and cells of a body are the same at every field step: a :class:`Grid`
+encodes them once, and each file written on it encodes only its data.
 
 The elements follow VTK's XML format (``VTKFile type="UnstructuredGrid"``, one ``Piece``): ``Points``
 one Float64 array of 3 components; ``Cells`` the arrays ``connectivity`` (the node numbers of every
@@ -18,6 +21,7 @@ tensor named XX, XY, … ZZ (row by row), as ParaView shows them.
 from __future__ import annotations
 
 import base64
+import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -25,10 +29,16 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from ..mesh.cells import CELL_TYPES
+from ..results.frames import field_frames, field_meshes
+from . import directory
+from .files import replacing
+
+FILES = ("fields/body.pvd", "fields/contact.pvd", "fields/body_*.vtu", "fields/contact_*.vtu")
 
 #: VTK's name of each NumPy type written.
 VTK_TYPES = {np.dtype("<f8"): "Float64", np.dtype("<i8"): "Int64", np.dtype("<i4"): "Int32", np.dtype("u1"): "UInt8"}
-#: The names of the components of a 3 × 3 tensor, written row by row (``tensors_in_space``).
+#: The names of the components of a 3 × 3 tensor, written row by row
+#: (:func:`vpcontact.results.frames.tensors_in_space`).
 TENSOR_COMPONENTS = ("XX", "XY", "XZ", "YX", "YY", "YZ", "ZX", "ZY", "ZZ")
 
 
@@ -84,17 +94,40 @@ def _data_array(name: str, values: np.ndarray) -> str:
             f"{encoded}</DataArray>")
 
 
-def in_space(vectors: np.ndarray) -> np.ndarray:
-    """Vectors (n, d) as the 3D vectors (n, 3) of a VTU file (z = 0 in 2D)."""
-    return np.column_stack([vectors, np.zeros((vectors.shape[0], 3 - vectors.shape[1]))])
+def wanted(result) -> bool:
+    """A run that kept fields (``output.field_steps``) has their files."""
+    return bool(result.fields)
 
 
-def tensors_in_space(tensors: np.ndarray, t33: np.ndarray | None = None) -> np.ndarray:
-    """Tensors (n, d, d) as the 3 × 3 tensors (n, 9) of a VTU file; in 2D the out-of-plane entry is
-    ``t33`` (σ33 of the plane reduction), or 0."""
-    n, d = tensors.shape[:2]
-    full = np.zeros((n, 3, 3))
-    full[:, :d, :d] = tensors
-    if t33 is not None:
-        full[:, 2, 2] = t33
-    return full.reshape(n, 9)
+def write(result, out: Path) -> None:
+    """``out``/fields: body_NNNNN.vtu and contact_NNNNN.vtu at each field step of ``result``, and their PVD
+    collections."""
+    folder = Path(out) / "fields"
+    directory.mkdir(folder)
+    body_mesh, contact_mesh = field_meshes(result.discretization)
+    body_grid = Grid(*body_mesh)
+    contact_grid = Grid(*contact_mesh) if contact_mesh is not None else None
+    body, contact = [], []
+    for frame in field_frames(result):
+        name = f"body_{frame.step:05d}.vtu"
+        with replacing(folder / name) as temporary:
+            write_vtu(temporary, body_grid, frame.body_points, frame.body_cells)
+        body.append((frame.t, name))
+        if frame.contact_points is not None:
+            name = f"contact_{frame.step:05d}.vtu"
+            with replacing(folder / name) as temporary:
+                write_vtu(temporary, contact_grid, frame.contact_points)
+            contact.append((frame.t, name))
+    write_pvd(folder / "body.pvd", body)
+    if contact:
+        write_pvd(folder / "contact.pvd", contact)
+
+
+def write_pvd(path: Path, entries: list[tuple[float, str]]) -> None:
+    """A ParaView collection: one dataset per time (``entries``: (t, file name))."""
+    root = ET.Element("VTKFile", type="Collection", version="0.1")
+    collection = ET.SubElement(root, "Collection")
+    for t, name in entries:
+        ET.SubElement(collection, "DataSet", timestep=repr(float(t)), part="0", file=name)
+    with replacing(path) as temporary:
+        ET.ElementTree(root).write(temporary, xml_declaration=True, encoding="utf-8")

@@ -11,7 +11,7 @@ For each of the body and the contact part (with contact), two files in ``fields/
 VTK's ``vtkXdmfReader`` (ParaView's "XDMF Reader"; the tests read every series with it), ParaView's Xdmf3
 readers, VisIt and meshio's ``meshio.xdmf.TimeSeriesReader`` read them; a run of a thousand field steps
 stores its mesh once (the VTU files of ``fields/body.pvd`` store it in each file). The arrays are those of
-the VTU files (:func:`vpcontact.io.writers.field_frames`), of the same types (integers as Int); a 2D contact
+the VTU files (:func:`vpcontact.results.frames.field_frames`), of the same types (integers as Int); a 2D contact
 part's segments are a Polyline topology of 2 nodes per element (XDMF has no linear line cell: VTK reads
 them as poly lines of 2 points, meshio as lines). Each file is written atomically, the HDF5 file before
 the XDMF file that describes it.
@@ -26,8 +26,10 @@ from pathlib import Path
 import numpy as np
 
 from ..mesh.cells import CELL_TYPES
-from ..results.result import Result
-from .writers import field_frames, field_meshes, replacing
+from ..results.frames import field_frames, field_meshes
+from .files import replacing
+
+FILES = ("fields/body.h5", "fields/body.xdmf", "fields/contact.h5", "fields/contact.xdmf")
 
 #: XDMF's attribute type of an array by its number of components per point or cell.
 ATTRIBUTE_TYPES = {1: "Scalar", 3: "Vector", 9: "Tensor"}
@@ -35,14 +37,18 @@ ATTRIBUTE_TYPES = {1: "Scalar", 3: "Vector", 9: "Tensor"}
 NUMBER_TYPES = {"f": "Float", "i": "Int", "u": "UInt"}
 
 
-def write_xdmf(result: Result, folder: Path) -> None:
-    """body.h5 and body.xdmf, and with contact contact.h5 and contact.xdmf, in ``folder`` (which exists),
-    with the fields at every field step of ``result`` (nothing without field steps). The steps' arrays are
-    made and written one step at a time."""
+def wanted(result) -> bool:
+    """Asked for (``output.xdmf``), by a run that kept fields (``output.field_steps``)."""
+    return bool(result.output.xdmf) and bool(result.fields)
+
+
+def write(result, out: Path) -> None:
+    """body.h5 and body.xdmf, and with contact contact.h5 and contact.xdmf, in ``out``/fields (which the VTU
+    files made), with the fields at every field step of ``result``. The steps' arrays are made and written
+    one step at a time; h5py is imported by the runs that write XDMF only."""
     import h5py
 
-    if not result.fields:
-        return
+    folder = Path(out) / "fields"
     body_mesh, contact_mesh = field_meshes(result.discretization)
     meshes = {"body": body_mesh, **({"contact": contact_mesh} if contact_mesh is not None else {})}
     steps = {name: [] for name in meshes}  # (step, t, {center: {array: (shape, dtype)}}) of each series

@@ -1,11 +1,10 @@
 """What a result needs of its problem to be read, written and drawn: the mesh, the contact nodes, the
 time grid, the materials' ℰ and the layer's parameters at the contact nodes.
 
-A :class:`~vpcontact.results.result.Result` holds this light view (``result.discretization``) beside the
-:class:`~vpcontact.problem.build.Problem` it was computed from (``result.problem``, in the process that ran
-it): the operators, the loads, the laws and the Python objects a problem may hold are not sent with a
-result, pickled, to another process, where ``result.problem`` is None and the writers, tables, plots and
-norms work from the view alone.
+A :class:`~vpcontact.results.result.Result` holds this light view (``result.discretization``), never the
+:class:`~vpcontact.problem.build.Problem` it was computed from: the operators, the loads, the laws and the
+Python objects a problem may hold stay with the problem, and the writers, tables, plots and norms work from
+the view alone (a result pickled to another process included).
 """
 
 from __future__ import annotations

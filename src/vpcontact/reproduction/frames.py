@@ -1,7 +1,7 @@
 """The deformed configurations the paper's Figs. 2, 3, 5 and 9 draw (`Frame`): the mesh, the
 displacement, and on Γ3 the normals, the contact pressure and the node states at one time, from a
-result in memory or from a run directory (:mod:`vpcontact.io.run_reader`). A frame also chooses the
-contact nodes that get a force arrow: no more than `ARROWS`, evenly spaced along Γ3."""
+result in memory or from a run directory (:mod:`vpcontact.io.solution`, :mod:`vpcontact.io.contact_csv`). A
+frame also chooses the contact nodes that get a force arrow: no more than `ARROWS`, evenly spaced along Γ3."""
 
 from __future__ import annotations
 
@@ -15,7 +15,8 @@ import numpy as np
 from ..errors import CaseError
 from ..results.plots import along_curve
 from ..case.load import read_case
-from ..io.run_reader import read_contact, read_solution
+from ..io.contact_csv import read_contact
+from ..io.solution import read_solution
 from .paper import CONTACT_CONDITIONS, FIGURE_TIMES, SHORT_LABELS
 from .plan import Plan, figure_step
 from .study_files import rho_id

@@ -9,7 +9,7 @@ from pathlib import Path
 
 def machine() -> dict:
     """Platform, processor, cores, memory and the versions that matter."""
-    from ..io.writers import versions
+    from ..io.versions import versions
 
     memory = None
     try:

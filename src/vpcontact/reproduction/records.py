@@ -12,7 +12,9 @@ import numpy as np
 from ..case.load import load_case
 from ..results.norms import differences
 from ..progress import SILENT, Progress
-from ..io.run_reader import read_summary, read_table, snapshots_at
+from ..io.csv_format import read_table
+from ..io.solution import snapshots_at
+from ..io.summary import read_summary
 from ..drivers.studies.table import norm_column
 from .paper import T
 from .plan import Plan, level_overrides, level_step

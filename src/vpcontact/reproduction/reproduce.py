@@ -33,9 +33,11 @@ from pathlib import Path
 from typing import Callable
 
 from .. import __version__
-from ..io import directory, writers
+from ..io import directory
+from ..io.files import remove_files
+from ..io.run import OUTPUTS as RUN_FILES, TEMPORARIES
 from ..progress import SILENT, Progress
-from ..io.writers import json_safe
+from ..io.summary import json_safe
 from . import figures, report
 from .calibration import calibrate
 from .claims import assess, node_states, penetration_ordering
@@ -56,9 +58,9 @@ class OutputError(ValueError):
 
 
 RUN_FOLDERS = ("cases/*", "studies/*/runs/*")
-"""Where `run` keeps its runs (each a run directory: writers.OUTPUTS)."""
+"""Where `run` keeps its runs (each a run directory: io.run.OUTPUTS)."""
 OUTPUTS = (*[f"{folder}/{name}" for folder in (*RUN_FOLDERS, "studies/*")
-             for name in (*writers.OUTPUTS, *writers.TEMPORARIES, directory.LOCK)],
+             for name in (*RUN_FILES, *TEMPORARIES, directory.LOCK)],
            "cases/paper_ball.toml", "studies/*.toml", "studies/*/study.csv", "studies/*/.study.tmp-[0-9]*.csv",
            "figures/fig[0-9][0-9].png", "figures/fig[0-9][0-9].pdf", "report.md", "report.html", "reproduce.json")
 """What `run` writes in DIR, as glob patterns: overwrite=True removes these (and the folders that this
@@ -72,7 +74,7 @@ def prepare(out: Path, overwrite: bool) -> None:
     if out.exists() and any(out.iterdir()):
         if not overwrite:
             raise OutputError(f"--out '{out}' is not empty (use --overwrite to replace its reproduction)")
-        writers.remove_files(out, OUTPUTS)
+        remove_files(out, OUTPUTS)
     out.mkdir(parents=True, exist_ok=True)
 
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 from ..case.load import load_case
 from ..progress import SILENT, Progress
-from ..results.result import INTEGER_COLUMNS
-from ..io.run_reader import read_table
+from ..results.columns import INTEGER_COLUMNS
+from ..io.csv_format import read_table
 from .paper import T
 from .plan import CaseSpec
 
@@ -26,7 +26,7 @@ def solve_case(base: Path, spec: CaseSpec, out: Path, progress: Progress = SILEN
     """Solve one case and write its standard outputs; raises ReproduceError if a step fails. ``progress``
     hears of the run as a phase (its start, life while it runs, its status and wall time)."""
     from .. import solve
-    from ..io.writers import write_run
+    from ..io.run import write_run
 
     with progress.phase(f"run '{spec.name}'") as phase:
         result = solve(load_case(base, spec.overrides))

@@ -1,59 +1,34 @@
 """The result of a run: time series, per-node contact history and fields at the requested steps.
 
-Conventions: the penetration d = u·ν − g0 (> 0 into the foundation); pressures are forces per unit
-length of Γ3 (per unit area in 3D), the compliance part ρK(ξ)p(d) and the rigid part λ_i / w_i;
-the normal stress σ_ν = −(compliance + rigid) ≤ 0; the contact force is the resultant the
-foundation exerts on the body, −Σ_i w_i (compliance_i + rigid_i) ν_i.
-
-Sub-steps: a step whose Newton iteration fails is cut in halves (``stepping``). Every converged
-time level is a row of the history and of the per-node arrays, in time order: a step done whole is
-one row (``substep`` 1, ``k`` the case's step), a step cut into s sub-steps is s rows with the same
-``step`` n, ``substep`` 1, …, s, their own ``t`` and ``k``, the last one at t_n. Fields are kept per
-step n, at t_n. Which rows are the steps t_n is decided in one place, :func:`step_ends` (for a run in
-memory and for a run directory's tables alike); ``series(..., substeps=False)`` and
-``contact_history(..., substeps=False)`` keep only those rows.
+The history's columns and the contact arrays are named in :mod:`vpcontact.results.columns` (with the
+conventions of their signs and units). Sub-steps: a step whose Newton iteration fails is cut in halves
+(``timeloop``); every converged time level is a row of the history and of the per-node arrays, in time
+order, and which rows are the steps t_n is decided by :mod:`vpcontact.results.steps`;
+``series(..., substeps=False)`` and ``contact_history(..., substeps=False)`` keep only those rows.
 
 Memory: the rows and the fields at the field steps are kept until the run is written; a case whose
-outputs would not fit in the memory available is refused before its first step (:func:`check_memory`).
+outputs would not fit in the memory available is refused before its first step
+(:func:`vpcontact.results.footprint.check_memory`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import difflib
-import os
 from collections.abc import Collection
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
+from ..errors import CaseError, shown
+from ..fem.space import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from ..problem.discretization import Discretization
-from ..errors import CaseError, flag, quoted, shown
-from ..memory import available_memory
-from ..fem.space import coordinates
+from .columns import CONTACT_ARRAYS, INTEGER_COLUMNS, estimate_columns, history_columns
+from .steps import end_of_step_rows, field_step_numbers, step_ends
 
-def history_columns(dim: int) -> tuple[str, ...]:
-    """The columns of history.csv for a d-dimensional body (one contact force component per coordinate)."""
-    return ("step", "t", "newton_iterations", "residual", "complementarity", "max_penetration", "mean_penetration",
-            "K_min", "K_max", "K_probe", "penetration_probe", "normal_stress_probe", "nodes_separated",
-            "nodes_in_compliance", "nodes_at_limit", *(f"contact_force_{c}" for c in coordinates(dim)), "substep", "k")
-
-
-def estimate_columns(terms: tuple[str, ...]) -> tuple[str, ...]:
-    """The history columns of an error estimate of ``terms`` at every level (``output.error_estimate``): η(t) =
-    (Σ_K η_K²)^½ and each term's share (Σ_K η_K,term²)^½; none without terms (no estimate)."""
-    return ("error_estimate", *(f"error_estimate_{term}" for term in terms)) if terms else ()
-
-
-#: The history columns of a 2D body (the paper's case).
-HISTORY_COLUMNS = history_columns(2)
-#: History columns holding integers (the others are floats).
-INTEGER_COLUMNS = ("step", "newton_iterations", "nodes_separated", "nodes_in_compliance", "nodes_at_limit", "substep")
 #: Most characters of a run's message that ``repr(result)`` shows (on its second line).
 REPR_MESSAGE = 200
-CONTACT_ARRAYS = ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid", "status")
 
 
 class UnknownName(CaseError, KeyError):
@@ -70,30 +45,6 @@ def _unknown(kind: str, name, valid: Collection[str], elsewhere: tuple[Collectio
     else:
         hint = f"did you mean '{close[0]}'? " if close else ""
     return UnknownName(f"unknown {kind} {shown(repr(name))}; {hint}valid names: {', '.join(valid)}")
-
-
-def step_ends(steps, completed: int) -> np.ndarray:
-    """Per history row, given the step number n of each row (in time order): is it the row at t_n? It is
-    the last row of its step, for the steps n ≤ ``completed`` (the steps reached): a step cut into
-    sub-steps has several rows, its last one at t_n; the rows of a step not reached (a step that failed
-    even after its cuts) are none."""
-    steps = np.asarray(steps)
-    last = np.append(steps[1:] != steps[:-1], True) if steps.size else np.zeros(0, dtype=bool)
-    return last & (steps <= completed)
-
-
-def end_of_step_rows(steps, completed: int) -> dict[int, int]:
-    """Step n -> the index of its row at t_n (:func:`step_ends`), for the steps reached."""
-    ends = np.flatnonzero(step_ends(steps, completed))
-    return dict(zip(np.asarray(steps)[ends].astype(int).tolist(), ends.tolist()))
-
-
-def field_step_numbers(field_steps, steps: int) -> Collection[int]:
-    """The steps whose fields are kept, for ``output.field_steps`` ("all", "final", "none" or a list) in a
-    run of ``steps`` steps (a range for "all": no set of every step is built)."""
-    if isinstance(field_steps, str):
-        return {"all": range(1, steps + 1), "final": range(steps, steps + 1), "none": range(0)}[field_steps]
-    return frozenset(field_steps)
 
 
 @dataclass(repr=False)
@@ -124,8 +75,11 @@ FIELD_NAMES = tuple(item.name for item in dataclasses.fields(Fields))
 
 @dataclass(repr=False)
 class Result:
-    """Everything a run computed. Arrays per contact node are (rows, m): one row per converged time
-    level, sub-steps included (see the module's docstring). ``times`` is the array of the rows' times."""
+    """Everything a run computed, as plain data: its sizes, the history rows, the per-node contact arrays
+    (rows, m): one row per converged time level, sub-steps included (see the module's docstring), the
+    fields at the field steps, and ``discretization``, all it needs of the problem (the mesh, the contact
+    nodes, the step times, ℰ, the layer's parameters) to be read, drawn and written; not the problem itself
+    (its operators, loads and laws stay with it). ``times`` is the array of the rows' times."""
 
     dofs: int
     elements: int
@@ -149,8 +103,7 @@ class Result:
     linear_solves: int = 0  # solves with a factored matrix in the time loop
     krylov_iterations: int = 0  # GMRES iterations on Newton systems in the time loop
     newton_factorizations: int = 0  # LU factorizations of condensed Newton matrices in the time loop
-    problem: object = None  # the Problem solved, in the process that solved it (None in a copy sent elsewhere)
-    discretization: object = None  # what the result needs of the problem (vpcontact.problem.discretization), always there
+    discretization: Discretization | None = None  # what the result needs of the problem, always there
     completed_steps: int = 0  # time steps t_n reached
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
@@ -158,15 +111,17 @@ class Result:
     output: object = None  # the OutputOptions the run was made with (what the writers write)
 
     @classmethod
-    def start(cls, problem, solver, output, estimate_terms: tuple[str, ...] = ()) -> "Result":
-        """The empty result of a run of ``problem`` by ``solver`` with the options ``output`` (OutputOptions), whose
-        levels record the error estimate of ``estimate_terms`` (none: no estimate)."""
-        wanted = field_step_numbers(output.field_steps, len(problem.times))
-        return cls(dofs=problem.basis.N, elements=problem.mesh.mesh.t.shape[1], nodes=problem.mesh.mesh.p.shape[1],
-                   contact_nodes=problem.surface.size, dim=problem.mesh.dim, probe=problem.probe, field_steps=wanted,
-                   augmentation=solver.r, method=solver.name, method_reason=solver.reason, problem=problem,
-                   discretization=Discretization.of(problem),
-                   output=output, estimate_terms=tuple(estimate_terms))
+    def start(cls, discretization: Discretization, dofs: int, solver, output,
+              estimate_terms: tuple[str, ...] = ()) -> "Result":
+        """The empty result of a run on ``discretization`` with ``dofs`` unknowns by the step ``solver`` (its
+        method, why it runs, its augmentation r), with the options ``output`` (the fields kept and what the writers
+        write), whose levels record the error estimate of ``estimate_terms`` (none: no estimate)."""
+        mesh = discretization.mesh
+        wanted = field_step_numbers(output.field_steps, len(discretization.times))
+        return cls(dofs=dofs, elements=mesh.mesh.t.shape[1], nodes=mesh.mesh.p.shape[1],
+                   contact_nodes=discretization.surface.size, dim=mesh.dim, probe=discretization.probe,
+                   field_steps=wanted, augmentation=solver.r, method=solver.name, method_reason=solver.reason,
+                   discretization=discretization, output=output, estimate_terms=tuple(estimate_terms))
 
     # --- filling in ------------------------------------------------------------------------------
     def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status, substep: int = 1,
@@ -227,6 +182,42 @@ class Result:
             self.status = "complete"
         self.timings = timings
         self.wall_time_s = timings["total"]
+
+    # --- a checkpoint ----------------------------------------------------------------------------
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The rows so far as named arrays: ``row_<column>`` for each of ``columns`` (int64 for the
+        INTEGER_COLUMNS, else float64), ``row_time`` and ``contact_<name>`` (rows, contact nodes) for each of
+        the CONTACT_ARRAYS; :meth:`resume` reads them back, bit for bit."""
+        rows = len(self.rows)
+        arrays = {f"row_{column}": np.array([row[column] for row in self.rows],
+                                            dtype=np.int64 if column in INTEGER_COLUMNS else np.float64)
+                  for column in self.columns}
+        arrays["row_time"] = np.array(self.times, dtype=np.float64)
+        arrays.update({f"contact_{name}": np.array(self.contact[name]).reshape(rows, self.contact_nodes)
+                       for name in CONTACT_ARRAYS})
+        return arrays
+
+    def field_arrays(self) -> dict[int, dict[str, np.ndarray]]:
+        """The Fields of each field step kept so far as named arrays (FIELD_NAMES; a field the run has not,
+        None, is left out)."""
+        return {n: {name: getattr(fields, name) for name in FIELD_NAMES if getattr(fields, name) is not None}
+                for n, fields in sorted(self.fields.items())}
+
+    def resume(self, arrays: dict[str, np.ndarray], fields: dict[int, dict[str, np.ndarray]], step: int,
+               step_cuts: int, resumed_at: list[int]) -> None:
+        """Take back the rows of :meth:`arrays` and the fields of :meth:`field_arrays` (a field left out is
+        None), the ``step`` reached, its ``step_cuts`` and the steps where the run was resumed."""
+        columns = {column: arrays[f"row_{column}"] for column in self.columns}
+        count = len(arrays["row_time"])
+        self.rows = [{column: (int(values[i]) if column in INTEGER_COLUMNS else np.float64(values[i]))
+                      for column, values in columns.items()} for i in range(count)]
+        self.times = [np.float64(t) for t in arrays["row_time"]]
+        self.contact = {name: list(arrays[f"contact_{name}"]) for name in CONTACT_ARRAYS}
+        self.completed_steps, self.step_cuts, self.resumed_at = step, step_cuts, resumed_at
+        for n, data in fields.items():
+            self.fields[n] = Fields(**{name: data.get(name) for name in FIELD_NAMES})
+        if self.fields:
+            self.final = self.fields[max(self.fields)]
 
     # --- reading ---------------------------------------------------------------------------------
     @property
@@ -314,7 +305,8 @@ class Result:
     def history(self):
         """The history as a pandas DataFrame (a new one at each access): one row per converged time level,
         the columns of history.csv (``columns``), integer columns as int64. ``result.history[result.ends_step()]``
-        keeps the rows at the step times t_n (those of ``series(..., substeps=False)``). See :mod:`vpcontact.results.tables`."""
+        keeps the rows at the step times t_n (those of ``series(..., substeps=False)``). See
+        :mod:`vpcontact.results.tables`."""
         from .tables import history_table
 
         return history_table(self)
@@ -338,24 +330,10 @@ class Result:
 
     def to_pyvista(self, step: int | None = None):
         """The body at a field step (default: the last one kept) as a ``pyvista.UnstructuredGrid`` with its
-        fields as point and cell data (needs pyvista); see :func:`vpcontact.io.pyvista_grid.body_grid`."""
-        from ..io.pyvista_grid import body_grid
+        fields as point and cell data (needs pyvista); see :func:`vpcontact.results.pyvista_grid.body_grid`."""
+        from .pyvista_grid import body_grid
 
         return body_grid(self, step)
-
-    def write(self, out: str | os.PathLike, *, overwrite: bool = False) -> Path:
-        """Write the files of a run directory (README, "Outputs") into ``out``, as ``vpcontact run`` does:
-        created if missing; a directory that is not empty is refused (a CaseError, and a FileExistsError)
-        unless ``overwrite``, which removes only the files a run writes there. Returns ``out`` as a Path."""
-        from ..io.directory import folder_path
-        from ..io.writers import write_run
-
-        return write_run(self, folder_path(out, "output directory"), overwrite=flag("overwrite", overwrite))
-
-    def __getstate__(self) -> dict:
-        """A copy sent to another process (pickled) leaves the Problem behind (its operators, loads and the
-        Python objects it may hold); ``discretization`` has all the writers, tables, plots and norms read."""
-        return {**self.__dict__, "problem": None}
 
     def __repr__(self) -> str:
         """One line: status, dimension, sizes, steps done of those planned, step method and wall time (not the
@@ -368,61 +346,3 @@ class Result:
             return text
         message = self.message if len(self.message) <= REPR_MESSAGE else self.message[:REPR_MESSAGE] + " …"
         return f"{text}\n  {message}"
-
-
-# --- memory ----------------------------------------------------------------------------------------
-#: Bytes of one history row in memory: a dict of the HISTORY_COLUMNS and its time (CPython 3.11, measured).
-HISTORY_ROW_BYTES = 1100
-#: Bytes the columns of the estimate of output.error_estimate add to a history row in memory, and their number (the
-#: residual estimator's η and six terms: 7 float objects and the larger dict; CPython 3.11, measured).
-ESTIMATE_ROW_BYTES, ESTIMATE_ROW_COLUMNS = 900, 7
-#: Bytes of a NumPy array object besides its data.
-ARRAY_BYTES = 112
-#: Bytes the writers add while they write, whatever the run's length (contact.csv is written in blocks).
-WRITING_BYTES = 2**24
-
-
-def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, contact_nodes: int,
-                  history: bool, dim: int = 2, estimate: bool = False) -> dict[str, int]:
-    """Bytes a run of ``steps`` steps keeps for its outputs until they are written, by part: the history
-    rows, the per-node contact rows and the fields at ``field_steps`` steps (``history``: with the
-    viscoplastic history z; ``estimate``: with the estimate's columns in every row and η_K in the fields),
-    each with the copy a checkpoint or solution.npz makes of them, and what the writers add. A step cut
-    into sub-steps adds rows: this is the least a run needs."""
-    columns = len(history_columns(dim)) + (ESTIMATE_ROW_COLUMNS if estimate else 0)
-    copies = 8 * columns
-    row = HISTORY_ROW_BYTES + (ESTIMATE_ROW_BYTES if estimate else 0)
-    contact = len(CONTACT_ARRAYS) * ARRAY_BYTES + 2 * (8 * (len(CONTACT_ARRAYS) - 1) + 1) * contact_nodes
-    tensor = dim * dim
-    per_field = 5 * ARRAY_BYTES + 8 * (dim * nodes + (tensor + 2) * elements) + 8 * (dim * nodes + tensor * elements)
-    if history:
-        per_field += 2 * 8 * tensor * elements
-    if estimate:
-        per_field += ARRAY_BYTES + 2 * 8 * elements
-    return {"history rows": steps * (row + copies), "contact rows": steps * contact,
-            "fields": (field_steps + 1) * per_field, "writing": WRITING_BYTES}
-
-
-def check_memory(steps: int, output, nodes: int, elements: int, contact_nodes: int, history: bool,
-                 dim: int = 2) -> None:
-    """Refuse, before anything per step is allocated, a run of ``steps`` steps whose outputs (``output``, the
-    :class:`~vpcontact.results.output_options.OutputOptions`) would not fit in the memory available now: one line
-    naming time.steps (and output.field_steps when the fields are the most)."""
-    field_steps = len(field_step_numbers(output.field_steps, steps))
-    parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim,
-                          estimate=output.error_estimate)
-    needed, available = sum(parts.values()), available_memory()
-    if needed <= available:
-        return
-    gib = 2.0**30
-    detail = (f"history rows {parts['history rows'] / gib:.3g} GiB, contact rows of {contact_nodes} nodes "
-              f"{parts['contact rows'] / gib:.3g} GiB, fields at {field_steps} steps of {nodes} nodes and {elements} "
-              f"elements {parts['fields'] / gib:.3g} GiB")
-    key = f"time.steps = {steps}"
-    fix = "use fewer steps"
-    if parts["fields"] > parts["history rows"] + parts["contact rows"]:
-        chosen = output.field_steps
-        key += f" with output.field_steps = {quoted(chosen) if isinstance(chosen, str) else shown(repr(chosen))}"
-        fix = "keep the fields at fewer steps (output.field_steps) or use fewer steps"
-    raise CaseError(f"{key}: the run's outputs need about {needed / gib:.3g} GiB of memory ({detail}), more than "
-                    f"the {available / gib:.3g} GiB available; {fix}")

@@ -10,16 +10,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..laws.contact import STATUS_NAMES
 from ..errors import CaseError
-from .plots import arc_length, step_rows
-from .result import CONTACT_ARRAYS, INTEGER_COLUMNS
 from ..fem.space import coordinates
+from ..laws.contact import STATUS_NAMES
+from .columns import CONTACT_ARRAYS, INTEGER_COLUMNS
+from .plots.curves import arc_length
+from .steps import step_rows
 
 
 def history_table(result):
     """The history of ``result`` as a DataFrame: one row per converged time level, sub-steps of a cut step
-    included (see :mod:`vpcontact.results.result`), the columns of history.csv (``result.columns``), integers
+    included (see :mod:`vpcontact.results.steps`), the columns of history.csv (``result.columns``), integers
     as int64 (INTEGER_COLUMNS), the others float64. ``table[result.ends_step()]`` keeps the rows at the
     step times t_n, those of ``result.series(..., substeps=False)``."""
     import pandas as pd
@@ -35,7 +36,7 @@ def contact_table(result, step: int | None = None):
     index in the mesh), its coordinates ``x, y(, z)``, its unit normal ``normal_x, …``, its weight
     w_i = ∫_Γ3 φ_i, in 2D ``arc_length`` (the arc length s along Γ3 from its end of least x, as the
     contact-pressure figure draws it), the contact arrays ``penetration, xi, K, pressure_compliance,
-    pressure_rigid`` (see :mod:`vpcontact.results.result`), ``normal_stress`` σ_ν = −(compliance + rigid),
+    pressure_rigid`` (see :mod:`vpcontact.results.columns`), ``normal_stress`` σ_ν = −(compliance + rigid),
     ``status`` (a category: separated, in_compliance, at_limit) and, with several contact parts, ``part``
     (a category of their names). ``table.attrs`` holds the ``step`` and its time ``t``."""
     import pandas as pd
@@ -71,7 +72,8 @@ def step_row(result, step: int | None) -> int:
 
 
 def arc_lengths(surface) -> np.ndarray:
-    """The arc length along Γ3 (2D) of each contact node, in their order (see :func:`vpcontact.results.plots.arc_length`)."""
+    """The arc length along Γ3 (2D) of each contact node, in their order (see
+    :func:`vpcontact.results.plots.curves.arc_length`)."""
     lengths = np.zeros(surface.size)
     if surface.size:
         order, s, _ = arc_length(surface.coordinates, surface.facets)

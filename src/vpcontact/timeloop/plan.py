@@ -7,7 +7,7 @@ and ``vpcontact check`` prints it (:mod:`vpcontact.drivers.check`), so that the 
 refusal before the first step is made here, each one line (CaseError), in this order:
 
 1. the outputs kept until they are written would not fit in the memory available
-   (:func:`~vpcontact.results.result.check_memory`);
+   (:func:`~vpcontact.results.footprint.check_memory`);
 2. ``solver.augmentation`` far from the normal stiffness at the contact nodes
    (:func:`~vpcontact.solvers.augmentation_parameter`);
 3. the chosen method's own algebra would not fit: the condensed method's dense algebra
@@ -29,7 +29,8 @@ import scipy.sparse as sp
 
 from ..memory import available_memory
 from ..problem.build import Problem
-from ..results.result import check_memory, field_step_numbers, memory_needed
+from ..results.footprint import check_memory, memory_needed
+from ..results.steps import field_step_numbers
 from ..solvers import augmentation_parameter
 from ..solvers.choice import check_iterative_memory, chosen_method, iterative_memory
 from ..solvers.condensed import check_condensed_memory, condensed_memory
@@ -42,7 +43,7 @@ class RunPlan:
     condition fixes); the time grid t_n = ``start`` + n ``k``, n = 1, …, ``steps`` up to ``T``, with the fields kept
     at ``field_steps`` of its steps; ``method`` the step method that runs and ``method_reason`` why (summary.json's
     solver_reason), ``augmentation`` its Alart–Curnier r; ``memory_bytes``: the outputs kept until written, by
-    part (:func:`~vpcontact.results.result.memory_needed`: "history rows", "contact rows", "fields", "writing"),
+    part (:func:`~vpcontact.results.footprint.memory_needed`: "history rows", "contact rows", "fields", "writing"),
     and the step method's own algebra ("solver": the condensed method's dense algebra or the iterative method's
     peak; None for the full method, not estimated), against ``memory_available_bytes`` when the plan was made;
     ``time_seconds``: "build" (mesh, assembly, checks) as measured, "solver setup", "time loop" and "total"

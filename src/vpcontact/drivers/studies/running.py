@@ -14,9 +14,9 @@ from pathlib import Path
 
 from ...case.load import load_case, read_case
 from ...errors import CaseError
-from ...io import directory
-from ...io.run_reader import read_summary
-from ...io.writers import check_room, refuse_links
+from ...io import directory, paths
+from ...io.run import check_room, refuse_links
+from ...io.summary import read_summary
 from ...progress import Progress, duration, reporting
 from .file import RunSpec, Study
 from .table import write_study_table
@@ -25,7 +25,7 @@ from .table import write_study_table
 def execute_run(spec: RunSpec) -> dict:
     """Solve one run and write its directory; returns its summary (status "error" on an exception)."""
     from ...case.translate import translate
-    from ...io.writers import write_run
+    from ...io.run import write_run
     from ...problem.build import build_problem
     from ...timeloop.loop import solve_problem
 
@@ -69,7 +69,7 @@ def run_study(study: Study, out: str | os.PathLike, *, executor: Executor | None
     the reason or None}.
     """
     out = Path(out)
-    directory.usable(out)
+    paths.usable(out)
     _check_run_directories(study, out)
     held = directory.acquire(out)
     try:
@@ -204,7 +204,7 @@ def _check_run_directories(study: Study, out: Path) -> None:
     """Every run writes into DIR/runs/<id> and nowhere else: refuse a run directory elsewhere (a study
     loaded for another DIR), a runs/ or runs/<id> that is a symbolic link or not a directory, a
     study.csv that is a link, and anything standing where a run or the table is written (see
-    ``writers.check_room``: a symbolic link too)."""
+    ``io.run.check_room``: a symbolic link too)."""
     runs = out / "runs"
     for spec in study.runs:
         if spec.out != runs / spec.id:

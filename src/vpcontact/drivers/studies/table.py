@@ -10,8 +10,9 @@ from collections.abc import Collection
 from pathlib import Path
 
 from ...fem.space import COORDINATES
-from ...io.run_reader import read_summary, snapshots_at
-from ...io.writers import replacing
+from ...io.files import replacing
+from ...io.solution import snapshots_at
+from ...io.summary import read_summary
 from ...results.norms import Snapshot, differences
 from .file import RunSpec, Study
 

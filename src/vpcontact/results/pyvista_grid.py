@@ -2,18 +2,16 @@
 it in 3D (``grid.warp_by_vector("displacement").plot(scalars="von_mises")``) or hand it to VTK.
 
 pyvista is optional (``pip install pyvista``, or the extra ``vpcontact[pyvista]``) and imported only here.
-The grid is the body's VTU file of that step as VTK reads it (:func:`vpcontact.io.writers.body_data`): the
-same points and cells, the same arrays; 2D bodies lie in the plane z = 0 with their vectors padded to 3D
-and their tensors to 3 × 3 (σ33 of the plane reduction in the stress).
+The grid holds the data of the body's VTU file of that step (:func:`vpcontact.results.frames.body_data`):
+the same points and cells, the same arrays; 2D bodies lie in the plane z = 0 with their vectors padded to
+3D and their tensors to 3 × 3 (σ33 of the plane reduction in the stress).
 """
 
 from __future__ import annotations
 
 from ..errors import CaseError
-from ..results.plots import fields_at
-from ..mesh.cells import SIMPLICES
-from .vtu import in_space
-from .writers import body_data
+from .frames import body_data, field_meshes
+from .steps import fields_at
 
 
 def body_grid(result, step=None):
@@ -28,8 +26,9 @@ def body_grid(result, step=None):
     except ImportError:
         raise CaseError("to_pyvista needs pyvista, which is not installed: pip install pyvista") from None
     step, fields = fields_at(result, step, "no body to convert to pyvista")
-    mesh = result.discretization.mesh.mesh
-    grid = pyvista.UnstructuredGrid({SIMPLICES[result.dim].vtk: mesh.t.T}, in_space(mesh.p.T))
+    (points, cell_type, cells), _ = field_meshes(result.discretization)
+    types = {"triangle": pyvista.CellType.TRIANGLE, "tetra": pyvista.CellType.TETRA}
+    grid = pyvista.UnstructuredGrid({types[cell_type]: cells}, points)
     point_data, cell_data = body_data(result.discretization, fields)
     grid.point_data.update(point_data)
     grid.cell_data.update(cell_data)
