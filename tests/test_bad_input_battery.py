@@ -7,7 +7,7 @@ The families: a case's keys and values (unknown, of the wrong type, out of range
 values the run would not use), expressions, ``--set`` syntax, mesh files, ``--out`` paths, the files of
 ``initial.from_run``, and the Python API (``compose``'s arguments, ``Mesh`` arrays, NumPy values, Python laws
 and loads, the tables of ``vpcontact.solve`` and ``vpcontact.adapt``, ``Result.write``). The command line is
-called in this process (``vpcontact.drivers.cli.main``): a subprocess costs a second each, and the exit status, the
+called in this process (``vpcontact.cli.main``): a subprocess costs a second each, and the exit status, the
 one line on stderr and the files are the same (tests/test_bad_input.py, test_robustness.py run the CLI in
 subprocesses)."""
 
@@ -24,7 +24,7 @@ import tomli_w
 
 import vpcontact
 from vpcontact import mesh as meshes
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact.case.translate import output_options
 from vpcontact.errors import CaseError
 from vpcontact.timeloop.loop import TimeLoop, solve_problem
