@@ -22,7 +22,7 @@ DOCS = REPO / "docs"
 GENERATED = ("gallery", "sg_execution_times.rst", "_build")
 """What a build writes into a docs folder, left out of the copy."""
 PAGES = ("index", "readme", "api/index", "gallery/index", "3d", "accuracy", "adaptivity", "factorizations",
-         "heterogeneity", "long-runs", "performance", "reproduce", "viscoplasticity")
+         "heterogeneity", "long-runs", "performance", "reproduce", "viscoplasticity", "architecture")
 
 
 def copy_sources(target: Path) -> Path:
