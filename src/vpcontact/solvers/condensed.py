@@ -37,7 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import CaseError
-from .base import ContactState, StepData, StepSolution, norm
+from .base import ContactState, SolverWork, StepData, StepSolution, norm
 from ..memory import available_memory
 from ..progress import SILENT, Progress, duration, size
 from .condensed_systems import NewtonSystems
@@ -174,19 +174,12 @@ class CondensedNewton(SemismoothNewton):
         self.recoveries += 1
         return self.factorization.solve(self._load_vector - self.N.T @ q)
 
-    @property
-    def krylov_iterations(self) -> int:
-        return self.systems.iterations
-
-    @property
-    def newton_factorizations(self) -> int:
-        return self.systems.factorizations
-
-    @property
-    def solves(self) -> int:
-        """Solves with the factored A0 in the time loop: new right-hand sides (a split solve counts once
-        with PARDISO), recoveries of u and the corrections of refinements."""
-        return self.span.solves + self.recoveries + self.refinements
+    def work(self) -> SolverWork:
+        """Solves with the factored A0 (new right-hand sides, a split solve counting once with PARDISO; recoveries
+        of u; the corrections of refinements), and the GMRES iterations and LU factorizations of the Newton
+        systems."""
+        return SolverWork(self.span.solves + self.recoveries + self.refinements, self.systems.iterations,
+                          self.systems.factorizations)
 
     def _load(self, state: ContactState, d, lam) -> np.ndarray:
         return state.force + lam - self.reference * (d + self.gap0)
