@@ -762,7 +762,7 @@ def test_the_condensed_newton_matrix_of_a_floating_body_with_every_node_separate
     with a capacitance matrix as singular: LAPACK warned (rcond 1e-16, scipy's LinAlgWarning, on a correct
     run). Now the conditioning is checked before that solve and no warning is given; GMRES still solves a
     system of that K to its tolerance (its residual measured here)."""
-    from vpcontact.solvers.condensed import KRYLOV_TOLERANCE
+    from vpcontact.solvers.condensed_systems import KRYLOV_TOLERANCE
 
     case = vpcontact.load_case(half_disc_case(h=0.25), {"solver.method": "condensed"})
     solver = TimeLoop(vpcontact.build_problem(case), output_options(case.output)).solver
