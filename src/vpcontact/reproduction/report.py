@@ -1,126 +1,18 @@
 """The report of `vpcontact reproduce`: DIR/report.md and DIR/report.html from the data of reproduce.json.
 
-The report is built once as a list of blocks (headings, paragraphs, bullet lists, tables, figures)
-and rendered twice: Markdown with the figures as relative links (figures/figNN.png), and a
-self-contained HTML page with the PNGs inlined (base64) and links to the PDFs. Inline text may use
-**bold** and `code`.
+The report is built once as a list of blocks (headings, paragraphs, bullet lists, tables, figures;
+:mod:`.markup`) and rendered twice: Markdown with the figures as relative links (figures/figNN.png),
+and a self-contained HTML page with the PNGs inlined (base64) and links to the PDFs.
 """
 
 from __future__ import annotations
 
-import base64
-import html
-import re
-from dataclasses import dataclass
 from pathlib import Path
 
 from .figures import MESH_DRAWN_UP_TO
 from .frames import ARROWS
+from .markup import Bullets, Heading, Paragraph, Picture, Table, percent_change, significant, to_html, to_markdown
 from .paper import CONTACT_CONDITIONS, T
-
-
-@dataclass
-class Heading:
-    level: int
-    text: str
-
-
-@dataclass
-class Paragraph:
-    text: str
-
-
-@dataclass
-class Bullets:
-    items: list
-
-
-@dataclass
-class Table:
-    header: list
-    rows: list
-
-
-@dataclass
-class Picture:
-    key: str
-    """The figure id (fig02 …)."""
-    caption: str
-
-
-# --- rendering -----------------------------------------------------------------------------------
-def _md(text) -> str:
-    """Markdown-safe text: the star of u_* is not emphasis."""
-    return str(text).replace("_*", "_\\*")
-
-
-def to_markdown(blocks: list, figures: dict) -> str:
-    lines = []
-    for block in blocks:
-        if isinstance(block, Heading):
-            lines += ["#" * block.level + " " + _md(block.text), ""]
-        elif isinstance(block, Paragraph):
-            lines += [_md(block.text), ""]
-        elif isinstance(block, Bullets):
-            lines += [f"- {_md(item)}" for item in block.items] + [""]
-        elif isinstance(block, Table):
-            cell = lambda v: _md(v).replace("|", "\\|").replace("\n", " ")  # noqa: E731
-            lines.append("| " + " | ".join(cell(h) for h in block.header) + " |")
-            lines.append("|" + "---|" * len(block.header))
-            lines += ["| " + " | ".join(cell(v) for v in row) + " |" for row in block.rows]
-            lines.append("")
-        elif isinstance(block, Picture):
-            figure = figures[block.key]
-            title = _md(figure["title"])
-            lines += [
-                f"![{title}]({figure['png']})",
-                "",
-                f"**{title}.** {_md(block.caption)} ([PDF]({figure['pdf']}))",
-                "",
-            ]
-    return "\n".join(lines)
-
-
-def _inline(text: str) -> str:
-    text = html.escape(str(text), quote=False)
-    text = re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", text)
-    text = re.sub(r"`(.+?)`", r"<code>\1</code>", text)
-    return re.sub(r"\[([^\]]+)\]\(([^)\s]+)\)", r'<a href="\2">\1</a>', text)
-
-
-STYLE = """body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;max-width:1200px;margin:2em auto;
-padding:0 1em;line-height:1.45;color:#222}table{border-collapse:collapse;margin:1em 0;font-size:0.9em}
-th,td{border:1px solid #bbb;padding:4px 8px;text-align:left;vertical-align:top}th{background:#eee}
-figure{margin:1.5em 0}img{max-width:100%;border:1px solid #ddd}figcaption{font-size:0.9em;color:#444}
-code{background:#f3f3f3;padding:0 3px}"""
-
-
-def to_html(blocks: list, figures: dict, folder: Path, title: str) -> str:
-    parts = [
-        f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title>'
-        f"<style>{STYLE}</style></head><body>"
-    ]
-    for block in blocks:
-        if isinstance(block, Heading):
-            parts.append(f"<h{block.level}>{_inline(block.text)}</h{block.level}>")
-        elif isinstance(block, Paragraph):
-            parts.append(f"<p>{_inline(block.text)}</p>")
-        elif isinstance(block, Bullets):
-            parts.append("<ul>" + "".join(f"<li>{_inline(item)}</li>" for item in block.items) + "</ul>")
-        elif isinstance(block, Table):
-            head = "".join(f"<th>{_inline(h)}</th>" for h in block.header)
-            body = "".join("<tr>" + "".join(f"<td>{_inline(v)}</td>" for v in row) + "</tr>" for row in block.rows)
-            parts.append(f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>")
-        elif isinstance(block, Picture):
-            figure = figures[block.key]
-            encoded = base64.b64encode((folder / figure["png"]).read_bytes()).decode("ascii")
-            parts.append(
-                f'<figure id="{block.key}"><img alt="{html.escape(figure["title"])}" '
-                f'src="data:image/png;base64,{encoded}"><figcaption><strong>{_inline(figure["title"])}.</strong> '
-                f'{_inline(block.caption)} (<a href="{figure["pdf"]}">PDF</a>)</figcaption></figure>'
-            )
-    parts.append("</body></html>\n")
-    return "\n".join(parts)
 
 
 def write(data: dict, folder: Path) -> None:
@@ -130,16 +22,6 @@ def write(data: dict, folder: Path) -> None:
     title = f"vpcontact {data['vpcontact_version']}: reproduction of Sect. 4 of Barboteu, Han, Sofonea"
     (folder / "report.md").write_text(to_markdown(blocks, data["figures"]), encoding="utf-8")
     (folder / "report.html").write_text(to_html(blocks, data["figures"], folder, title), encoding="utf-8")
-
-
-# --- content ---------------------------------------------------------------------------------------
-def _f(value, digits=4) -> str:
-    return "–" if value is None else f"{value:.{digits}g}"
-
-
-def _pct(value, reference) -> str:
-    change = 100.0 * (value - reference) / reference
-    return "0.0 %" if abs(change) < 0.05 else f"{change:+.1f} %"
 
 
 def build(data: dict) -> list:
@@ -198,8 +80,8 @@ def _load(data):
             label,
             f"{c:g}",
             k,
-            _f(plus["K_probe"][-1] if isinstance(plus, dict) else plus, 5),
-            _f(minus["K_probe"][-1] if isinstance(minus, dict) else minus, 4),
+            significant(plus["K_probe"][-1] if isinstance(plus, dict) else plus, 5),
+            significant(minus["K_probe"][-1] if isinstance(minus, dict) else minus, 4),
             f"{plus['nodes_at_limit'][-1]}/{m}" if isinstance(plus, dict) else "–",
             f"{minus['nodes_at_limit'][-1]}/{m}" if isinstance(minus, dict) else "–",
         ]
@@ -234,8 +116,8 @@ def _load(data):
                     "recalibrated for k ≈ 1/128",
                     f"{fine['c']:.5g}",
                     f"1.1/{fine['steps']}",
-                    _f(fine["K_beta=1"], 5),
-                    _f(fine["K_beta=-1"], 4),
+                    significant(fine["K_beta=1"], 5),
+                    significant(fine["K_beta=-1"], 4),
                     "–",
                     "–",
                 ],
@@ -245,7 +127,7 @@ def _load(data):
             f"With k = 0.1 the calibrated load gives both of the paper's values (323 by construction, "
             f"{cases['beta-1_k0.1']['K_probe'][-1]:.2f} against 21 as a prediction). Recalibrated for k ≈ 1/128 "
             f"(Brent, {fine['evaluations']} runs), c = {fine['c']:.5g} N/m and β = −1 then gives "
-            f"{fine['K_beta=-1']:.2f} ({_pct(fine['K_beta=-1'], 21)} from 21): the paper's pair (323, 21) is matched "
+            f"{fine['K_beta=-1']:.2f} ({percent_change(fine['K_beta=-1'], 21)} from 21): the paper's pair (323, 21) is matched "
             f"better with k = 0.1, the time step its Sect. 4.1 lists (N = 11)."
         ),
         Paragraph(
@@ -262,15 +144,15 @@ def _time_step(data):
     rows = []
     for sign, label in (("+1", "β = 1"), ("-1", "β = −1")):
         a, b = cases[f"beta{sign}_k0.1"]["K_probe"][-1], cases[f"beta{sign}_k1_128"]["K_probe"][-1]
-        rows.append([f"K(0,0) at t = 1.1, {label} (N/m²)", _f(a, 5), _f(b, 5), _pct(b, a)])
+        rows.append([f"K(0,0) at t = 1.1, {label} (N/m²)", significant(a, 5), significant(b, 5), percent_change(b, a)])
     for name, (label, _) in CONTACT_CONDITIONS.items():
         a, b = cases[f"{name}_k0.1"], cases[f"{name}_k1_128"]
         rows.append(
             [
                 f"penetration at (0,0), t = 1.1, {label} (m)",
-                _f(a["penetration_probe"][-1]),
-                _f(b["penetration_probe"][-1]),
-                _pct(b["penetration_probe"][-1], a["penetration_probe"][-1]),
+                significant(a["penetration_probe"][-1]),
+                significant(b["penetration_probe"][-1]),
+                percent_change(b["penetration_probe"][-1], a["penetration_probe"][-1]),
             ]
         )
     for name, (label, _) in CONTACT_CONDITIONS.items():
@@ -278,9 +160,9 @@ def _time_step(data):
         rows.append(
             [
                 f"|σ_ν| at (0,0), t = 1.1, {label} (N/m)",
-                _f(-a["normal_stress_probe"][-1]),
-                _f(-b["normal_stress_probe"][-1]),
-                _pct(b["normal_stress_probe"][-1], a["normal_stress_probe"][-1]),
+                significant(-a["normal_stress_probe"][-1]),
+                significant(-b["normal_stress_probe"][-1]),
+                percent_change(b["normal_stress_probe"][-1], a["normal_stress_probe"][-1]),
             ]
         )
     for name, (label, _) in CONTACT_CONDITIONS.items():
@@ -553,8 +435,8 @@ def _beyond(data):
         r = rates[name]
         sizes = s["h_levels"] if name == "h" else s["k_steps"]
         for i, size in enumerate(sizes):
-            rows.append([label, unit.format(size), f"{r['dofs'][i]:,}", str(r["steps"][i]), _f(r["error_V"][i]),
-                         _f(r["error_Q"][i])])
+            rows.append([label, unit.format(size), f"{r['dofs'][i]:,}", str(r["steps"][i]), significant(r["error_V"][i]),
+                         significant(r["error_Q"][i])])
         rows.append([f"**slope in {label}**", "all / finest three", "", "",
                      f"**{r['slope_V']:.2f}** / {r['slope_V_finest_three']:.2f}",
                      f"**{r['slope_Q']:.2f}** / {r['slope_Q_finest_three']:.2f}"])
@@ -580,7 +462,7 @@ def _effectivity(data):
     s, h = data["settings"], data["rates"]["h"]
     if "effectivity" not in h:
         return []
-    rows = [[f"1/{level}", f"{dofs:,}", _f(error), _f(eta), f"{ratio:.2f}"]
+    rows = [[f"1/{level}", f"{dofs:,}", significant(error), significant(eta), f"{ratio:.2f}"]
             for level, dofs, error, eta, ratio in zip(s["h_levels"], h["dofs"], h["error_energy"], h["estimate"],
                                                       h["effectivity"])]
     low, high = min(h["effectivity"]), max(h["effectivity"])
@@ -601,17 +483,17 @@ def _effectivity(data):
 def _adaptive(data):
     """Adaptive meshes against the uniform ones of the rate in h (the same time grid and reference)."""
     s, a = data["settings"], data["adaptive"]
-    rows = [[str(i + 1), f"{dofs:,}", _f(eta), _f(error)]
+    rows = [[str(i + 1), f"{dofs:,}", significant(eta), significant(error)]
             for i, (dofs, eta, error) in enumerate(zip(a["dofs"], a["estimate"], a["error_energy"]))]
     finest = a["uniform_finest"]
     reached = a["dofs_at_uniform_error"]
     if reached == reached:  # not NaN
         answer = (f"The cycles reach the error of the uniform 1/{finest['level']} mesh ({finest['dofs']:,} DOFs, "
-                  f"{_f(finest['error_energy'])}) at about **{reached:,.0f} DOFs**, {reached / finest['dofs']:.2f} of "
+                  f"{significant(finest['error_energy'])}) at about **{reached:,.0f} DOFs**, {reached / finest['dofs']:.2f} of "
                   "its DOFs.")
     else:
         answer = (f"The cycles did not reach the error of the uniform 1/{finest['level']} mesh ({finest['dofs']:,} "
-                  f"DOFs, {_f(finest['error_energy'])}) within adapt.max_dofs = {s['adapt_max_dofs']:,}.")
+                  f"DOFs, {significant(finest['error_energy'])}) within adapt.max_dofs = {s['adapt_max_dofs']:,}.")
     return [
         Heading(3, "Adaptive meshes"),
         Paragraph(
