@@ -40,7 +40,7 @@ import numpy as np
 import vpcontact
 from vpcontact import adapt
 from vpcontact.case.translate import adapt_options, output_options
-from vpcontact.estimate.adapt import solve_and_estimate
+from vpcontact.adaptivity.cycles import solve_and_estimate
 from vpcontact.results.norms import differences, element_energies, transfer
 from vpcontact import build_problem
 from vpcontact.mesh.simplex import determinants

@@ -162,7 +162,7 @@ def _plain_env() -> dict:
 def vpcontact_command(case: Path, out: Path) -> list[str]:
     """`vpcontact run CASE --out DIR`: the console script beside this Python when there is one."""
     script = Path(sys.executable).with_name("vpcontact")
-    program = [str(script)] if script.exists() else [sys.executable, "-m", "vpcontact.drivers.cli"]
+    program = [str(script)] if script.exists() else [sys.executable, "-m", "vpcontact.cli"]
     return [*program, "run", str(case), "--out", str(out)]
 
 

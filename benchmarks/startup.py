@@ -70,13 +70,13 @@ def wall(command: list[str], repeat: int) -> dict:
 def run_command(case: Path, overrides: dict, out: Path) -> list[str]:
     """``vpcontact run case --set ... --out out --overwrite --quiet``."""
     sets = [item for key, value in overrides.items() for item in ("--set", f"{key}={value}")]
-    return [sys.executable, "-m", "vpcontact.drivers.cli", "run", str(case), *sets, "--out", str(out), "--overwrite", "--quiet"]
+    return [sys.executable, "-m", "vpcontact.cli", "run", str(case), *sets, "--out", str(out), "--overwrite", "--quiet"]
 
 
 def phases(case_path: str, overrides: dict, out: Path) -> dict:
     """The phases of one run of the case, in this process (seconds)."""
     started = time.perf_counter()
-    import vpcontact.drivers.cli  # noqa: F401  (what `vpcontact run` imports)
+    import vpcontact.cli  # noqa: F401  (what `vpcontact run` imports)
     from vpcontact.io import checkpoint, contact_csv, figures, history_csv, solution, summary, vtu
     from vpcontact.io.run import write_resolved_case
     from vpcontact.case.load import load_case
@@ -160,7 +160,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as scratch:
         folder = Path(scratch)
         record["python_pass_s"] = wall([sys.executable, "-c", "pass"], repeat)
-        record["help_s"] = wall([sys.executable, "-m", "vpcontact.drivers.cli", "--help"], repeat)
+        record["help_s"] = wall([sys.executable, "-m", "vpcontact.cli", "--help"], repeat)
         record["tiny_run"] = {"case": str(EXAMPLE.name), "overrides": TINY,
                               **wall(run_command(EXAMPLE, TINY, folder / "tiny"), repeat)}
         from_file, file_overrides = gmsh_case(folder, large)

@@ -128,7 +128,7 @@ def reproduce_targets(runs: int, quick: bool) -> tuple[list[dict], dict]:
     raw, targets = {}, []
     for name, options, limit in (("full", [], 60.0), ("quick", ["--quick"], 12.0)):
         with tempfile.TemporaryDirectory(prefix="targets_reproduce_") as scratch:
-            command = [sys.executable, "-m", "vpcontact.drivers.cli", "reproduce", "--out", str(Path(scratch) / "out"),
+            command = [sys.executable, "-m", "vpcontact.cli", "reproduce", "--out", str(Path(scratch) / "out"),
                        *options]
             started = time.perf_counter()
             done = subprocess.run(command, capture_output=True, text=True)

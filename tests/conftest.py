@@ -74,13 +74,13 @@ def deep_copy():
 
 # --- the exit-code contract (README "Exit status"), shared by the adversarial tests ------------------
 def run_cli(*args, cwd=None, timeout=120, env=None):
-    """``python -m vpcontact.drivers.cli ARGS`` in a subprocess (a hang fails the test): (status, stdout, stderr)."""
+    """``python -m vpcontact.cli ARGS`` in a subprocess (a hang fails the test): (status, stdout, stderr)."""
     import os
     import subprocess
     import sys
 
     environment = {**os.environ, **(env or {})}
-    process = subprocess.run([sys.executable, "-m", "vpcontact.drivers.cli", *map(str, args)], cwd=cwd, env=environment,
+    process = subprocess.run([sys.executable, "-m", "vpcontact.cli", *map(str, args)], cwd=cwd, env=environment,
                              capture_output=True, text=True, timeout=timeout, stdin=subprocess.DEVNULL)
     return process.returncode, process.stdout, process.stderr
 

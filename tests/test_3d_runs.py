@@ -72,7 +72,7 @@ def test_a_3d_run_resumed_after_a_kill_equals_an_uninterrupted_one(tmp_path):
     reference = tmp_path / "reference"
     assert run_cli("run", path, "--out", reference, "--quiet")[0] == 0
     out = tmp_path / "killed"
-    process = subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "run", str(path), "--out", str(out), "--quiet"],
+    process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "run", str(path), "--out", str(out), "--quiet"],
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     deadline = time.time() + 120
     while not (out / "checkpoint" / "state.npz").exists():

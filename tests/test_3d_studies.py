@@ -123,7 +123,7 @@ def independent_norms(solution: Snapshot, reference: Snapshot):
 @pytest.fixture(scope="module")
 def ball_study(tmp_path_factory):
     """examples/quarter_ball.toml in 3 steps at h = 0.5 and 0.35 against h = 0.25, and a second run at
-    h = 0.25 ("again"), through `python -m vpcontact.drivers.cli study`: (output directory, study.csv rows)."""
+    h = 0.25 ("again"), through `python -m vpcontact.cli study`: (output directory, study.csv rows)."""
     folder = tmp_path_factory.mktemp("ball_study")
     study = {"base": str(ROOT / "examples" / "quarter_ball.toml"),
              "set": {"time.steps": 3, "output.field_steps": "final", "output.figures": False},

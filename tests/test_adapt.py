@@ -1,4 +1,4 @@
-"""The adaptive loop ([adapt], vpcontact.estimate.adapt): Dörfler marking, the time functional of the indicators,
+"""The adaptive loop ([adapt], vpcontact.adaptivity.cycles): Dörfler marking, the time functional of the indicators,
 the cycles and their run directory."""
 
 import csv
@@ -11,7 +11,7 @@ import pytest
 import vpcontact
 from conftest import assert_refused, half_disc_case, run_cli, snapshot_tree, solved
 from vpcontact import adapt
-from vpcontact.estimate.adapt import dorfler, solve_and_estimate
+from vpcontact.adaptivity.cycles import dorfler, solve_and_estimate
 from vpcontact.estimate.estimators import ESTIMATORS
 from vpcontact.case.run import AdaptSection
 from vpcontact.case.translate import adapt_options, output_options

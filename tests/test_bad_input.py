@@ -4,7 +4,7 @@ output directory."""
 import tomli_w
 import pytest
 
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from conftest import half_disc_case
 
 

@@ -7,7 +7,7 @@ The families: a case's keys and values (unknown, of the wrong type, out of range
 values the run would not use), expressions, ``--set`` syntax, mesh files, ``--out`` paths, the files of
 ``initial.from_run``, and the Python API (``compose``'s arguments, ``Mesh`` arrays, NumPy values, Python laws
 and loads, the tables of ``vpcontact.solve`` and ``vpcontact.adapt``, ``Result.write``). The command line is
-called in this process (``vpcontact.drivers.cli.main``): a subprocess costs a second each, and the exit status, the
+called in this process (``vpcontact.cli.main``): a subprocess costs a second each, and the exit status, the
 one line on stderr and the files are the same (tests/test_bad_input.py, test_robustness.py run the CLI in
 subprocesses)."""
 
@@ -24,7 +24,7 @@ import tomli_w
 
 import vpcontact
 from vpcontact import mesh as meshes
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact.case.translate import output_options
 from vpcontact.errors import CaseError
 from vpcontact.timeloop.loop import TimeLoop, solve_problem
@@ -762,7 +762,7 @@ def test_the_condensed_newton_matrix_of_a_floating_body_with_every_node_separate
     with a capacitance matrix as singular: LAPACK warned (rcond 1e-16, scipy's LinAlgWarning, on a correct
     run). Now the conditioning is checked before that solve and no warning is given; GMRES still solves a
     system of that K to its tolerance (its residual measured here)."""
-    from vpcontact.solvers.condensed import KRYLOV_TOLERANCE
+    from vpcontact.solvers.condensed_systems import KRYLOV_TOLERANCE
 
     case = vpcontact.load_case(half_disc_case(h=0.25), {"solver.method": "condensed"})
     solver = TimeLoop(vpcontact.build_problem(case), output_options(case.output)).solver

@@ -15,7 +15,7 @@ import vpcontact
 from conftest import assert_refused, half_disc_case, rectangle_case, snapshot_tree
 from test_robustness import write
 from vpcontact.drivers.check import check_case
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact.solvers import condensed
 
 

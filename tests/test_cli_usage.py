@@ -45,9 +45,9 @@ def test_help_and_version_still_work():
 def test_help_and_import_load_no_numerics():
     """`vpcontact --help` and `import vpcontact` import neither NumPy, SciPy, scikit-fem nor pydantic (the
     API's names load on first use): start-up is the interpreter's."""
-    script = ("import sys, contextlib, io, vpcontact, vpcontact.drivers.cli\n"
+    script = ("import sys, contextlib, io, vpcontact, vpcontact.cli\n"
               "with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
-              "    vpcontact.drivers.cli.main(['--help'])\n"
+              "    vpcontact.cli.main(['--help'])\n"
               "heavy = {'numpy', 'scipy', 'skfem', 'pydantic', 'matplotlib', 'pandas', 'pyvista'}\n"
               "print(sorted(heavy & set(sys.modules)))")
     loaded = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True).stdout

@@ -67,7 +67,7 @@ def test_the_example_runs_and_writes_the_layer_per_node(tmp_path):
 
     import meshio
 
-    from vpcontact.drivers.cli import main
+    from vpcontact.cli import main
 
     out = tmp_path / "run"
     assert main(["run", str(EXAMPLES / "coated_ball.toml"), "--out", str(out), "--quiet",

@@ -20,11 +20,11 @@ from conftest import half_disc_case
 REPO = pathlib.Path(__file__).resolve().parents[1]
 SOURCE = REPO / "src" / "vpcontact"
 #: The modules after the problem in the flow case -> problem -> time loop -> result -> writers.
-DOWNSTREAM = ("timeloop/loop", "results/result", "io/run", "io/outputs", "io/checkpoint", "estimate/adapt",
+DOWNSTREAM = ("timeloop/loop", "results/result", "io/run", "io/outputs", "io/checkpoint", "adaptivity/cycles",
               "estimate/indicators", "estimate/residual", "estimate/recovery", "results/plots/contact",
               "results/plots/body", "results/plots/history", "results/norms")
 #: The packages below the case: they take plain options (vpcontact.case.translate), never the case itself.
-BELOW_THE_CASE = ("problem", "timeloop", "solvers", "results", "io", "estimate")
+BELOW_THE_CASE = ("problem", "timeloop", "solvers", "results", "io", "estimate", "adaptivity")
 
 
 def composed(h=0.1, **changes):

@@ -7,9 +7,9 @@ import scipy.sparse as sp
 import tomli_w
 
 import vpcontact
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact.solvers import condensed
-from vpcontact.solvers.condensed import SolvedSpan
+from vpcontact.solvers.solved_span import SolvedSpan
 from conftest import half_disc_case
 
 

@@ -22,7 +22,7 @@ DOCS = REPO / "docs"
 GENERATED = ("gallery", "sg_execution_times.rst", "_build")
 """What a build writes into a docs folder, left out of the copy."""
 PAGES = ("index", "readme", "api/index", "gallery/index", "3d", "accuracy", "adaptivity", "factorizations",
-         "heterogeneity", "long-runs", "performance", "reproduce", "viscoplasticity")
+         "heterogeneity", "long-runs", "performance", "reproduce", "viscoplasticity", "architecture")
 
 
 def copy_sources(target: Path) -> Path:
@@ -91,7 +91,7 @@ def test_the_docs_build_without_warnings_and_run_the_gallery(tmp_path):
               for name in vpcontact.__all__]
     modules = [f"module-vpcontact.{name}" for name in ("results.plots", "results.norms", "drivers.studies",
                                                         "laws.contact", "mesh.shapes", "laws.materials",
-                                                        "estimate.indicators", "estimate.residual", "estimate.adapt",
+                                                        "estimate.indicators", "estimate.residual", "adaptivity.cycles",
                                                         "io.run")]
     for name in (*public, *modules, "vpcontact.results.plots.contact_pressure", "vpcontact.results.norms.differences"):
         assert f'id="{name}"' in reference, f"{name} is not in the API reference (docs/api/)"

@@ -57,7 +57,7 @@ RUNNER = '''
 import copy, json, sys
 
 import vpcontact
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact.laws.stiffness import STIFFNESS
 import linear
 

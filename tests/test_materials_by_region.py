@@ -93,7 +93,7 @@ def test_regional_viscoplastic_law_acts_on_its_elements_only():
 
 def test_outputs_carry_the_material_of_each_element(tmp_path):
     """The body VTU has each element's material index, E and ν: E the expression at the centroid."""
-    from vpcontact.drivers.cli import main
+    from vpcontact.cli import main
 
     case = bar_case(2, {"E": "500 + 100*x*y", "nu": 0.25})
     case["output"]["field_steps"] = "final"

@@ -9,7 +9,7 @@ import numpy as np
 import tomli_w
 
 import vpcontact
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from conftest import half_disc_case, solved
 
 SUMMARY_FINAL = {"t", "max_penetration", "mean_penetration", "K_min", "K_max", "K_probe", "penetration_probe",

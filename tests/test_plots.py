@@ -16,7 +16,7 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 import vpcontact
 from vpcontact.io import checkpoint
 from vpcontact.results import plots
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact.laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from vpcontact.errors import CaseError
 from vpcontact.io.outputs import write_outputs

@@ -42,7 +42,7 @@ def write(folder, case, name="case.toml"):
 def streamed_run(*args, timeout=120):
     """``vpcontact ARGS`` with stderr a pipe (not a terminal), read line by line as the lines come: [(the
     line, when it came, whether the process was still running then)], and the exit status."""
-    process = subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", *map(str, args)], stdout=subprocess.DEVNULL,
+    process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", *map(str, args)], stdout=subprocess.DEVNULL,
                                stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
     lines, deadline = [], time.monotonic() + timeout
     for line in process.stderr:
@@ -110,7 +110,7 @@ def test_a_terminal_gets_the_bar_of_the_steps_below_the_set_up_lines(tmp_path):
     path = write(tmp_path, half_disc_case(h=0.25))
     master, slave = pty.openpty()
     fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 120, 0, 0))  # a pty starts 0 columns wide
-    process = subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "run", str(path), "--out",
+    process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "run", str(path), "--out",
                                 str(tmp_path / "out")], stderr=slave, stdout=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
     os.close(slave)
     screen = b""

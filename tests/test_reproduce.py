@@ -11,7 +11,7 @@ from matplotlib.colors import to_hex
 from matplotlib.quiver import Quiver
 
 from vpcontact import build_problem, load_case
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact.laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from vpcontact.results.plots import STATE_COLORS, along_curve
 from vpcontact.reproduction.figures import MESH_DRAWN_UP_TO, deformed_panels

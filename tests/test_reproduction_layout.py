@@ -57,7 +57,7 @@ def test_nothing_in_the_package_imports_the_reproduction_but_the_reproduce_comma
             for name, lazy in imports(path):
                 if is_reproduction(name):
                     importers.setdefault(module_name(path), set()).add(lazy)
-    assert importers == {"vpcontact.drivers.cli": {True}}  # only the command line, inside the reproduce command
+    assert importers == {"vpcontact.cli": {True}}  # only the command line, inside the reproduce command
 
 
 def test_the_reproduction_modules_import_each_other_without_a_cycle():

@@ -34,7 +34,7 @@ import pytest
 import tomli_w
 
 from vpcontact.io import checkpoint, directory
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from conftest import block_3d_case, half_disc_case, rectangle_case
 
 STEPS = 30
@@ -154,7 +154,7 @@ def fill(disk: Path) -> Path:
 
 
 def start(path: Path, out: Path, *flags: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "run", str(path), "--out", str(out), "--quiet",
+    return subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "run", str(path), "--out", str(out), "--quiet",
                              *flags], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             stdin=subprocess.DEVNULL, start_new_session=True)
 

@@ -18,7 +18,7 @@ import vpcontact
 import vpcontact.timeloop.loop
 from vpcontact.io import directory
 from vpcontact.drivers import rundir
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact.results.columns import INTEGER_COLUMNS
 from vpcontact.solvers import StepSolution
 from conftest import half_disc_case
@@ -89,7 +89,7 @@ def assert_same_run(out, reference, *, bitwise, rtol=1e-12):
 
 
 def start(path, out, *args):
-    return subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "run", str(path), "--out", str(out), "--quiet",
+    return subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "run", str(path), "--out", str(out), "--quiet",
                              *args], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
 
 

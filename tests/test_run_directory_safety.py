@@ -23,7 +23,7 @@ from vpcontact.io import checkpoint, directory
 from vpcontact.io.files import write_text
 from vpcontact.io.outputs import write_outputs
 from vpcontact.io.run import remove_outputs, write_resolved_case, write_run
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact import build_problem
 from vpcontact.case.translate import output_options
 from vpcontact.timeloop.loop import TimeLoop
@@ -387,7 +387,7 @@ def slow_case(folder):
 
 
 def start_run(case, out):
-    return subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "run", str(case), "--out", str(out), "--quiet"],
+    return subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "run", str(case), "--out", str(out), "--quiet"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
 
 

@@ -5,7 +5,7 @@ stopping the run with a traceback."""
 import tomli_w
 
 import vpcontact
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact.solvers import amg, choice
 from conftest import half_disc_case
 from test_3d import ball_case

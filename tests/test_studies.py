@@ -66,7 +66,7 @@ def test_local_pool_and_dask_cluster_give_the_same_table(tmp_path):
 def test_a_killed_study_resumes_without_redoing_finished_runs(tmp_path):
     path = write_study(tmp_path, steps=150, h=0.1)
     out = tmp_path / "out"
-    process = subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "study", str(path), "--out", str(out),
+    process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "study", str(path), "--out", str(out),
                                 "--workers", "1", "--quiet"], start_new_session=True,
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
@@ -284,7 +284,7 @@ def running(pid):
 def test_a_signal_stops_the_study_its_workers_and_writes_the_table(tmp_path, number, code, group):
     path = write_study(tmp_path, steps=600, h=0.1)
     out = tmp_path / "out"
-    process = subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "study", str(path), "--out", str(out),
+    process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "study", str(path), "--out", str(out),
                                 "--workers", "2", "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                text=True, start_new_session=True)
     workers = set()
@@ -332,7 +332,7 @@ def test_a_worker_killed_by_the_system_stops_the_study_cleanly(tmp_path):
     stops with one line and exit 3, writes the table of what finished, and leaves no process behind."""
     path = write_study(tmp_path, steps=600, h=0.1)
     out = tmp_path / "out"
-    process = subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "study", str(path), "--out", str(out),
+    process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "study", str(path), "--out", str(out),
                                 "--workers", "2", "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                text=True, start_new_session=True)
     try:
@@ -355,7 +355,7 @@ def test_a_worker_killed_by_the_system_stops_the_study_cleanly(tmp_path):
 def test_a_second_study_into_a_directory_in_use_is_refused(tmp_path):
     path = write_study(tmp_path, steps=6000, h=0.1)  # still running when the second study starts, on a busy machine
     out = tmp_path / "out"
-    process = subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "study", str(path), "--out", str(out),
+    process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "study", str(path), "--out", str(out),
                                 "--workers", "1", "--quiet"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                start_new_session=True)
     try:
@@ -373,7 +373,7 @@ def test_a_second_study_into_a_directory_in_use_is_refused(tmp_path):
 def test_a_study_whose_directory_is_replaced_stops_and_writes_nothing_there(tmp_path):
     path = write_study(tmp_path, steps=600, h=0.1)
     out = tmp_path / "out"
-    process = subprocess.Popen([sys.executable, "-m", "vpcontact.drivers.cli", "study", str(path), "--out", str(out),
+    process = subprocess.Popen([sys.executable, "-m", "vpcontact.cli", "study", str(path), "--out", str(out),
                                 "--workers", "2", "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                text=True, start_new_session=True)
     workers = set()

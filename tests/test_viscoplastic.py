@@ -15,7 +15,7 @@ import pytest
 import tomli_w
 
 import vpcontact
-from vpcontact.drivers.cli import main
+from vpcontact.cli import main
 from vpcontact.laws.elasticity import deviator, tensor_norm
 from vpcontact.laws.viscoplastic.perzyna import Perzyna, von_mises_projection
 from conftest import half_disc_case

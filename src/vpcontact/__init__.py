@@ -29,8 +29,8 @@ API = {"Case": "case.model", "Model": "case.model", "load_case": "case.load", "C
 
 #: The packages a user may reach as ``vpcontact.<name>`` after ``import vpcontact`` (and their modules as
 #: ``vpcontact.<name>.<module>``), and the modules of the package itself.
-SUBMODULES = ("case", "drivers", "errors", "estimate", "expressions", "fem", "inputs", "io", "laws", "mesh", "problem",
-              "progress", "reproduction", "results", "solvers", "timeloop")
+SUBMODULES = ("adaptivity", "api", "case", "cli", "drivers", "errors", "estimate", "expressions", "fem", "inputs", "io",
+              "laws", "memory", "mesh", "problem", "progress", "registry", "reproduction", "results", "solvers", "timeloop")
 
 
 def submodule(package: str, name: str):

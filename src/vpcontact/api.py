@@ -27,7 +27,7 @@ from .results.result import Result
 from .timeloop.loop import TimeLoop, solve_problem
 
 if TYPE_CHECKING:
-    from .estimate.adapt import Adaptation
+    from .adaptivity.cycles import Adaptation
 
 
 def build_problem(case, *, mesh=None, progress: Progress = SILENT, **laws) -> Problem:
@@ -76,9 +76,9 @@ def adapt(problem: Problem, settings, output=None, *, after_cycle: Callable | No
           after_step: Callable[[TimeLoop], None] | None = None) -> Adaptation:
     """The adaptive cycles of ``settings`` (the ``[adapt]`` table: a dict, or a case's ``case.adapt``) from the
     mesh of ``problem``, each run with the outputs ``output`` (the ``[output]`` table; default: its defaults):
-    see :func:`vpcontact.estimate.adapt.adapt`, whose hooks ``after_cycle``, ``stop`` and ``after_step`` these
+    see :func:`vpcontact.adaptivity.cycles.adapt`, whose hooks ``after_cycle``, ``stop`` and ``after_step`` these
     are; ``progress``: True for each cycle, its set-up, steps and refinement reported on stderr, or a reporter."""
-    from .estimate.adapt import adapt as cycles  # adaptive runs only: refinement is not loaded for the others
+    from .adaptivity.cycles import adapt as cycles  # adaptive runs only: refinement is not loaded for the others
 
     settings, output = adapt_options(settings), output_options(output)
     return cycles(problem, settings, output, after_cycle=after_cycle, stop=stop, progress=progress,

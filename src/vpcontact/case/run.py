@@ -85,7 +85,7 @@ class OutputSection(Section):
 
 
 class AdaptSection(Section):
-    """Adaptive meshes (:mod:`vpcontact.estimate.adapt`): up to ``cycles`` solves of the whole history, each on the
+    """Adaptive meshes (:mod:`vpcontact.adaptivity.cycles`): up to ``cycles`` solves of the whole history, each on the
     mesh refined from the one before by Dörfler marking (the fewest elements holding ``theta`` of the sum of
     the time functional of the indicators), none with more than ``max_dofs`` dofs."""
 

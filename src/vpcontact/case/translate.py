@@ -4,7 +4,7 @@ A validated :class:`~vpcontact.case.model.Case` (or a :class:`~vpcontact.case.mo
 given from Python) becomes frozen dataclasses of plain values: :class:`~vpcontact.problem.options.ProblemOptions`
 (the materials, boundary conditions, contact layers, initial state, time grid, solver and mesh), which the
 problem is built from; :class:`~vpcontact.results.output_options.OutputOptions`, which the time loop, the result
-and the writers read; :class:`~vpcontact.estimate.adapt_options.AdaptOptions`, which the adaptation reads.
+and the writers read; :class:`~vpcontact.adaptivity.options.AdaptOptions`, which the adaptation reads.
 Nothing under problem/, timeloop/, solvers/, results/, io/ or estimate/ imports the case: the command line
 (:mod:`vpcontact.drivers`), the Python API (:mod:`vpcontact.api`) and :func:`~vpcontact.compose` translate, then
 call them.
@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..estimate.adapt_options import AdaptOptions
+from ..adaptivity.options import AdaptOptions
 from ..problem.options import (Boundary, BodyForce, ContactOptions, Dirichlet, InitialOptions, LawChoice, Layer,
                                MaterialOptions, MeshSource, ProblemOptions, SolverOptions, TimeOptions, Traction)
 from ..results.output_options import OutputOptions

@@ -1,4 +1,5 @@
-"""What a user runs: run directories, studies, check, the command line."""
+"""What a user runs: run directories (with checkpoints and resume), parameter studies, the pre-run check;
+the command line that calls them is :mod:`vpcontact.cli`."""
 
 from .. import submodule
 

@@ -108,7 +108,7 @@ def check_case(case: Case) -> CaseCheck:
     options = translate(case)
     problem = build_problem(options.problem)
     if options.adapt is not None:
-        from ..estimate.adapt import check_start
+        from ..adaptivity.cycles import check_start
 
         check_start(problem, options.adapt)
     plan = plan_run(problem, options.output, *free_operators(problem))

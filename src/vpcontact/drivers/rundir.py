@@ -29,7 +29,7 @@ the outputs of an earlier run (``io.run.OUTPUTS``) and nothing else. A symbolic 
 one line naming the link), with or without ``--overwrite`` and ``--resume``, and no write ever goes
 through one (see :mod:`vpcontact.io.directory`). ``--out`` itself may be a link to a folder.
 
-A case with ``[adapt]`` runs its adaptive cycles (:mod:`vpcontact.estimate.adapt`): ``case.resolved.toml`` first,
+A case with ``[adapt]`` runs its adaptive cycles (:mod:`vpcontact.adaptivity.cycles`): ``case.resolved.toml`` first,
 each cycle's run in ``cycles/<n>/`` (its outputs as above, summary.json last) with ``adapt.csv``
 refreshed after each cycle, then the last cycle's mesh ``final_mesh.msh`` and ``summary.json`` (the
 status, why the cycles stopped, the rows of adapt.csv). It writes no checkpoints: ``--resume`` is refused; the
@@ -65,7 +65,7 @@ from ..timeloop.loop import TimeLoop
 from .signals import StopOnSignals
 
 if TYPE_CHECKING:
-    from ..estimate.adapt import Adaptation, Cycle
+    from ..adaptivity.cycles import Adaptation, Cycle
 
 
 class RunStopped(OSError):
@@ -117,7 +117,7 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
         with StopOnSignals() as stopper, reporting(progress) as progress:
             problem = build_problem(options.problem, progress=progress)
             if case.adapt is not None:
-                from ..estimate.adapt import check_start  # an adaptive run only (as _adapt_locked)
+                from ..adaptivity.cycles import check_start  # an adaptive run only (as _adapt_locked)
 
                 check_start(problem, options.adapt)
                 started = True  # from here on the directory is written to: nothing above wrote to it
@@ -205,7 +205,7 @@ def _adapt_locked(problem: Problem, case: Case, options: CaseOptions, held: dire
                   progress: Progress) -> Adaptation:
     """The adaptive cycles of ``case.adapt`` (translated: ``options``) from ``problem`` (the case's) in a directory
     this process holds (see the module docstring)."""
-    from ..estimate.adapt import COLUMNS, adapt
+    from ..adaptivity.cycles import COLUMNS, adapt
 
     out = held.path
     if clear:

@@ -1,4 +1,6 @@
-"""Error estimation and adaptivity."""
+"""Error estimation: the estimators as plug-ins (:mod:`.estimators`), their element indicators at a time level
+(:mod:`.indicators`), the residual and recovery estimators. The adaptive cycles they drive are in
+:mod:`vpcontact.adaptivity`."""
 
 from .. import submodule
 

@@ -38,7 +38,7 @@ from skfem import Basis, ElementTetP1, ElementTriP1, FacetBasis, MeshTet1
 
 from .estimators import Estimator
 from .indicators import Indicators, Level
-from ..fem.space import component, coordinates
+from ..mesh.cells import component, coordinates
 from ..mesh.simplex import facet_normals, longest_edges
 
 #: The terms of the estimate, in the order of the outputs.

@@ -26,7 +26,7 @@ from ..expressions.parse import Expression
 from ..laws.elasticity import Elasticity
 from ..mesh.mesh import Mesh
 from .kernels import elastic_stiffness, geometry, strains, stress_work
-from .space import coordinates
+from ..mesh.cells import coordinates
 
 #: A load density: f(x, y, t) -> (fx, fy) in 2D, f(x, y, z, t) -> (fx, fy, fz) in 3D, each an array
 #: broadcastable to x's shape.

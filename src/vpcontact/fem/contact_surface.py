@@ -17,7 +17,7 @@ from skfem import FacetBasis
 
 from ..errors import CaseError, point, quoted
 from ..mesh.mesh import Mesh
-from .space import coordinates as coordinates_names
+from ..mesh.cells import coordinates as coordinates_names
 
 
 @dataclass(frozen=True)

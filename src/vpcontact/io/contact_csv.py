@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..fem.space import coordinates
+from ..mesh.cells import coordinates
 from ..laws.contact import STATUS_NAMES
 from ..results.columns import CONTACT_ARRAYS
 from ..results.frames import layer_columns

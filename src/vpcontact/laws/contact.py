@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import CaseError, point, quoted
 from ..expressions.parse import values_at
-from ..fem.space import coordinates as coordinates_names
+from ..mesh.cells import coordinates as coordinates_names
 from .compliance import COMPLIANCE
 from .spec import Law
 from .stiffness import STIFFNESS

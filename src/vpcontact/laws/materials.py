@@ -21,7 +21,7 @@ from ..expressions.parse import values_at
 from .elasticity import Elasticity
 from .viscoplastic import VISCOPLASTIC
 from ..mesh.mesh import Mesh
-from ..fem.space import coordinates
+from ..mesh.cells import coordinates
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,11 @@
-"""The cells of a mesh, by dimension, as every file format and every message names them: the one table.
+"""The cells and the coordinates of a mesh, by dimension, as every file format and every message names
+them: the one table.
 
 A body of dimension d (2 or 3) has the elements ``SIMPLICES[d]`` (triangles, tetrahedra) and the boundary
 facets ``SIMPLICES[d - 1]`` (lines, triangles); a mesh file may hold the lower ones too (vertices, lines).
-Pure data: importing it imports nothing else.
+Its points have the coordinates ``coordinates(d)``: vectors of a case (loads, probe, normal) and their
+output columns (``contact_force_x``, …) have one entry per coordinate. Pure data: importing it imports
+nothing else.
 """
 
 from __future__ import annotations
@@ -50,3 +53,16 @@ SIMPLICES = (
 )
 #: The simplices by meshio's cell type.
 CELL_TYPES = {simplex.cell_type: simplex for simplex in SIMPLICES}
+
+#: The names of the coordinates, in order.
+COORDINATES = ("x", "y", "z")
+
+
+def coordinates(dim: int) -> tuple[str, ...]:
+    """The coordinate names of a d-dimensional body: ("x", "y") or ("x", "y", "z")."""
+    return COORDINATES[:dim]
+
+
+def component(name: str) -> int:
+    """The index of a coordinate by name: "x" → 0, "y" → 1, "z" → 2."""
+    return COORDINATES.index(name)

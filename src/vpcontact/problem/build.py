@@ -21,14 +21,13 @@ from ..errors import CaseError, brief
 from ..expressions.parse import parse_expression
 from ..fem.assembly import Density, LoadVector, displacement_basis, element_strain, stiffness
 from ..fem.contact_surface import ContactSurface, contact_surface, empty_surface
-from ..fem.space import component, coordinates
 from ..laws.compliance.positive_part import PositivePart
 from ..laws.contact import ContactLaw
 from ..laws.stiffness.constant import ConstantStiffness
 from ..laws.elasticity import Elasticity
 from ..laws.materials import Materials, body_materials
 from ..laws.python_laws import api_law, api_viscoplastic
-from ..mesh.cells import SIMPLICES
+from ..mesh.cells import SIMPLICES, component, coordinates
 from ..progress import SILENT, Progress
 from ..solvers.factorization import check_installed
 from .checks import check_contact_can_move, check_dimension, check_first_history, check_rigid_motions

@@ -14,7 +14,7 @@ from ..errors import CaseError, brief, point, quoted
 from ..expressions.parse import parse_expression
 from ..fem.assembly import stress_force
 from ..fem.rigid_modes import RigidModes
-from ..fem.space import component, coordinates
+from ..mesh.cells import component, coordinates
 from ..fem.contact_surface import ContactSurface
 from ..laws.python_laws import check_returned, tried
 from ..mesh.mesh import Mesh

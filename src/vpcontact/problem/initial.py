@@ -34,8 +34,7 @@ from ..fem.contact_surface import ContactSurface
 from ..inputs import check_regular_file
 from ..laws.contact import ContactLaw
 from ..mesh.mesh import Mesh
-from ..fem.space import component, coordinates
-from ..mesh.cells import SIMPLICES
+from ..mesh.cells import SIMPLICES, component, coordinates
 from .options import ProblemOptions
 from .time_grid import check_time_span
 

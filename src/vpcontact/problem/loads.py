@@ -10,7 +10,7 @@ import numpy as np
 from ..errors import CaseError, brief
 from ..expressions.parse import parse_expression
 from ..fem.assembly import Density, ExpressionDensity
-from ..fem.space import coordinates
+from ..mesh.cells import coordinates
 from ..laws.python_laws import accepts, parameters_in_words
 from ..mesh.mesh import Mesh
 from .options import ProblemOptions

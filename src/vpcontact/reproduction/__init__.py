@@ -12,7 +12,12 @@ Nothing else in the package imports this subpackage: the command line imports it
 - :mod:`.claims`       every number or claim of Sect. 4, paper against vpcontact, with a verdict;
 - :mod:`.frames`       the deformed configurations the figures draw, from results or run directories;
 - :mod:`.figures`      Figs. 2–11 (matplotlib, PNG and PDF);
-- :mod:`.report`       report.md and report.html;
+- :mod:`.markup`       the report's blocks, rendered to Markdown and to HTML, and how it writes a number;
+- :mod:`.comparison`   its sections setting vpcontact beside the paper's values: claims, load, time step,
+                       ordering of penetrations, deviations;
+- :mod:`.figure_section`  its Figures section: Figs. 2–10, their captions and the tables of their numbers;
+- :mod:`.beyond_paper` its section Beyond the paper: rates in h and in k, effectivity, adaptive meshes;
+- :mod:`.report`       report.md and report.html: the opening, the sections in order, the machine;
 - :mod:`.timing`, :mod:`.machine`  how long each part took, and where;
 - :mod:`.reproduce`    the whole reproduction into DIR (`reproduce.run`).
 """

@@ -10,12 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from ..case.load import load_case
-from ..results.norms import differences
+from ..results.norms import differences, norm_column
 from ..progress import SILENT, Progress
 from ..io.csv_format import read_table
 from ..io.solution import snapshots_at
 from ..io.summary import read_summary
-from ..drivers.studies.table import norm_column
 from .paper import T
 from .plan import Plan, level_overrides, level_step
 from .runs import ReproduceError

@@ -9,7 +9,7 @@ foundation exerts on the body, −Σ_i w_i (compliance_i + rigid_i) ν_i.
 
 from __future__ import annotations
 
-from ..fem.space import coordinates
+from ..mesh.cells import coordinates
 
 
 def history_columns(dim: int) -> tuple[str, ...]:

@@ -151,6 +151,15 @@ def _mean_squares(elements: np.ndarray, displacement) -> np.ndarray:
     return ((u**2).sum(axis=(0, 2)) + (u.sum(axis=0) ** 2).sum(axis=1)) / ((d + 1) * (d + 2))
 
 
+#: The difference norms of :func:`differences` a parameter study compares at each compared time (study.csv).
+COMPARED = ("V", "Q", "U", "energy")
+
+
+def norm_column(norm: str, t: float) -> str:
+    """The column of study.csv with the difference norm ``norm`` (one of COMPARED) at time t."""
+    return f"norm_{norm}_t{t:g}"
+
+
 def differences(solution: Snapshot, reference: Snapshot) -> dict[str, float]:
     """{"V": ‖ε(u − u_ref)‖_{L²}, "Q": ‖σ − σ_ref‖_{L²}, "U": ‖u − u_ref‖_{L²}, "V_reference": ‖ε(u_ref)‖,
     "Q_reference": ‖σ_ref‖, "U_reference": ‖u_ref‖} computed on the reference mesh after transferring

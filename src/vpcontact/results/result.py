@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import CaseError, shown
-from ..fem.space import coordinates
+from ..mesh.cells import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from ..problem.discretization import Discretization
 from .columns import CONTACT_ARRAYS, INTEGER_COLUMNS, estimate_columns, history_columns

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import CaseError
-from ..fem.space import coordinates
+from ..mesh.cells import coordinates
 from ..laws.contact import STATUS_NAMES
 from .columns import CONTACT_ARRAYS, INTEGER_COLUMNS
 from .plots.curves import arc_length

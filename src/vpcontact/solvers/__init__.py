@@ -3,6 +3,7 @@
 ``make_solver(method, ...)`` returns an object with
     solve(step, previous) -> StepSolution        (previous: the last step's solution or None)
     displacement(step, solution) -> u            (at the free dofs)
+    work() -> SolverWork                         (its counters of work in the time loop)
     r, name, timings
 Methods: "full" (Newton on the whole system, its SPD systems by a sparse direct solver),
 "iterative" (the same Newton iteration, its systems by AMG-preconditioned CG), "condensed" (factor
@@ -17,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import StepData, StepSolution, default_augmentation
+from .base import SolverWork, StepData, StepSolution, default_augmentation
 from .condensed import CondensedNewton
 from .full import FullNewton, IterativeNewton
 from ..errors import CaseError
@@ -90,4 +91,5 @@ def _built(make, factorization: str, A):
                         f"coarser mesh{other}") from None
 
 
-__all__ = ["METHODS", "SOLVERS", "DofLayout", "StepData", "StepSolution", "augmentation_parameter", "make_solver"]
+__all__ = ["METHODS", "SOLVERS", "DofLayout", "SolverWork", "StepData", "StepSolution", "augmentation_parameter",
+           "make_solver"]

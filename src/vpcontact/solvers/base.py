@@ -1,4 +1,4 @@
-"""What every step solver shares: the step data, the solution record, and the contact residual.
+"""What every step solver shares: the step data, the solution record, the contact residual and the counters of work.
 
 At step n the discrete problem (DESIGN §3) is: find u (free dofs) and λ (one per contact node) with
     A u + Nᵀ (f(d) + λ) = b,                 f_i(d) = w_i ρ K(ξ_i^{n−1} + k d_i⁺) p(d_i),
@@ -8,7 +8,7 @@ with d = N u − g0. C / r = min(λ / r, g − d) is the complementarity error i
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import astuple, dataclass, fields
 from functools import cached_property
 
 import numpy as np
@@ -84,6 +84,24 @@ class ContactState:
         trial = lam + r * (d - step.law.g)  # −∞ where g = ∞: never active
         C = lam - np.maximum(trial, 0.0)
         return cls(weights * pressure, weights * dpressure, trial > 0.0, C)
+
+
+@dataclass(frozen=True)
+class SolverWork:
+    """A step solver's work in the time loop, counted (its ``work()``): summary.json reports these counters
+    under their names here, summed over the sessions of a resumed run (``+``)."""
+
+    linear_solves: int = 0  # solves with a factored matrix: the condensed method's A0, the full method's Newton ones
+    krylov_iterations: int = 0  # Krylov iterations on Newton systems: GMRES (condensed), CG (iterative)
+    newton_factorizations: int = 0  # Newton matrices factored: the condensed method's m × m ones, the full method's
+
+    @classmethod
+    def from_counts(cls, counts: dict) -> "SolverWork":
+        """The counters named in ``counts`` (a checkpoint's meta: JSON numbers), 0 for one it lacks."""
+        return cls(**{counter.name: int(counts.get(counter.name, 0)) for counter in fields(cls)})
+
+    def __add__(self, other: "SolverWork") -> "SolverWork":
+        return SolverWork(*(mine + theirs for mine, theirs in zip(astuple(self), astuple(other))))
 
 
 def default_augmentation(A, N) -> float:

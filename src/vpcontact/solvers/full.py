@@ -24,7 +24,7 @@ import scipy.sparse as sp
 
 from ..progress import SILENT, Progress, duration, size
 from .amg import AMGConjugateGradient
-from .base import ContactState, StepData, StepSolution, norm
+from .base import ContactState, SolverWork, StepData, StepSolution, norm
 from .choice import iterative_memory
 from .linear import direct_solver
 from .newton import ROUNDOFF, Evaluation, SemismoothNewton
@@ -70,14 +70,11 @@ class FullNewton(SemismoothNewton):
         """Seconds of the setup stages (the normal frame; the linear solver's, an AMG hierarchy's)."""
         return dict(self.setup_timings)
 
-    @property
-    def krylov_iterations(self) -> int:
-        return self.linear.iterations
-
-    @property
-    def newton_factorizations(self) -> int:
-        """Newton matrices factored: every one, by the direct solver (none by the iterative one)."""
-        return self.linear.factorizations
+    def work(self) -> SolverWork:
+        """Newton systems solved (one per Newton iteration), the linear solver's Krylov iterations (CG; none by a
+        direct solver) and the Newton matrices it factored (every one by a direct solver, none by the iterative
+        one)."""
+        return SolverWork(self.solves, self.linear.iterations, self.linear.factorizations)
 
     def initial(self, step: StepData, previous: StepSolution | None) -> tuple:
         if previous is None:

@@ -20,7 +20,7 @@ import numpy as np
 from threadpoolctl import ThreadpoolController
 
 from ..progress import SILENT, Progress
-from .base import ContactState, StepData, StepSolution
+from .base import ContactState, SolverWork, StepData, StepSolution
 
 #: Jacobian-only stiffness (relative to r) on inactive nodes with no compliance stiffness at all (a
 #: separated node, K = 0): keeps the Newton matrix of a body held only by contact nonsingular; the
@@ -61,13 +61,11 @@ class Evaluation:
 
 
 class SemismoothNewton:
-    """The iteration; subclasses define ``initial``, ``evaluate``, ``direction`` and ``solution``."""
+    """The iteration; subclasses define ``initial``, ``evaluate``, ``direction`` and ``solution``, and report
+    their work in the time loop (``work``)."""
 
     _threads = ThreadpoolController()
     reason = ""  # why this method runs: the case's solver.method, or what "auto" weighed (set by make_solver)
-    #: Work on the Newton systems in the time loop (summary.json): Krylov iterations (GMRES, CG), and
-    #: factorizations of Newton matrices; none unless a solver counts them.
-    krylov_iterations = newton_factorizations = 0
 
     def __init__(self, weights: np.ndarray, r: float, tolerance: float, max_iterations: int, length_scale: float,
                  progress: Progress = SILENT):
@@ -155,4 +153,8 @@ class SemismoothNewton:
 
     def solution(self, step, x, ev: Evaluation, iterations: int, converged: bool, message: str = "",
                  advice: str = "") -> StepSolution:
+        raise NotImplementedError
+
+    def work(self) -> SolverWork:
+        """The solver's counters of work so far (:class:`~.base.SolverWork`)."""
         raise NotImplementedError

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import point
-from ..fem.space import coordinates
+from ..mesh.cells import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
 
 

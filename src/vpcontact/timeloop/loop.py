@@ -35,7 +35,7 @@ row and η_K to its fields.
 from __future__ import annotations
 
 import time as clock
-from dataclasses import replace
+from dataclasses import asdict, replace
 from typing import Callable
 
 import numpy as np
@@ -51,17 +51,13 @@ from ..estimate.estimators import ESTIMATORS, EVERY_LEVEL
 from ..results.output_options import OutputOptions
 from ..results.result import Fields, Result
 from ..fem.rigid_modes import RigidModes
-from ..solvers import DofLayout, StepData, StepSolution, make_solver
+from ..solvers import DofLayout, SolverWork, StepData, StepSolution, make_solver
 from ..solvers.errors import NotConvergedError, SingularMatrixError
 from .checks import LawShapeError, failure_message, history_failure, invalid_law, pulled_off, viscoplastic_rate
 from .plan import free_operators, plan_run
 from .resting import FreeMotions, room
 from .snapshot import LoopSnapshot
 from .state import Attempt, LoopState, Trend
-
-#: The solver's counters of work in the time loop that summary.json reports (summed over the sessions of a
-#: resumed run): solves with a factored matrix, Krylov iterations, Newton matrices factored.
-COUNTERS = ("linear_solves", "krylov_iterations", "newton_factorizations")
 
 
 class TimeLoop:
@@ -105,7 +101,7 @@ class TimeLoop:
         self._created = started
         self.setup_time = clock.perf_counter() - started
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
-        self.earlier_counts = dict.fromkeys(COUNTERS, 0)  # the counters of earlier sessions (resumed)
+        self.earlier_work = SolverWork()  # the step solver's work in earlier sessions (resumed)
         self.state = LoopState.initial(problem, rigid)
         # (u at the free dofs, ε, σ, z) of the last level when its Fields were not built (a viscoplastic body
         # computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
@@ -144,7 +140,7 @@ class TimeLoop:
         if self._level_without_fields is not None:  # the last level's fields, not kept at its step
             result.final, self._level_without_fields = self._fields(*self._level_without_fields), None
         now = clock.perf_counter()
-        for name, count in self.counts().items():
+        for name, count in asdict(self.work()).items():
             setattr(result, name, count)
         result.finish({**problem.timings, **self.solver.timings, "time_loop": now - started,
                        "total": problem.timings["build"] + self.setup_time + now - started,
@@ -160,12 +156,9 @@ class TimeLoop:
                           rows[-1]["nodes_at_limit"] if contact else None,
                           rows[-1]["nodes_in_compliance"] if contact else None, cuts, self.result.step_cuts, seconds)
 
-    def counts(self) -> dict[str, int]:
-        """The COUNTERS of the run so far, earlier sessions included."""
-        solver = self.solver
-        now = {"linear_solves": solver.solves, "krylov_iterations": solver.krylov_iterations,
-               "newton_factorizations": solver.newton_factorizations}
-        return {name: self.earlier_counts[name] + now[name] for name in COUNTERS}
+    def work(self) -> SolverWork:
+        """The step solver's work in the run so far, earlier sessions included (summary.json reports it)."""
+        return self.earlier_work + self.solver.work()
 
     def elapsed(self) -> float:
         """Wall time of the run so far, earlier sessions included (seconds)."""
@@ -180,7 +173,7 @@ class TimeLoop:
         arrays = {**self.state.arrays(self.rigid_position()), **result.arrays(), "solver_method": np.array(solver.name),
                   **{f"solver_{key}": value for key, value in solver.kept().items()}}
         meta = {"field_steps": sorted(result.fields), "step_cuts": result.step_cuts,
-                "resumed_at": list(result.resumed_at), "elapsed_s": self.elapsed(), **self.counts()}
+                "resumed_at": list(result.resumed_at), "elapsed_s": self.elapsed(), **asdict(self.work())}
         return LoopSnapshot(arrays, meta, result.field_arrays())
 
     def restore(self, snapshot: LoopSnapshot) -> None:
@@ -196,7 +189,7 @@ class TimeLoop:
             self.solver.restore({key[7:]: value for key, value in arrays.items()
                                  if key.startswith("solver_") and key != "solver_method"})
         self.earlier_time = float(meta["elapsed_s"])
-        self.earlier_counts = {name: int(meta.get(name, 0)) for name in COUNTERS}
+        self.earlier_work = SolverWork.from_counts(meta)
         if self.motions.held_by_contact_only:
             self.motions.recall(self.result.contact)
 

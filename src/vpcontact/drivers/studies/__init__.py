@@ -32,6 +32,7 @@ Dask), :mod:`.table` writes study.csv with the difference norms.
 
 from .file import RunSpec, Study, load_study
 from .running import run_study
-from .table import COMPARED, norm_column, write_study_table
+from ...results.norms import COMPARED, norm_column
+from .table import write_study_table
 
 __all__ = ["COMPARED", "RunSpec", "Study", "load_study", "norm_column", "run_study", "write_study_table"]

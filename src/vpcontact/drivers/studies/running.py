@@ -56,7 +56,7 @@ def run_study(study: Study, out: str | os.PathLike, *, executor: Executor | None
 
     DIR is held while the study runs (see :mod:`vpcontact.io.directory`: CaseError before any run if it
     cannot be used or another vpcontact process holds it). ``stop()`` is asked while the runs go (a
-    signal, see :mod:`vpcontact.drivers.cli`); once it gives a reason, the runs not finished are abandoned (the
+    signal, see :mod:`vpcontact.cli`); once it gives a reason, the runs not finished are abandoned (the
     workers of the local pool are killed and waited for: nothing is written after run_study returns;
     on a Dask cluster, runs already started finish there), study.csv marks them "interrupted", and a
     rerun of the study does them.

@@ -1,5 +1,7 @@
 """DIR/study.csv: a row per run of a study, its overrides, status and summary values, and the difference norms
-against the reference run at the compared times."""
+against the reference run at the compared times (the norms of
+:data:`vpcontact.results.norms.COMPARED`, NaN where a run has no fields at a compared time; "energy" needs the
+reference's Lamé parameters)."""
 
 from __future__ import annotations
 
@@ -9,18 +11,12 @@ import math
 from collections.abc import Collection
 from pathlib import Path
 
-from ...fem.space import COORDINATES
+from ...mesh.cells import COORDINATES
 from ...io.files import replacing
 from ...io.solution import snapshots_at
 from ...io.summary import read_summary
-from ...results.norms import Snapshot, differences
+from ...results.norms import COMPARED, Snapshot, differences, norm_column
 from .file import RunSpec, Study
-
-COMPARED = ("V", "Q", "U", "energy")
-"""The difference norms (:func:`vpcontact.results.norms.differences`) study.csv has at each compared time t, in
-the columns ``norm_column(norm, t)`` (NaN where a run has no fields at t; "energy" needs the
-reference's Lamé parameters)."""
-
 
 def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = None,
                       interrupted: Collection[str] = ()) -> list[dict]:
@@ -52,11 +48,6 @@ def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = N
         writer.writeheader()
         writer.writerows(rows)
     return rows
-
-
-def norm_column(norm: str, t: float) -> str:
-    """The column of study.csv with the difference norm ``norm`` (one of COMPARED) at time t."""
-    return f"norm_{norm}_t{t:g}"
 
 
 def _summary(spec: RunSpec, error: str | None, interrupted: bool) -> dict:

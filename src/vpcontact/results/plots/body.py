@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from ...errors import CaseError, shown
-from ...fem.space import coordinates
+from ...mesh.cells import coordinates
 from ..steps import fields_at
 from .layout import EDGES_DRAWN_UP_TO, STRESS_MAP, drawing_size, new_figure
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...errors import CaseError
-from ...fem.space import coordinates
+from ...mesh.cells import coordinates
 from ..steps import step_rows
 from .curves import arc_length
 from .layout import (EDGES_DRAWN_UP_TO, PANELS, PRESSURE_MAP, draw_states, new_figure, panel_columns, panel_grid,

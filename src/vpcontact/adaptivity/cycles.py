@@ -24,9 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import CaseError
-from .adapt_options import AdaptOptions
-from .estimators import ESTIMATORS
-from .indicators import Level
+from ..estimate.estimators import ESTIMATORS
+from ..estimate.indicators import Level
 from ..mesh.mesh import Mesh
 from ..problem.build import Problem, checked_problem
 from ..progress import SILENT, Progress, duration, reporting
@@ -34,6 +33,7 @@ from ..mesh.refinement import refine
 from ..results.output_options import OutputOptions
 from ..results.result import Result
 from ..timeloop.loop import TimeLoop
+from .options import AdaptOptions
 
 #: The columns of adapt.csv, one row per cycle.
 COLUMNS = ("cycle", "dofs", "contact_nodes", "estimate", "wall_time_s")
@@ -136,7 +136,7 @@ def adapt(problem: Problem, settings: AdaptOptions, output: OutputOptions | None
           after_cycle: Callable[[Cycle], None] | None = None, stop: Callable[[], str | None] | None = None,
           progress: bool | Progress = False, after_step: Callable[[TimeLoop], None] | None = None) -> Adaptation:
     """The adaptive cycles of ``settings`` (a case's ``[adapt]``,
-    :class:`~vpcontact.estimate.adapt_options.AdaptOptions`; :func:`vpcontact.adapt` takes the table as a dict) from
+    :class:`~vpcontact.adaptivity.options.AdaptOptions`; :func:`vpcontact.adapt` takes the table as a dict) from
     the mesh of ``problem``, each run with the outputs ``output`` (see the module docstring); ``after_cycle(cycle)``
     is called after each (its outputs), ``stop`` and ``after_step`` are the time loop's hooks; ``progress``: True
     for each cycle, its set-up, steps and refinement reported on stderr (:mod:`vpcontact.progress`), or a

@@ -1,5 +1,5 @@
 """The settings of an adaptation: the ``[adapt]`` table of a case as plain values
-(:func:`vpcontact.case.translate.adapt_options`), read by :mod:`vpcontact.estimate.adapt`."""
+(:func:`vpcontact.case.translate.adapt_options`), read by :mod:`vpcontact.adaptivity.cycles`."""
 
 from __future__ import annotations
 

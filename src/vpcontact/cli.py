@@ -20,8 +20,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from .. import __version__
-from ..errors import CaseError, one_line
+from . import __version__
+from .errors import CaseError, one_line
 
 EXIT_BAD_INPUT, EXIT_FAILED, EXIT_OUTPUT = 2, 3, 4
 
@@ -88,10 +88,10 @@ def _refuse(error) -> int:
 
 
 def _run(args) -> int:
-    from ..case.load import load_case
-    from ..progress import SILENT, Log
-    from .rundir import run
-    from .signals import EXIT_SIGNAL
+    from .case.load import load_case
+    from .progress import SILENT, Log
+    from .drivers.rundir import run
+    from .drivers.signals import EXIT_SIGNAL
 
     try:
         case = load_case(args.case, args.overrides)
@@ -128,8 +128,8 @@ def _run(args) -> int:
 def _check(args) -> int:
     import json
 
-    from ..case.load import load_case
-    from .check import check_case
+    from .case.load import load_case
+    from .drivers.check import check_case
 
     try:
         checked = check_case(load_case(args.case, args.overrides))
@@ -151,10 +151,10 @@ def _describe(error: OSError) -> str:
 
 
 def _study(args) -> int:
-    from ..progress import SILENT, Log
-    from .signals import EXIT_SIGNAL, StopOnSignals
-    from .studies.file import load_study
-    from .studies.running import connect, run_study
+    from .progress import SILENT, Log
+    from .drivers.signals import EXIT_SIGNAL, StopOnSignals
+    from .drivers.studies.file import load_study
+    from .drivers.studies.running import connect, run_study
 
     client = None
     try:
@@ -188,8 +188,8 @@ def _study(args) -> int:
 
 
 def _reproduce(args) -> int:
-    from ..progress import SILENT, Log
-    from ..reproduction.reproduce import OutputError, ReproduceError, run
+    from .progress import SILENT, Log
+    from .reproduction.reproduce import OutputError, ReproduceError, run
 
     if args.workers is not None and args.workers < 1:
         return _refuse(f"--workers {args.workers}: must be at least 1")
