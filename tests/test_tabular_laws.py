@@ -38,7 +38,8 @@ def test_a_table_of_the_power_law_reproduces_its_run_and_converges_at_second_ord
     """The half disc (its contact nodes reach many histories ξ) with K = c_v (1 + α ξ)^2 and with the tables of
     that K on n + 1 equally spaced points of [0, 1.05 max ξ]: the penetrations differ by no more than the
     relative interpolation error h² max|K''| / (8 min K) of the penetrations, and that difference falls as h²
-    (the least-squares rate over n = 8 ... 128 within 0.15 of 2, each halving within 0.35)."""
+    (the least-squares rate over n = 8 ... 128 within 0.15 of 2, each halving within 0.35). Newton, with the
+    slopes of the table as derivative, takes the power law's iterations (2 more at most over the run)."""
     reference = _solved(half_disc_case(g="inf", stiffness={"law": "power", "c_v": C_V, "alpha": ALPHA, "beta": BETA}))
     d, xi = reference.contact_history("penetration"), reference.contact_history("xi")
     top, curvature = 1.05 * xi.max(), 2.0 * C_V * ALPHA**2  # K'' = c_v α² β (β − 1) (1 + α ξ)^(β − 2), β = 2
@@ -49,6 +50,7 @@ def test_a_table_of_the_power_law_reproduces_its_run_and_converges_at_second_ord
         h = top / n
         assert np.abs(difference).max() <= h**2 * curvature / (8.0 * C_V) * np.abs(d).max(), n
         errors.append(np.sqrt(np.mean(difference**2)))
+        assert table.series("newton_iterations").sum() <= reference.series("newton_iterations").sum() + 2, n
     rate = -np.polyfit(np.log(counts), np.log(errors), 1)[0]
     halvings = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
     assert abs(rate - 2.0) < 0.15, (rate, errors)
@@ -144,3 +146,37 @@ def test_a_run_with_tables_from_a_case_file_reports_the_tables_values_in_contact
     np.testing.assert_allclose(contact["pressure_compliance"], expected_K * np.where(d > 0, p_of_d, 0.0), rtol=1e-12)
     resolved = (tmp_path / "run" / "case.resolved.toml").read_text()
     assert 'xi = [\n    0.0,' in resolved or "xi = [0.0, 0.02, 0.05, 0.2]" in resolved, resolved
+
+
+def test_tables_given_from_python_on_two_contact_parts_are_the_laws_they_tabulate(tmp_path):
+    """vpcontact.compose with the tables as NumPy arrays, a different table on each part of a split Γ3 (K linear
+    in ξ on both, p = r⁺ below and p = 2 r⁺ above, each a table of 2 points extrapolated linearly): the same
+    penetrations, histories and pressures, to rounding, as the case with p = r⁺ and K power (β = 1, c_v times
+    the slope of p) on those parts; the parts' tables are kept apart (a PiecewiseLaw), not merged per node."""
+    from test_contact_parts import split_case
+
+    case, part, _ = split_case(tmp_path, 2)
+    case["contact"].pop("stiffness")
+    layers = [(f"{part}_below", 100.0, 20.0, 1.0), (f"{part}_above", 300.0, 5.0, 2.0)]
+    powers = {"probe": [0.0, 0.0], "parts": [
+        {"part": name, "g": 0.2, "p": "power", "exponent": 1.0,
+         "stiffness": {"law": "power", "c_v": c_v * slope, "alpha": alpha, "beta": 1.0}}
+        for name, c_v, alpha, slope in layers]}
+    tables = {"probe": np.zeros(2), "parts": [
+        {"part": name, "g": 0.2, "p": "table", "r": np.array([0.0, 1.0]), "p_of_r": np.array([0.0, slope]),
+         "p_extrapolation": "linear",
+         "stiffness": {"law": "table", "xi": np.array([0.0, 0.01]), "K": np.array([c_v, c_v * (1 + alpha * 0.01)]),
+                       "extrapolation": "linear"}}
+        for name, c_v, alpha, slope in layers]}
+    reference = _solved({**case, "contact": powers})
+    problem = vpcontact.compose(case["mesh"]["file"], case["material"], dirichlet=case["boundary"]["dirichlet"],
+                                traction={item["part"]: item["value"] for item in case["boundary"]["traction"]},
+                                contact=tables, time=case["time"], solver=case["solver"])
+    assert type(problem.law.stiffness).__name__ == type(problem.law.p).__name__ == "PiecewiseLaw"
+    tabled = vpcontact.solve(problem)
+    assert tabled.status == "complete"
+    for name in ("penetration", "xi", "pressure_compliance"):
+        expected = reference.contact_history(name)
+        np.testing.assert_allclose(tabled.contact_history(name), expected, rtol=0,
+                                   atol=1e-11 * np.abs(expected).max(), err_msg=name)
+    assert reference.contact_history("K")[-1].max() > 0 and reference.contact_history("xi").max() > 0.01

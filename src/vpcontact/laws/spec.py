@@ -38,7 +38,7 @@ class Parameter:
     """A parameter of a law: its key in the case, what it is, and the values it admits: any finite number, or at
     least ``minimum`` (more than it when ``strict``), or a Poisson ratio admissible for the material's 2D
     hypothesis (``poisson_ratio``: −1 < ν < 0.5, ν ≤ 0.5 in plane stress); or, with ``points``, a list of at least
-2 finite numbers (each at least ``minimum`` when given), or, with ``choices``, one of these names."""
+    2 finite numbers (each at least ``minimum`` when given), or, with ``choices``, one of these names."""
 
     name: str
     summary: str
