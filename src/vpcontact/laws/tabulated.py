@@ -49,10 +49,11 @@ class PiecewiseLinear:
 
     def derivative(self, values: np.ndarray) -> np.ndarray:
         """The slope of the segment [x_i, x_{i+1}) holding each value (the right derivative at a breakpoint), the
-        extrapolation's beyond x_n, the first segment's below x_0."""
+        extrapolation's from x_n on, and 0 below x_0 (where np.interp holds y_0; never asked, see the module)."""
         values = np.asarray(values, dtype=float)
         segment = np.clip(np.searchsorted(self.x, values, side="right") - 1, 0, self.slopes.size - 1)
-        return np.where(values >= self.x[-1], self.last_slope, self.slopes[segment])
+        slopes = np.where(values >= self.x[-1], self.last_slope, self.slopes[segment])
+        return np.where(values < self.x[0], 0.0, slopes)
 
 
 def check_table(x_name: str, x, y_name: str, y, extrapolation_name: str, extrapolation: str, *,
