@@ -12,10 +12,11 @@ of p(r) = r⁺, whose derivative at 0 is 1. Values and derivatives are vectorize
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
-from .spec import ParameterError
+from .spec import Parameter, ParameterError
 
 #: The extrapolations beyond the last point a table may state.
 EXTRAPOLATIONS = ("constant", "linear")
@@ -54,6 +55,36 @@ class PiecewiseLinear:
         segment = np.clip(np.searchsorted(self.x, values, side="right") - 1, 0, self.slopes.size - 1)
         slopes = np.where(values >= self.x[-1], self.last_slope, self.slopes[segment])
         return np.where(values < self.x[0], 0.0, slopes)
+
+
+def table_parameters(x: str, x_summary: str, y: str, y_summary: str, extrapolation: str,
+                     law: str) -> tuple[Parameter, ...]:
+    """The parameters of a tabular law, in the order of its table: the abscissae ``x`` (a list from 0), the values
+    ``y`` (a list, each ≥ 0) and ``extrapolation``, how the law ``law`` goes on beyond the last point."""
+    return (Parameter(x, x_summary, points=True), Parameter(y, y_summary, minimum=0.0, points=True),
+            Parameter(extrapolation, f"{law} beyond the last point: its value (constant) or its last segment's line "
+                      f"(linear)", choices=EXTRAPOLATIONS))
+
+
+class TableLaw:
+    """What the tabular laws share (subclassed by frozen dataclasses): their fields named in TABLE (the abscissae,
+    the values, the extrapolation) made once into their :class:`PiecewiseLinear` interpolant, and the law and its
+    derivative from it; ``ZERO_BELOW``: the law is 0 at arguments ≤ 0 (p(r), (2.19)), whatever it is given
+    there."""
+
+    TABLE: ClassVar[tuple[str, str, str]]
+    ZERO_BELOW: ClassVar[bool] = False
+
+    def __post_init__(self):
+        object.__setattr__(self, "interpolant", PiecewiseLinear(*(getattr(self, name) for name in self.TABLE)))
+
+    def __call__(self, values: np.ndarray) -> np.ndarray:
+        law = self.interpolant(values)
+        return np.where(np.asarray(values) > 0.0, law, 0.0) if self.ZERO_BELOW else law
+
+    def derivative(self, values: np.ndarray) -> np.ndarray:
+        """The interpolant's derivative (0 below the first point, 0)."""
+        return self.interpolant.derivative(values)
 
 
 def check_table(x_name: str, x, y_name: str, y, extrapolation_name: str, extrapolation: str, *,
