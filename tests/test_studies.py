@@ -250,7 +250,7 @@ def test_scheduler_without_the_cluster_extra_names_the_fix(tmp_path):
     before = snapshot_tree(tmp_path)
     python_path = os.pathsep.join([str(fake), *filter(None, [os.environ.get("PYTHONPATH")])])
     status, _, stderr = run_cli("study", path, "--out", tmp_path / "study", "--scheduler", "tcp://127.0.0.1:8786",
-                                "--quiet", env={"PYTHONPATH": python_path})
+                                "--quiet", env={"PYTHONPATH": python_path, "PYTHONDONTWRITEBYTECODE": "1"})
     assert_refused(status, stderr, "--scheduler", 'pip install "vpcontact[cluster]"', untouched=[(tmp_path, before)])
 
 
