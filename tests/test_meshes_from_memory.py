@@ -237,3 +237,7 @@ def test_a_meshio_mesh_made_in_python_has_its_cell_sets_as_parts_and_regions():
     inner = meshio.Mesh(SQUARE, [("triangle", triangles), ("line", lines[2:])], cell_sets={"inner": [None, [0]]})
     with pytest.raises(CaseError, match=r"^the meshio.Mesh: line of group 'inner' is not a boundary edge"):
         meshes.from_meshio(inner)
+    beyond = meshio.Mesh(SQUARE, [("triangle", triangles), ("line", lines[:2])], cell_sets={"top": [None, [2]]})
+    with pytest.raises(CaseError, match=r"^the meshio.Mesh: cell_sets\['top'\] = array\(\[2\]\) for its 2 line cells: "
+                                        r"expected indices of those cells, 0 to 1$"):
+        meshes.from_meshio(beyond)

@@ -20,7 +20,7 @@ import types
 import numpy as np
 import skfem
 
-from ..errors import CaseError
+from ..errors import CaseError, brief
 from . import physical_groups
 from .cells import SIMPLICES
 from .checks_arrays import SKFEM_MESH, index_sets
@@ -35,6 +35,7 @@ def from_meshio(mesh) -> Mesh:
 
     if not isinstance(mesh, meshio.Mesh):
         raise CaseError(f"mesh = a {type(mesh).__name__}: expected a meshio.Mesh")
+    _check_cell_sets(mesh)
     names = physical_groups.field_names(mesh)
     tags = [tag for _, tag, _ in names] + [int(np.max(block_tags, initial=0))
                                            for block_tags in mesh.cell_data.get("gmsh:physical", [])]
@@ -48,6 +49,20 @@ def from_meshio(mesh) -> Mesh:
             internal.add(following)
             following += 1
     return mesh_from_cells("the meshio.Mesh", mesh, names, internal=frozenset(internal), first=0)
+
+
+def _check_cell_sets(mesh) -> None:
+    """CaseError for a cell set of a meshio.Mesh that names cells its blocks do not have (meshio's bookkeeping
+    sets, "gmsh:…", are not sets of cells)."""
+    for name, members in mesh.cell_sets.items():
+        if name.startswith("gmsh:"):
+            continue
+        for block, cells in zip(mesh.cells, members):
+            cells = np.asarray([] if cells is None else cells)
+            if cells.size and (cells.ndim != 1 or cells.dtype.kind not in "iu" or cells.min() < 0
+                               or cells.max() >= len(block.data)):
+                raise CaseError(f"the meshio.Mesh: cell_sets[{name!r}] = {brief(cells)} for its {len(block.data)} "
+                                f"{block.type} cells: expected indices of those cells, 0 to {len(block.data) - 1}")
 
 
 def from_skfem(mesh) -> Mesh:
