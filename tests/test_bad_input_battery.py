@@ -468,8 +468,9 @@ def write_case(tmp_path, case: dict) -> Path:
 # --- 7. compose's arguments -----------------------------------------------------------------------------------
 COMPOSE = [
     # the mesh
-    ({"mesh": skfem.MeshTri()}, ["mesh = a scikit-fem MeshTri1", "vpcontact.mesh.Mesh(m, parts="]),
-    ({"mesh": skfem.MeshQuad()}, ["mesh = a scikit-fem MeshQuad1", "not accepted yet"]),
+    ({"mesh": skfem.MeshTri()}, ["mesh = a scikit-fem MeshTri1 without named boundaries", "with_boundaries",
+                                 "vpcontact.mesh.Mesh(m, parts="]),
+    ({"mesh": skfem.MeshQuad()}, ["mesh = a scikit-fem MeshQuad1", "linear triangles (skfem.MeshTri1)"]),
     ({"mesh": "nowhere.msh"}, ["mesh file 'nowhere.msh' not found"]),
     ({"mesh": {"shape": "half_disc"}}, ["missing required value 'mesh.h'"]),
     ({"mesh": {"shape": "half_disc", "h": 0.25, "side": 1}}, ["unknown key 'mesh.side'"]),

@@ -32,7 +32,6 @@ import os
 from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
-import skfem
 from pydantic import ValidationError
 
 from .. import mesh as meshes
@@ -41,6 +40,7 @@ from .load import check_expressions, check_tree, plain, section
 from .messages import describe
 from .model import Model
 from ..errors import CaseError, brief
+from ..mesh.memory import from_object
 from ..problem.build import Problem, build_problem, make_mesh
 from .translate import mesh_source, problem_options
 
@@ -56,7 +56,10 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     ``body_force``, in ``contact`` with the foundation, over the time grid ``time``, solved with ``solver``:
 
     - ``mesh``: a :class:`~vpcontact.mesh.Mesh` (``vpcontact.mesh.half_disc(h)``, ``quarter_ball``,
-      ``rectangle``, ``block``, ``read_mesh(path)``), a mesh file's name, or a ``[mesh]`` table;
+      ``rectangle``, ``block``, ``read_mesh(path)``), a mesh file's name, a ``[mesh]`` table, or a mesh in
+      memory, checked as a file is: a ``meshio.Mesh``, a scikit-fem ``MeshTri1`` / ``MeshTet1`` with named
+      boundaries (the parts) and subdomains (the regions), or the ``gmsh`` module (its open model, its
+      physical groups the parts and regions; ``vpcontact.mesh.from_gmsh()``);
     - ``material``: a ``[material]`` table ({"E": ..., "nu": ..., "hypothesis": ..., "viscoplastic": {...}}), or
       a list of them, each with its ``region``; ``viscoplastic``: a Python law 𝒢(σ, ε) (or 𝒢(σ, ε, x)) for the
       whole body instead of the tables' laws;
@@ -110,19 +113,20 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
 
 
 def _mesh(mesh) -> meshes.Mesh:
-    """The mesh of ``compose``'s argument: a Mesh as it is, a file name read, a [mesh] table made."""
+    """The mesh of ``compose``'s argument: a Mesh as it is, a file name read, a [mesh] table made, a mesh in
+    memory (a meshio.Mesh, a scikit-fem mesh, the gmsh module's open model) checked as a file is."""
     if isinstance(mesh, meshes.Mesh):
         return mesh
     if isinstance(mesh, (str, os.PathLike)):
         return meshes.read_mesh(mesh)
     if isinstance(mesh, Mapping):
         return make_mesh(mesh_source(section(MeshSection, mesh, "mesh")))
-    if isinstance(mesh, skfem.Mesh):
-        raise CaseError(f"mesh = a scikit-fem {type(mesh).__name__} without named boundary parts: not accepted yet; "
-                        f"pass vpcontact.mesh.Mesh(m, parts={{name: indices of boundary facets}}, exact_normals={{}}) "
-                        f"(or save it to a mesh file with physical groups and pass its name)")
+    in_memory = from_object(mesh)
+    if in_memory is not None:
+        return in_memory
     raise CaseError(f"mesh = {brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, quarter_ball, "
-                    f"rectangle, block or read_mesh), a mesh file's name or a [mesh] table")
+                    f"rectangle, block or read_mesh), a mesh file's name, a [mesh] table, a meshio.Mesh, a "
+                    f"scikit-fem MeshTri1 or MeshTet1 with named boundaries, or the gmsh module (its open model)")
 
 
 def _table(key: str, value) -> dict:

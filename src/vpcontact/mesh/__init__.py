@@ -1,10 +1,11 @@
 """Meshes: the body's shapes, mesh files, checks, refinement, simplex geometry and point location.
 
-The public face: a :class:`Mesh` (scikit-fem's mesh with named parts and regions), the built-in shapes and the
-reader of mesh files::
+The public face: a :class:`Mesh` (scikit-fem's mesh with named parts and regions), the built-in shapes, the
+reader of mesh files and the meshes in memory::
 
     from vpcontact import mesh
     body = mesh.half_disc(h=0.05)            # or rectangle, quarter_ball, block, read_mesh("part.msh")
+    body = mesh.from_gmsh()                  # the model open in gmsh; or from_meshio(m), from_skfem(m)
 
 They and the submodules (``vpcontact.mesh.<module>``) are imported on first use.
 """
@@ -15,9 +16,10 @@ from .. import submodule
 
 #: The public names, by the module that defines them.
 PUBLIC = {"Mesh": "mesh", "block": "shapes", "half_disc": "shapes", "quarter_ball": "shapes", "read_mesh": "read",
-          "rectangle": "shapes"}
+          "rectangle": "shapes", "from_gmsh": "gmsh_model", "from_meshio": "memory", "from_skfem": "memory"}
 
-__all__ = ["Mesh", "block", "half_disc", "quarter_ball", "read_mesh", "rectangle"]
+__all__ = ["Mesh", "block", "from_gmsh", "from_meshio", "from_skfem", "half_disc", "quarter_ball", "read_mesh",
+           "rectangle"]
 
 
 def __getattr__(name: str):

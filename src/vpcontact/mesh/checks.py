@@ -63,7 +63,7 @@ class Names:
         return f"node {self.numbers[i]} at {point(self.p[:, i])}"
 
     def error(self, text: str) -> CaseError:
-        return CaseError(f"mesh file '{self.label}': {text}")
+        return CaseError(f"{self.label}: {text}")
 
 
 def more(count: int, what: str) -> str:
@@ -76,7 +76,7 @@ def check_finite(label: str, points: np.ndarray, node_numbers: np.ndarray) -> No
     bad = np.flatnonzero(~np.isfinite(points).all(axis=0))
     if bad.size:
         i = bad[0]
-        raise CaseError(f"mesh file '{label}': node {node_numbers[i]} has the coordinates {point(points[:, i])}"
+        raise CaseError(f"{label}: node {node_numbers[i]} has the coordinates {point(points[:, i])}"
                         f"{more(bad.size, 'node')}: every coordinate must be a finite number; fix the program or "
                         f"edit that wrote the file")
 

@@ -68,13 +68,13 @@ def check_mesh(mesh) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
                         f"({unused.size} such nodes): remove the nodes no element uses")
     boundary = np.zeros(m.facets.shape[1], dtype=bool)
     boundary[m.boundary_facets()] = True
-    parts = _index_sets("parts", mesh.parts, boundary.size, "facets")
+    parts = index_sets("parts", mesh.parts, boundary.size, "facets")
     for name, facets in parts.items():
         inner = facets[~boundary[facets]]
         if inner.size:
             raise CaseError(f"Mesh.parts[{_name(name)}]: facet {int(inner[0])} is inside the body ({inner.size} such "
                             f"facets): a part is a set of boundary facets (Mesh.mesh.boundary_facets())")
-    regions = _index_sets("regions", mesh.regions, t.shape[1], "elements")
+    regions = index_sets("regions", mesh.regions, t.shape[1], "elements")
     _check_functions("exact_normals", mesh.exact_normals, parts, "parts")
     _check_functions("curved_parts", mesh.curved_parts, parts, "parts")
     _check_functions("curved_interfaces", mesh.curved_interfaces, regions, "regions", pairs=True)
@@ -83,17 +83,17 @@ def check_mesh(mesh) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     return parts, regions
 
 
-def _index_sets(attribute: str, sets, count: int, what: str) -> dict[str, np.ndarray]:
+def index_sets(attribute: str, sets, count: int, what: str, owner: str = "Mesh") -> dict[str, np.ndarray]:
     """``sets`` ({name: indices}) as sorted distinct int64 arrays, each non-empty and in [0, count); else
-    CaseError naming Mesh.<attribute>[name]."""
+    CaseError naming <owner>.<attribute>[name] (Mesh.parts, or a scikit-fem mesh's boundaries)."""
     if not isinstance(sets, Mapping):
-        raise CaseError(f"Mesh.{attribute} = {_kind(sets)}: expected a dict {{name: indices of {what}}}")
+        raise CaseError(f"{owner}.{attribute} = {_kind(sets)}: expected a dict {{name: indices of {what}}}")
     checked = {}
     for name, indices in sets.items():
         if not isinstance(name, str):
-            raise CaseError(f"Mesh.{attribute}: the name {_kind(name)} is not a string (a case names parts and "
+            raise CaseError(f"{owner}.{attribute}: the name {_kind(name)} is not a string (a case names parts and "
                             f"regions by strings; a number n as \"n\")")
-        where = f"Mesh.{attribute}[{_name(name)}]"
+        where = f"{owner}.{attribute}[{_name(name)}]"
         array = np.asarray(indices) if isinstance(indices, (np.ndarray, list, tuple, range)) else None
         if array is None or array.ndim != 1 or (array.size and array.dtype.kind not in "iu"):
             raise CaseError(f"{where} = {_kind(indices)}: expected a 1D array of integers, the indices of its {what}")

@@ -69,7 +69,8 @@ class Mesh:
         name = str(part)
         if name not in self.parts and not self.parts:
             facet, body = SIMPLICES[self.dim - 1].gmsh_group, SIMPLICES[self.dim].gmsh_group
-            raise CaseError(f"unknown part '{name}': mesh file '{self.file}' has no parts; the parts of a mesh file "
+            mesh = "the mesh" if self.file is None else f"mesh file '{self.file}'"
+            raise CaseError(f"unknown part '{name}': {mesh} has no parts; the parts of a mesh file "
                             f"are its physical {facet.lower()}s: in gmsh add Physical {facet}(\"{name}\") = {{...}}; "
                             f"for each part the case names (and a Physical {body} for the body) and mesh again")
         if name not in self.parts:

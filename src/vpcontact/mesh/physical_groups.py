@@ -5,7 +5,11 @@ also ``cell_sets`` by name). The groups of the body's dimension (physical surfac
 are the regions: `body_elements` gives the elements and the (element, group) pairs, `regions` the regions.
 The groups of the facets' dimension (physical curves in 2D, surfaces in 3D) are the parts: `parts`. A
 group is named by its tag number (str) and, if the file names it, by its name too; two groups of one
-dimension with one name are refused (`check_unique_names`).
+dimension with one name are refused (`check_unique_names`). A group known only by its name (a named boundary
+or subdomain of a scikit-fem mesh, a cell set of a meshio.Mesh without a physical tag) is given a tag here, an
+``internal`` one: it names nothing, the group is keyed by its name only.
+
+`label` names the mesh in messages: "mesh file 'punch.msh'", "the gmsh model 'punch'", "the meshio.Mesh".
 """
 
 from __future__ import annotations
@@ -22,6 +26,11 @@ if TYPE_CHECKING:
     import meshio
 
 
+def field_names(data: meshio.Mesh) -> list[tuple[int, int, str]]:
+    """(dimension, tag, name) of each physical group meshio's ``field_data`` names (name -> [tag, dimension])."""
+    return [(int(value[1]), int(value[0]), name) for name, value in data.field_data.items() if np.size(value) == 2]
+
+
 def check_unique_names(label: str, names: list[tuple[int, int, str]], dim: int) -> None:
     """CaseError if two physical groups of the parts' dimension, or two of the body's, of a `dim`-dimensional
     mesh have one name (meshio would keep only one of them)."""
@@ -31,7 +40,7 @@ def check_unique_names(label: str, names: list[tuple[int, int, str]], dim: int) 
         tags: dict[str, int] = {}
         for group_dim, tag, name in names:
             if group_dim == dim - 1 + body and tags.setdefault(name, tag) != tag:
-                raise CaseError(f"mesh file '{label}': two physical {group.lower()}s are named '{name}' (groups "
+                raise CaseError(f"{label}: two physical {group.lower()}s are named '{name}' (groups "
                                 f"{tags[name]} and {tag}); a {what} of that name would hold only one of them: give "
                                 f"each group its own name, or put all its {group.lower()}s in one Physical "
                                 f"{group}(\"{name}\") = {{...}};")
@@ -87,27 +96,35 @@ def body_elements(data: meshio.Mesh, names: list[tuple[int, int, str]],
     return t[:, keep], np.flatnonzero(keep) + 1, np.vstack((pairs // scale, pairs % scale))
 
 
-def regions(label: str, names: list[tuple[int, int, str]], dim: int, members: np.ndarray) -> dict[str, np.ndarray]:
+def regions(label: str, names: list[tuple[int, int, str]], dim: int, members: np.ndarray,
+            internal: frozenset[int] = frozenset()) -> dict[str, np.ndarray]:
     """Region name -> sorted element indices, from the distinct (element, physical tag) pairs `members` (2, k),
-    sorted by element: one region per tag (named by its number) and, if the file names the group, by its
-    name too."""
-    regions = {str(tag): members[0, members[1] == tag] for tag in _distinct(members[1])}
+    sorted by element: one region per tag (named by its number, unless the tag is `internal`) and, if the file
+    names the group, by its name too."""
+    by_tag = {int(tag): members[0, members[1] == tag] for tag in _distinct(members[1])}
+    return _named(label, by_tag, names, dim, internal)
+
+
+def _named(label: str, by_tag: dict[int, np.ndarray], names: list[tuple[int, int, str]], dim: int,
+           internal: frozenset[int]) -> dict[str, np.ndarray]:
+    """The groups `by_tag` of dimension `dim` keyed by their tag number (str; not an `internal` tag) and by the
+    name `names` gives them; CaseError for a name that is another group's number."""
+    named = {str(tag): members for tag, members in by_tag.items() if tag not in internal}
     for group_dim, tag, name in names:
-        if group_dim != dim or str(tag) not in regions:
+        if group_dim != dim or tag not in by_tag:
             continue
-        if name in regions and not np.array_equal(regions[name], regions[str(tag)]):
-            raise CaseError(f"mesh file '{label}': physical name '{name}' (group {tag}) clashes with physical group "
-                            f"{name}")
-        regions[name] = regions[str(tag)]
-    return regions
+        if name in named and not np.array_equal(named[name], by_tag[tag]):
+            raise CaseError(f"{label}: physical name '{name}' (group {tag}) clashes with physical group {name}")
+        named[name] = by_tag[tag]
+    return named
 
 
 def parts(label: str, mesh, data: meshio.Mesh, names: list[tuple[int, int, str]], renumber: np.ndarray,
-          dim: int) -> dict[str, np.ndarray]:
+          dim: int, internal: frozenset[int] = frozenset()) -> dict[str, np.ndarray]:
     """Part name -> sorted boundary facets of the skfem `mesh` read from the file `label` (`renumber`: the
     mesh's node of each node of the file, -1 for none): the facet cells of each physical group of the parts'
-    dimension, by tag number and, if the file names the group, by its name too; CaseError for a cell that is
-    not a boundary facet."""
+    dimension, by tag number (unless `internal`) and, if the file names the group, by its name too; CaseError
+    for a cell that is not a boundary facet."""
     facet_nodes, facet_tags = _physical_facets(data, names, SIMPLICES[dim - 1].cell_type, dim - 1)
     parts: dict[str, np.ndarray] = {}
     if not facet_tags.size:
@@ -118,24 +135,16 @@ def parts(label: str, mesh, data: meshio.Mesh, names: list[tuple[int, int, str]]
     found = find_columns(mesh.facets[:, boundary], nodes)
     bad = np.flatnonzero((nodes < 0).any(axis=0) | (found < 0))
     if bad.size:
+        group = _group(int(facet_tags[bad[0]]), names, dim - 1, internal)
         what, kind = SIMPLICES[dim - 1].cell_type, SIMPLICES[dim - 1].facet_name
         facet_group, body_group = SIMPLICES[dim - 1].gmsh_group, SIMPLICES[dim].gmsh_group
-        raise CaseError(f"mesh file '{label}': {what} of physical group {facet_tags[bad[0]]} is not a boundary "
+        raise CaseError(f"{label}: {what} of {group} is not a boundary "
                         f"{kind} of the {SIMPLICES[dim].plural} ({bad.size} such {what}s): a part must lie on "
                         f"the boundary of the body; remove inner {facet_group.lower()}s from that physical group, "
                         f"or add the {body_group.lower()} they bound to the Physical {body_group}")
     facets = boundary[found]
-    for tag in np.unique(facet_tags):
-        parts[str(tag)] = np.unique(facets[facet_tags == tag])
-    for group_dim, tag, name in names:
-        if group_dim != dim - 1 or str(tag) not in parts:
-            continue
-        if name in parts and not np.array_equal(parts[name], parts[str(tag)]):
-            raise CaseError(
-                f"mesh file '{label}': physical name '{name}' (group {tag}) clashes with physical group {name}"
-            )
-        parts[name] = parts[str(tag)]
-    return parts
+    by_tag = {int(tag): np.unique(facets[facet_tags == tag]) for tag in np.unique(facet_tags)}
+    return _named(label, by_tag, names, dim - 1, internal)
 
 
 def _physical_facets(data: meshio.Mesh, names: list[tuple[int, int, str]], kind: str,
@@ -162,6 +171,13 @@ def _physical_facets(data: meshio.Mesh, names: list[tuple[int, int, str]], kind:
                 nodes.append(block.data[np.asarray(members, dtype=np.int64)].T)
                 tags.append(np.full(len(members), tag, dtype=np.int64))
     return np.hstack(nodes).astype(np.int64), np.concatenate(tags)
+
+
+def _group(tag: int, names: list[tuple[int, int, str]], dim: int, internal: frozenset[int]) -> str:
+    """A physical group in a message: "physical group 3", or "group 'contact'" for an `internal` tag."""
+    if tag in internal:
+        return next(f"group '{name}'" for group_dim, group_tag, name in names if (group_dim, group_tag) == (dim, tag))
+    return f"physical group {tag}"
 
 
 def _distinct(keys: np.ndarray) -> np.ndarray:

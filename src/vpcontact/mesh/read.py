@@ -1,9 +1,10 @@
 """A mesh file read into a `Mesh`: a gmsh file (.msh 2.2 / 4.1) or any triangle or tetrahedron file meshio reads.
 
 A gmsh 2.2 text file is read with NumPy (`vpcontact.mesh.gmsh.read_msh22`), any other file with meshio,
-imported then. The file's cells are checked (linear triangles or tetrahedra only, a plane 2D body), its
-physical groups become the parts and regions (`vpcontact.mesh.physical_groups`), and the mesh must cover a
-body once (`vpcontact.mesh.checks`).
+imported then. What the file holds becomes a checked Mesh as a mesh in memory does
+(`vpcontact.mesh.from_cells`): the cells are checked (linear triangles or tetrahedra only, a plane 2D body),
+the physical groups become the parts and regions (`vpcontact.mesh.physical_groups`), and the mesh must cover
+a body once (`vpcontact.mesh.checks`).
 """
 
 from __future__ import annotations
@@ -13,17 +14,11 @@ import io
 import os
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from ..inputs import check_regular_file
 from ..errors import CaseError, shown
 from . import gmsh, physical_groups
-from .cells import SIMPLICES
-from .checks import check_finite
-from .checks_2d import check_triangles
-from .checks_3d import check_tetrahedra
-from .checks_arrays import SKFEM_MESH
-from .mesh import Mesh, check_memory, with_parts
+from .from_cells import mesh_from_cells
+from .mesh import Mesh
 
 if TYPE_CHECKING:
     import meshio
@@ -59,37 +54,8 @@ def read_mesh(path: str | os.PathLike) -> Mesh:
     if data is None:
         data = _read_with_meshio(path, label)
 
-    names = gmsh.physical_names(label) or [(int(v[1]), int(v[0]), k) for k, v in data.field_data.items()
-                                           if np.size(v) == 2]
-    dim = 3 if any(block.dim == 3 for block in data.cells) else 2
-    _check_cell_types(label, data.cells, dim)
-    physical_groups.check_unique_names(label, names, dim)
-    t, position, members = physical_groups.body_elements(data, names, dim)
-    if not t.size:
-        raise CaseError(_no_triangles(label, data, names))
-    check_memory(t.shape[1], f"mesh file '{label}'", "use a coarser mesh", dim=dim)
-    outside = (t < 0) | (t >= len(data.points))
-    if outside.any():
-        k = np.flatnonzero(outside.any(axis=0))[0]
-        raise CaseError(f"mesh file '{label}': {SIMPLICES[dim].name} {position[k]} refers to node "
-                        f"{t[outside[:, k], k][0] + 1}, but the file has nodes 1 to {len(data.points)}: the file is "
-                        f"damaged")
-    used, t = np.unique(t, return_inverse=True)
-    t = t.reshape(dim + 1, -1)
-    renumber = np.full(len(data.points), -1, dtype=np.int64)
-    renumber[used] = np.arange(used.size)
-
-    points = np.asarray(data.points, dtype=float)[used].T
-    check_finite(label, points, used + 1)
-    if dim == 2:
-        points = _plane(label, data, names, points)
-        check_triangles(label, points, t, used + 1, position)
-    else:
-        check_tetrahedra(label, points, t, used + 1, position)
-
-    mesh = SKFEM_MESH[dim](np.ascontiguousarray(points), np.ascontiguousarray(t))
-    parts = physical_groups.parts(label, mesh, data, names, renumber, dim)
-    return Mesh(with_parts(mesh, parts), parts, {}, label, physical_groups.regions(label, names, dim, members))
+    names = gmsh.physical_names(label) or physical_groups.field_names(data)
+    return mesh_from_cells(f"mesh file '{label}'", data, names, file=label)
 
 
 def _read_with_meshio(path: str | os.PathLike, label: str) -> meshio.Mesh:
@@ -106,66 +72,3 @@ def _read_with_meshio(path: str | os.PathLike, label: str) -> meshio.Mesh:
     reason = str(failure) if isinstance(failure, Exception) else said.getvalue()
     reason = " ".join(reason.replace("Error:", "").split()) or type(failure).__name__
     raise CaseError(f"cannot read mesh file '{label}': {reason}") from failure
-
-
-def _plane(label: str, data: meshio.Mesh, names: list[tuple[int, int, str]], points: np.ndarray) -> np.ndarray:
-    """The x, y rows of the nodes `points` of a 2D mesh; CaseError if a z coordinate is not zero."""
-    if points.shape[0] == 3:
-        scale = max(float(np.abs(points[:2]).max()), 1.0)
-        if np.abs(points[2]).max() > 1e-12 * scale:
-            surfaces = any(dim == 2 for dim, _, _ in names) or any(
-                tags is not None and np.any(np.asarray(tags) > 0)
-                for block, tags in zip(data.cells, data.cell_data.get("gmsh:physical", [None] * len(data.cells)))
-                if block.type == "triangle")
-            if surfaces:
-                raise CaseError(f"mesh file '{label}' is not a 2D mesh (nonzero z coordinates) and has no tetrahedra, "
-                                f"only triangles of physical surfaces: when a model has physical groups, gmsh saves "
-                                f"only their elements; add a Physical Volume for the body (e.g. Physical "
-                                f"Volume(\"body\") = {{1}};) and mesh again")
-            raise CaseError(f"mesh file '{label}' is not a 2D mesh (nonzero z coordinates) and has no tetrahedra: "
-                            f"mesh the volume in 3D (gmsh -3), or put a plane body's nodes in the plane z = 0")
-        points = points[:2]
-    return points
-
-
-def _check_cell_types(label: str, cells: list, dim: int) -> None:
-    """Refuse cells other than the linear cells of a `dim`-dimensional mesh (triangles or tetrahedra, and
-    cells of lower dimension), with the gmsh setting to change."""
-    counts: dict[str, int] = {}
-    for block in cells:
-        counts[block.type] = counts.get(block.type, 0) + len(block.data)
-    allowed = [simplex.cell_type for simplex in SIMPLICES[:dim + 1]]
-    others = {kind: count for kind, count in counts.items() if kind not in allowed}
-    if not others:
-        return
-    listed = ", ".join(f"{count} {kind}" for kind, count in others.items())
-    elements = SIMPLICES[dim].plural
-    solids = {kind: count for kind, count in others.items() if kind.startswith(("hexahedron", "wedge", "pyramid"))}
-    if solids:
-        raise CaseError(f"mesh file '{label}' has {', '.join(f'{c} {k}' for k, c in solids.items())} cells and "
-                        f"{counts.get('tetra', 0)} tetrahedra: vpcontact uses linear tetrahedra only; mesh without "
-                        f"recombination: Mesh.RecombineAll = 0, Mesh.Recombine3DAll = 0, no Recombine Surface or "
-                        f"Volume and no Recombine in Extrude")
-    quadrilaterals = sum(count for kind, count in others.items() if kind.startswith("quad"))
-    if quadrilaterals:
-        raise CaseError(f"mesh file '{label}' has {quadrilaterals} quadrilaterals and "
-                        f"{counts.get(SIMPLICES[dim].cell_type, 0)} {elements}: vpcontact uses linear {elements} "
-                        f"only; mesh without recombination: Mesh.RecombineAll = 0 and no Recombine Surface")
-    if any(kind.startswith(("tetra", "triangle", "line")) for kind in others):
-        raise CaseError(f"mesh file '{label}' has second-order or higher-order elements ({listed}): use first-order "
-                        f"elements: Mesh.ElementOrder = 1 (gmsh -order 1)")
-    raise CaseError(f"mesh file '{label}' has cells that are not linear {elements} ({listed}): vpcontact uses linear "
-                    f"{elements} only")
-
-
-def _no_triangles(label: str, data: meshio.Mesh, names: list[tuple[int, int, str]]) -> str:
-    """Why a mesh file has no triangles, and the fix."""
-    curves = any(dim == 1 for dim, _, _ in names) or any(
-        tags is not None and np.any(np.asarray(tags) > 0)
-        for block, tags in zip(data.cells, data.cell_data.get("gmsh:physical", [None] * len(data.cells)))
-        if block.type == "line")
-    if curves:
-        return (f"mesh file '{label}' has no triangles, only lines of physical curves: when a model has physical "
-                f"groups, gmsh saves only their elements; add a Physical Surface for the body (e.g. "
-                f"Physical Surface(\"body\") = {{1}};) and mesh again")
-    return f"mesh file '{label}' has no triangles: mesh the surface in 2D (gmsh -2) and save it"
