@@ -22,7 +22,8 @@ DOCS = REPO / "docs"
 GENERATED = ("gallery", "sg_execution_times.rst", "_build")
 """What a build writes into a docs folder, left out of the copy."""
 PAGES = ("index", "readme", "api/index", "gallery/index", "3d", "accuracy", "adaptivity", "factorizations",
-         "heterogeneity", "long-runs", "performance", "reproduce", "viscoplasticity", "architecture")
+         "heterogeneity", "long-runs", "performance", "reproduce", "viscoplasticity", "architecture",
+         "units")
 
 
 def copy_sources(target: Path) -> Path:

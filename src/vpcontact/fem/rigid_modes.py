@@ -84,11 +84,12 @@ class RigidModes:
         return blocks
 
     def unheld(self, *constraints: sp.spmatrix) -> tuple[np.ndarray, np.ndarray]:
-        """The motions the ``constraints`` do not hold: for each body the number of them and a unit
-        combination of its modes that is free (the least held one): (count,), (count, per_body)."""
+        """The motions the ``constraints`` do not hold: for each body b their number k_b and orthonormal
+        combinations of its modes, the first k_b of which span them (least held first): (count,),
+        (count, per_body, per_body)."""
         values, vectors = np.linalg.eigh(self.grams(*constraints))
         free = np.count_nonzero(values <= HELD * np.maximum(values[:, -1:], 1.0), axis=1)
-        return free, vectors[:, :, 0]
+        return free, vectors
 
     def free_basis(self, free: np.ndarray) -> np.ndarray:
         """An orthonormal basis, over the ``free`` dofs, of the motions that vanish on every other dof

@@ -18,6 +18,7 @@ from ..mesh.cells import component, coordinates
 from ..fem.contact_surface import ContactSurface
 from ..laws.python_laws import check_returned, tried
 from ..mesh.mesh import Mesh
+from .free_motions import free_motions_in_words
 from .initial import InitialState
 from .options import ProblemOptions
 
@@ -98,51 +99,33 @@ def check_rigid_motions(mesh: Mesh, basis: Basis, free: np.ndarray, surface: Con
     """Refuse a body, or a separate part of the mesh, whose rigid motions are held neither by
     Dirichlet conditions nor by contact: the motions of each connected part (the d translations and
     the rotations about its centroid scaled by its size, :mod:`vpcontact.fem.rigid_modes`) must stay
-    independent on the fixed dofs and the contact normals of that part."""
+    independent on the fixed dofs and the contact normals of that part. The refusal names the free
+    motions (:mod:`vpcontact.problem.free_motions`) and how to hold them."""
     modes = RigidModes.of_mesh(mesh.mesh.p, mesh.mesh.t, basis.nodal_dofs)
     fixed = np.ones(basis.N, dtype=bool)
     fixed[free] = False
-    free_motions, least_held = modes.unheld(sp.eye(basis.N, format="csr")[fixed], surface.operator)
+    free_motions, combinations = modes.unheld(sp.eye(basis.N, format="csr")[fixed], surface.operator)
     loose = np.flatnonzero(free_motions)
     if loose.size == 0:
         return
     b, count = loose[0], modes.count
     where = "the Dirichlet conditions and the contact part" if surface.size else "the Dirichlet conditions"
-    if free_motions[b] > 1:
-        words = ("", "one", "two", "three", "four", "five", "six")
-        motion = (f"all {words[modes.per_body]}" if free_motions[b] == modes.per_body
-                  else f"{words[free_motions[b]]} of the {words[modes.per_body]}")
-    else:
-        motion = _rigid_motion(least_held[b], modes.centroid[:, b], modes.size[b])
+    motions = free_motions_in_words(combinations[b][:, :free_motions[b]], modes.centroid[:, b], modes.size[b])
+    them = "them" if free_motions[b] > 1 else "it"
     if count == 1:
-        raise CaseError(f"{where} leave a rigid motion of the body free ({motion}): add boundary.dirichlet entries")
+        raise CaseError(f"{where} leave {motions} of the body free: hold {them} with boundary.dirichlet entries on "
+                        f"parts that block {them} (holding a component on a part blocks the translation along it; a "
+                        f"rotation needs a part held off its axis in the direction it turns there), e.g. rollers on "
+                        f"the symmetry planes of a half or quarter model")
     p = mesh.mesh.p
     inside = np.flatnonzero(modes.body == b)
     point = inside[np.argmin(np.sum((p[:, inside] - modes.centroid[:, b:b + 1]) ** 2, axis=0))]
     nodes = np.bincount(modes.body, minlength=count)
-    raise CaseError(f"the mesh has {count} separate parts; {where} leave a rigid motion of the part of {nodes[b]} "
-                    f"nodes through the node at {_point(p[:, point])} free ({motion})"
-                    f"{f' (and of {loose.size - 1} more)' if loose.size > 1 else ''}: add boundary.dirichlet "
-                    f"entries on it, or join it to the rest of the mesh")
-
-
-def _rigid_motion(combination: np.ndarray, centroid: np.ndarray, size: float) -> str:
-    """A rigid motion in words, from its coefficients on the modes of :mod:`vpcontact.fem.rigid_modes`:
-    d translations, then the rotations in the planes xy (2D), or xy, yz, zx (3D), about ``centroid``
-    and scaled by ``size``: "a translation along (…)", "a rotation about (…)" (2D) or "a rotation about
-    the axis through (…) along (…)" (3D)."""
-    d = centroid.size
-    combination = combination * np.sign(combination[np.argmax(np.abs(combination))])
-    translation, rotation = combination[:d], combination[d:]
-    if np.linalg.norm(rotation) < 1e-9:
-        return f"a translation along {_point(translation / np.linalg.norm(translation), 3)}"
-    if d == 2:  # u = t + ω e_z × (x − c)/size vanishes at x = c + size (−t_y, t_x)/ω
-        center = centroid + size * np.array([-translation[1], translation[0]]) / rotation[0]
-        return f"a rotation about {_point(np.round(center / size, 9) * size)}"
-    axis = rotation[[1, 2, 0]]  # rotations in the planes yz, zx, xy: the axis components x, y, z
-    point = centroid + size * np.cross(axis, translation) / (axis @ axis)
-    return (f"a rotation about the axis through {_point(np.round(point / size, 9) * size)} along "
-            f"{_point(axis / np.linalg.norm(axis), 3)}")
+    raise CaseError(f"the mesh has {count} separate parts; {where} leave {motions} of the part of {nodes[b]} "
+                    f"nodes through the node at {_point(p[:, point])} free"
+                    f"{f' (and motions of {loose.size - 1} more parts)' if loose.size > 1 else ''}: hold {them} "
+                    f"with boundary.dirichlet entries on parts of it that block {them}, or join it to the rest of "
+                    f"the mesh")
 
 
 def _point(x: np.ndarray, digits: int = 6) -> str:
