@@ -104,7 +104,7 @@ def test_a_new_stiffness_law_is_one_module_and_one_registration(tmp_path):
     positive, unknown = json.loads(process.stdout.splitlines()[-1])
     assert positive == "contact.stiffness.c_v: expected a number >= 0 or an expression in the coordinates, got -1.0"
     assert unknown == ('contact.stiffness.law = "quadratic": unknown law; expected one of "power", "constant", '
-                       '"exponential", "linear"')
+                       '"exponential", "table", "linear"')
     contact = pd.read_csv(out / "contact.csv")
     expected = closed_form()
     for name, column in (("penetration", 0), ("xi", 1)):
@@ -119,14 +119,22 @@ def test_a_new_stiffness_law_is_one_module_and_one_registration(tmp_path):
 
 @pytest.mark.parametrize("registry", [STIFFNESS, COMPLIANCE])
 def test_every_contact_law_has_its_parameters_and_its_derivative(registry):
-    """The contract of a K or p law: its object has its parameters as attributes (per node: arrays work), is
-    vectorized, and its derivative is the central difference of its values."""
+    """The contract of a K or p law: its object has its parameters as attributes (per node: arrays work; a
+    table's points: an increasing table from 0), is vectorized, and its derivative is the central difference
+    of its values (away from a table's breakpoints)."""
     rng = np.random.default_rng(1)
     r = rng.uniform(0.05, 0.5, 7)
+
+    def value(parameter):
+        if parameter.choices:
+            return parameter.choices[-1]
+        if parameter.points:  # the abscissae, then the values, of a table whose breakpoints r avoids
+            return np.array([0.0, 0.011, 0.6]) if parameter.minimum is None else np.array([0.0, 0.02, 0.9])
+        return rng.uniform(1.0, 2.0, 7) if parameter.name != "beta" else rng.uniform(-2.0, 2.0, 7)
+
     for law in registry.values():
-        values = {p.name: rng.uniform(1.0, 2.0, 7) if p.name != "beta" else rng.uniform(-2.0, 2.0, 7)
-                  for p in law.parameters}
-        made = law.make(**values)
+        values = {p.name: value(p) for p in law.parameters}
+        made = law.made(lambda parameter: values[parameter.name])
         assert all(np.array_equal(getattr(made, name), value) for name, value in values.items()), law.name
         assert made(r).shape == r.shape, law.name
         delta = 1e-6
@@ -150,8 +158,8 @@ def test_every_viscoplastic_law_is_a_lipschitz_map_of_the_stress():
 
 
 def test_the_registries_list_the_case_names_in_order():
-    assert STIFFNESS.names == ("power", "constant", "exponential")
-    assert COMPLIANCE.names == ("positive_part", "power")
+    assert STIFFNESS.names == ("power", "constant", "exponential", "table")
+    assert COMPLIANCE.names == ("positive_part", "power", "table")
     assert VISCOPLASTIC.names == ("perzyna", "relaxation")
     assert [law.name for law in STIFFNESS.values()] == list(STIFFNESS)
 

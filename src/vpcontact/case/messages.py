@@ -60,6 +60,8 @@ def describe(error: dict) -> str:
         message = str(ctx.get("error", error["msg"]))
         if message.startswith("= "):  # "= <value>: ..." of a validator that does not know its key
             return f"{key} {message}"
+        if message.startswith("."):  # ".xi = <value>: ..." of a table's validator naming one of its keys
+            return f"{key}{message}"
         if key in ("", "mesh", "material", "contact", "output") or message.startswith(key):
             return message
         name = loc[-1] if loc else ""

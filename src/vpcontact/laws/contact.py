@@ -90,9 +90,15 @@ class PiecewiseLaw:
 def law_at_nodes(law: Law, parameters: Mapping, key: str, points: np.ndarray):
     """The object of ``law`` (a law K or p of the registries) on a contact part whose nodes are ``points`` (d, k):
     each of its parameters, ``parameters[name]`` of the case key ``key.name``, a number or an expression's values
-    at the nodes (:func:`layer_parameter`, checked against the parameter's bound)."""
-    return law.made(lambda parameter: layer_parameter(f"{key}.{parameter.name}", parameters[parameter.name],
-                                                      parameter.minimum, points=points, strict=parameter.strict))
+    at the nodes (:func:`layer_parameter`, checked against the parameter's bound), or a table's points or
+    choice as they are (the same at every node of the part)."""
+    def value(parameter):
+        if not parameter.per_node:
+            return parameters[parameter.name]
+        return layer_parameter(f"{key}.{parameter.name}", parameters[parameter.name], parameter.minimum,
+                               points=points, strict=parameter.strict)
+
+    return law.made(value)
 
 
 def layer_parameter(where: str, value, minimum: float | None = None, *, points: np.ndarray, strict: bool = False):
@@ -130,19 +136,21 @@ def per_node(values: list, owner: np.ndarray) -> float | np.ndarray:
 def merged_law(laws: list, owner: np.ndarray):
     """One law over all the contact nodes from ``laws[j]`` at the nodes where ``owner == j``: the same
     family everywhere gives that family with its parameters per_node, different families (or laws
-    without named parameters) a PiecewiseLaw."""
+    without named parameters, or tables, whose points are not per node) a PiecewiseLaw."""
     first = laws[0]
     if len(laws) == 1:
         return first
     declared = _declared(first)
-    if declared is None or any(type(law) is not type(first) for law in laws):
+    if (declared is None or any(type(law) is not type(first) for law in laws)
+            or not all(parameter.per_node for parameter in declared.parameters)):
         return PiecewiseLaw(tuple(laws), owner)
     return declared.made(lambda parameter: per_node([getattr(law, parameter.name) for law in laws], owner))
 
 
 def law_parameters(law, m: int) -> dict[str, np.ndarray]:
     """The named parameters of ``law`` at the m contact nodes (NaN at the nodes of a PiecewiseLaw's part
-    whose law has not that parameter); none for a Python law (its parameters are unknown)."""
+    whose law has not that parameter): its numbers, not a table's points; none for a Python law (its
+    parameters are unknown)."""
     if isinstance(law, PiecewiseLaw):
         values: dict[str, np.ndarray] = {}
         for j, part_law in enumerate(law.laws):
@@ -153,7 +161,8 @@ def law_parameters(law, m: int) -> dict[str, np.ndarray]:
     declared = _declared(law)
     if declared is None:
         return {}
-    return {p.name: np.broadcast_to(np.asarray(getattr(law, p.name), dtype=float), (m,)) for p in declared.parameters}
+    return {p.name: np.broadcast_to(np.asarray(getattr(law, p.name), dtype=float), (m,)) for p in declared.parameters
+            if p.per_node}
 
 
 def _declared(law) -> Law | None:
@@ -164,8 +173,9 @@ def _declared(law) -> Law | None:
 
 def layer_parameters() -> tuple[str, ...]:
     """The layer's parameters per contact node, in the order of the outputs' columns: g, then those of the
-    laws K and p in the order of their registries."""
-    names = [p.name for registry in (STIFFNESS, COMPLIANCE) for law in registry.values() for p in law.parameters]
+    laws K and p in the order of their registries (their numbers: a table's points are not per node)."""
+    names = [p.name for registry in (STIFFNESS, COMPLIANCE) for law in registry.values() for p in law.parameters
+             if p.per_node]
     return ("g", *dict.fromkeys(names))
 
 
