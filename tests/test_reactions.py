@@ -135,3 +135,21 @@ def test_a_viscoplastic_body_balances(tmp_path, method):
     assert result.final.z is not None and np.abs(result.final.z).max() > 1.0  # the history is not negligible
     assert relative(history["reaction_left_x"], -7 * history["t"]) < 1e-9
     assert summary["final"]["balance"]["relative_residual"] < 1e-9
+
+
+def test_the_force_displacement_and_contact_area_figures_draw_the_history():
+    """result.plot.force_displacement draws the part's reaction against its mean displacement, contact_area the
+    two areas against t, the numbers of result.history; a part that is not held is one line naming the held ones."""
+    result = vpcontact.solve(cantilever())
+    history = result.history
+    figure = result.plot.force_displacement("left", force="y", displacement="x")
+    (line,) = figure.axes[0].get_lines()
+    np.testing.assert_array_equal(line.get_xdata(), history["displacement_left_x"])
+    np.testing.assert_array_equal(line.get_ydata(), history["reaction_left_y"])
+    figure = result.plot.contact_area()
+    for ax, column in zip(figure.axes, ("contact_area", "limit_area")):
+        np.testing.assert_array_equal(ax.get_lines()[0].get_ydata(), history[column])
+    with pytest.raises(vpcontact.CaseError, match="'top' is not a Dirichlet part of the run; its Dirichlet parts: left"):
+        result.plot.force_displacement("top")
+    with pytest.raises(vpcontact.CaseError, match="force = 'w': expected one of x, y"):
+        result.plot.force_displacement("left", force="w")
