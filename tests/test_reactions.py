@@ -153,3 +153,22 @@ def test_the_force_displacement_and_contact_area_figures_draw_the_history():
         result.plot.force_displacement("top")
     with pytest.raises(vpcontact.CaseError, match="force = 'w': expected one of x, y"):
         result.plot.force_displacement("left", force="w")
+
+
+def test_a_3d_block_on_rollers_balances(tmp_path):
+    """The 3D block held in x at x = 0 and in y at y = 0, pushed down onto a flat layer (normal −z): no force in x
+    or y reaches the rollers (R_x = R_y = 0 to 1e-9 of the load), the layer carries the load, the forces balance;
+    the contact area is the sum of contact.csv's weights where d > 0 and grows with the load."""
+    from conftest import block_3d_case
+
+    history, contact, summary, _ = written(block_3d_case(), tmp_path)
+    load = np.abs(history["applied_force_z"]).to_numpy()
+    assert relative(load, 30 * history["t"]) < 1e-12  # −30t on the unit square top
+    for column in ("reaction_left_x", "reaction_front_y"):
+        assert np.all(np.abs(history[column]) <= 1e-9 * load), column
+    assert np.all(history[["reaction_left_y", "reaction_left_z", "reaction_front_x", "reaction_front_z"]] == 0)
+    assert relative(history["contact_force_z"], load) < 1e-9
+    last = contact[contact["step"] == contact["step"].max()]
+    assert history["contact_area"].iloc[-1] == pytest.approx(last["weight"][last["penetration"] > 0].sum(), rel=1e-12)
+    assert 0 < history["contact_area"].iloc[0] < history["contact_area"].iloc[-1] < 1
+    assert summary["final"]["balance"]["relative_residual"] < 1e-9

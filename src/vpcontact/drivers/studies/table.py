@@ -34,8 +34,11 @@ def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = N
                     "newton_iterations": summary.get("newton_iterations")})
         final = dict(summary.get("final") or {})
         force = final.pop("contact_force", [None, None])
+        balance = final.pop("balance", {})  # of its sums, the relative residual
         row.update(final)
         row.update({f"contact_force_{c}": value for c, value in zip(COORDINATES, force)})
+        if balance:
+            row["balance_relative_residual"] = balance["relative_residual"]
         if reference:
             mine = _snapshots(study, spec.id) if summary.get("status") == "complete" else {}
             for t in study.times:
