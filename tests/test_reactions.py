@@ -65,7 +65,7 @@ def test_a_block_held_at_its_bottom_carries_the_load(tmp_path):
     assert relative(history["reaction_bottom_y"], 5 * t) < 1e-9
     assert relative(history["applied_force_x"], 3 * t) < 1e-12
     assert np.all(history[["displacement_bottom_x", "displacement_bottom_y", "contact_area", "limit_area"]] == 0)
-    assert summary["final"]["balance"]["relative_residual"] < 1e-9
+    assert summary["final"]["balance_relative_residual"] < 1e-9
     assert summary["final"]["contact_area"] == 0
 
 
@@ -73,9 +73,12 @@ def test_a_block_held_at_its_bottom_carries_the_load(tmp_path):
 def test_rollers_carry_the_tangential_load_and_the_layer_the_normal_one(tmp_path, method):
     """Held in x on the left, on a frictionless layer: the left side carries −7t (the whole x resultant) and
     nothing in y, the foundation 100t; every bottom node is in contact: the contact area is the bottom's length
-    1 (and the sum of contact.csv's weights where d > 0); the limit area is that of the nodes at the limit."""
-    history, contact, summary, _ = written(on_rollers(method), tmp_path)
+    1 (and the sum of contact.csv's weights where d > 0); the limit area is that of the nodes at the limit; the
+    mean displacement of the left side is that of the last level's displacement field at its nodes."""
+    history, contact, summary, result = written(on_rollers(method), tmp_path)
     t = history["t"].to_numpy()
+    left = result.discretization.mesh.nodes("left")  # the mean displacement, against the last level's field
+    assert history["displacement_left_y"].iloc[-1] == pytest.approx(result.final.displacement[left, 1].mean(), rel=1e-10)
     assert relative(history["reaction_left_x"], -7 * t) < 1e-9
     assert np.all(np.abs(history["reaction_left_y"]) == 0)  # y is not held: no dof contributes
     assert relative(history["contact_force_y"], 100 * t) < 1e-9
@@ -88,9 +91,10 @@ def test_rollers_carry_the_tangential_load_and_the_layer_the_normal_one(tmp_path
     assert np.allclose(history.set_index("step")["contact_area"], in_contact, rtol=1e-12, atol=0)
     assert np.allclose(history.set_index("step")["limit_area"], at_limit, rtol=1e-12, atol=0)
     assert history["limit_area"].iloc[0] == 0 and history["limit_area"].iloc[-1] == pytest.approx(1.0, rel=1e-12)
-    balance = summary["final"]["balance"]
-    assert balance["relative_residual"] < 1e-9
-    assert balance["reaction"][0] == pytest.approx(-7 * 1.1, rel=1e-9)
+    final = summary["final"]
+    assert final["balance_relative_residual"] < 1e-9
+    assert final["reaction"][0] == pytest.approx(-7 * 1.1, rel=1e-9)
+    assert final["applied_force"] == pytest.approx([7 * 1.1, -100 * 1.1], rel=1e-12)
 
 
 def test_no_contact_area_before_contact_and_the_reaction_of_a_cantilever(tmp_path):
@@ -109,7 +113,7 @@ def test_no_contact_area_before_contact_and_the_reaction_of_a_cantilever(tmp_pat
     assert relative(after["reaction_left_y"] + after["contact_force_y"], 100 * after["t"]) < 1e-9
     last = contact[contact["step"] == contact["step"].max()]
     assert history["contact_area"].iloc[-1] == pytest.approx(last["weight"][last["penetration"] > 0].sum(), rel=1e-12)
-    assert summary["final"]["balance"]["relative_residual"] < 1e-9
+    assert summary["final"]["balance_relative_residual"] < 1e-9
     assert relative(history["applied_force_y"], -100 * t) < 1e-12
 
 
@@ -134,7 +138,7 @@ def test_a_viscoplastic_body_balances(tmp_path, method):
     history, _, summary, result = written(case, tmp_path)
     assert result.final.z is not None and np.abs(result.final.z).max() > 1.0  # the history is not negligible
     assert relative(history["reaction_left_x"], -7 * history["t"]) < 1e-9
-    assert summary["final"]["balance"]["relative_residual"] < 1e-9
+    assert summary["final"]["balance_relative_residual"] < 1e-9
 
 
 def test_the_force_displacement_and_contact_area_figures_draw_the_history():
@@ -171,4 +175,20 @@ def test_a_3d_block_on_rollers_balances(tmp_path):
     last = contact[contact["step"] == contact["step"].max()]
     assert history["contact_area"].iloc[-1] == pytest.approx(last["weight"][last["penetration"] > 0].sum(), rel=1e-12)
     assert 0 < history["contact_area"].iloc[0] < history["contact_area"].iloc[-1] < 1
-    assert summary["final"]["balance"]["relative_residual"] < 1e-9
+    assert summary["final"]["balance_relative_residual"] < 1e-9
+
+
+def test_a_dof_held_by_two_parts_is_shared_and_the_parts_add_up(tmp_path):
+    """The bottom held (u = 0) and the left side held in x: their corner's x dof is shared equally, and the two
+    parts' x reactions add up to the whole, −3t; the bottom alone carries 5t in y."""
+    case = rectangle_case()
+    del case["contact"]
+    case["boundary"]["dirichlet"] = [{"part": "bottom"}, {"part": "left", "components": ["x"]}]
+    case["boundary"]["traction"] = [{"part": "top", "value": ["3*t", "-5*t"]}]
+    history, _, summary, _ = written(case, tmp_path)
+    t = history["t"]
+    assert np.all(history["reaction_left_x"].abs() > 1e-3 * t)  # the left side takes a share
+    assert relative(history["reaction_left_x"] + history["reaction_bottom_x"], -3 * t) < 1e-9
+    assert relative(history["reaction_bottom_y"], 5 * t) < 1e-9
+    assert np.all(history["reaction_left_y"] == 0)
+    assert summary["final"]["balance_relative_residual"] < 1e-9

@@ -15,7 +15,7 @@ equilibrium (a dof held by several parts is shared equally among them, so that t
 to the whole reaction), 0 in a component the part does not hold; ``displacement_<part>_<c>``, the mean of u_c
 over the part's nodes (the plain mean of the nodal values, not weighted; 0 in a held component). At a
 converged level the reactions, the applied force and the contact force balance (summary.json's
-``final.balance``).
+``final.balance_relative_residual``).
 """
 
 from __future__ import annotations
@@ -23,12 +23,14 @@ from __future__ import annotations
 from ..mesh.cells import coordinates
 
 
-def history_columns(dim: int) -> tuple[str, ...]:
-    """The columns of history.csv for a d-dimensional body (one contact force component per coordinate)."""
+def history_columns(dim: int, held_parts: tuple[str, ...] = ()) -> tuple[str, ...]:
+    """The columns of history.csv for a d-dimensional body (one force component per coordinate) held by the
+    Dirichlet ``held_parts`` (their :func:`held_part_columns` before ``substep`` and ``k``)."""
     return ("step", "t", "newton_iterations", "residual", "complementarity", "max_penetration", "mean_penetration",
             "K_min", "K_max", "K_probe", "penetration_probe", "normal_stress_probe", "nodes_separated",
             "nodes_in_compliance", "nodes_at_limit", *(f"contact_force_{c}" for c in coordinates(dim)), "contact_area",
-            "limit_area", *(f"applied_force_{c}" for c in coordinates(dim)), "substep", "k")
+            "limit_area", *(f"applied_force_{c}" for c in coordinates(dim)), *held_part_columns(dim, held_parts),
+            "substep", "k")
 
 
 def held_part_columns(dim: int, parts: tuple[str, ...]) -> tuple[str, ...]:

@@ -24,7 +24,7 @@ from ..errors import CaseError, shown
 from ..mesh.cells import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from ..problem.discretization import Discretization
-from .columns import CONTACT_ARRAYS, INTEGER_COLUMNS, estimate_columns, held_part_columns, history_columns
+from .columns import CONTACT_ARRAYS, INTEGER_COLUMNS, estimate_columns, history_columns
 from .balance import balance
 from .steps import end_of_step_rows, field_step_numbers, step_ends
 
@@ -228,7 +228,7 @@ class Result:
         """The history columns (history.csv) of this run's dimension, and with ``output.error_estimate``
         the estimate_columns of the estimator's terms."""
         held = self.discretization.held_parts if self.discretization is not None else ()
-        return history_columns(self.dim) + held_part_columns(self.dim, held) + estimate_columns(self.estimate_terms)
+        return history_columns(self.dim, held) + estimate_columns(self.estimate_terms)
 
     @property
     def steps(self) -> int:
@@ -293,7 +293,7 @@ class Result:
                                                  "nodes_in_compliance", "nodes_at_limit")}
             final["contact_force"] = [last[f"contact_force_{c}"] for c in coordinates(self.dim)]
             final.update(contact_area=last["contact_area"], limit_area=last["limit_area"],
-                         balance=balance(last, self.dim, self.discretization.held_parts))
+                         **balance(last, self.dim, self.discretization.held_parts))
             if self.estimate_terms:
                 final["error_estimate"] = last["error_estimate"]
         return {

@@ -16,7 +16,7 @@ rows, restricted to the free dofs, are one small matrix M (2 k rows, k = parts �
 applies to its solution (``solver.functionals``: the condensed method without recovering u). Summed over every
 dof, A u and Bᵀz vanish (a translation strains nothing), so the reactions, the applied force Σ F(t) and the
 contact force −Σ_i (w_i ρKp + λ_i) ν_i balance, to the residual of the free dofs' equilibrium: summary.json
-reports it (:func:`vpcontact.results.balance.balance`).
+reports how well (:func:`vpcontact.results.balance.balance`).
 """
 
 from __future__ import annotations
