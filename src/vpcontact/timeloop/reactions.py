@@ -1,6 +1,6 @@
 """The forces of the Dirichlet conditions and the motion of the parts they hold, at a converged level.
 
-At a converged level the discrete equilibrium (README, "the step problem")
+At a converged level the discrete equilibrium of the step (README)
 
     A u + Σ_i N_iᵀ (w_i ρK(ξ)p(d_i) + λ_i) = F(t) − Bᵀz
 
