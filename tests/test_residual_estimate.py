@@ -226,7 +226,7 @@ def test_the_run_records_the_estimate_of_every_step_when_asked():
     data = half_disc_case(h=0.25, stiffness={"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0}, load=40.0)
     data["output"] = {"field_steps": [5, 11], "error_estimate": True}
     problem, result = solve(data)
-    assert result.columns == history_columns(2) + ESTIMATE_COLUMNS
+    assert result.columns == history_columns(2, ("axis",)) + ESTIMATE_COLUMNS
     eta = result.series("error_estimate")
     assert eta.size == result.steps and np.all(eta > 0)
     shares = np.array([result.series(f"error_estimate_{term}") for term in TERMS])
@@ -237,7 +237,7 @@ def test_the_run_records_the_estimate_of_every_step_when_asked():
         np.testing.assert_allclose(result.fields[step].error_indicator, np.sqrt(indicators.squared), rtol=1e-12)
     data["output"]["error_estimate"] = False
     _, plain = solve(data)
-    assert plain.columns == history_columns(2)
+    assert plain.columns == history_columns(2, ("axis",))
     assert plain.fields[11].error_indicator is None
 
 
@@ -248,7 +248,7 @@ def test_the_cli_writes_the_estimate_columns_and_cell_data(tmp_path):
     assert status == 0, stderr
     with open(out / "history.csv") as handle:
         rows = list(csv.DictReader(handle))
-    assert list(rows[0]) == list(history_columns(2) + ESTIMATE_COLUMNS)
+    assert list(rows[0]) == list(history_columns(2, ("axis",)) + ESTIMATE_COLUMNS)
     body = meshio.read(out / "fields" / "body_00011.vtu")
     indicator = body.cell_data["error_indicator"][0]
     assert np.sqrt((indicator**2).sum()) == pytest.approx(float(rows[-1]["error_estimate"]), rel=1e-12)
@@ -256,7 +256,7 @@ def test_the_cli_writes_the_estimate_columns_and_cell_data(tmp_path):
                                 str(tmp_path / "plain"), "--quiet")
     assert status == 0, stderr
     with open(tmp_path / "plain" / "history.csv") as handle:
-        assert next(csv.reader(handle)) == list(history_columns(2))
+        assert next(csv.reader(handle)) == list(history_columns(2, ("axis",)))
     assert "error_indicator" not in meshio.read(tmp_path / "plain" / "fields" / "body_00011.vtu").cell_data
 
 
@@ -334,7 +334,7 @@ def test_a_3d_run_records_the_estimate():
     case = vpcontact.load_case("examples/quarter_ball.toml", {"mesh.h": 0.6, "output.field_steps": [11],
                                                              "output.error_estimate": True})
     problem, result = solved(case)
-    assert result.columns == history_columns(3) + ESTIMATE_COLUMNS
+    assert result.columns == history_columns(3, ("sym_x", "sym_y")) + ESTIMATE_COLUMNS
     level = Level.of(result, 11, problem)
     assert result.series("error_estimate")[-1] == pytest.approx(estimate(level).total, rel=1e-12)
     assert result.fields[11].error_indicator.shape == (result.elements,)

@@ -36,6 +36,7 @@ class Discretization:
     layer: dict[str, np.ndarray]
     probe: int | None
     source: str | None
+    held_parts: tuple[str, ...] = ()  # the Dirichlet parts, in the order of boundary.dirichlet (history columns)
 
     @classmethod
     def of(cls, problem) -> "Discretization":
@@ -45,10 +46,16 @@ class Discretization:
         if len(surface.parts) > 1:
             layer["part"] = np.asarray(surface.parts)[surface.owner]
         return cls(problem.mesh, surface, problem.times, problem.elasticity, problem.materials.owner, layer,
-                   problem.probe, problem.source)
+                   problem.probe, problem.source, held_parts(problem.options))
 
     @property
     def materials(self) -> Materials:
         """ℰ and the material entry of each element (E and ν per element: ``materials.E``, ``materials.nu``),
         without the viscoplastic law (a function of the problem, left behind with it)."""
         return Materials(self.material, self.elasticity, None)
+
+
+def held_parts(options) -> tuple[str, ...]:
+    """The names of the parts that Dirichlet conditions hold (``boundary.dirichlet``), each once, in the order of
+    their first entry."""
+    return tuple(dict.fromkeys(str(item.part) for item in options.boundary.dirichlet))

@@ -25,6 +25,7 @@ from ..mesh.cells import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED
 from ..problem.discretization import Discretization
 from .columns import CONTACT_ARRAYS, INTEGER_COLUMNS, estimate_columns, history_columns
+from .balance import balance
 from .steps import end_of_step_rows, field_step_numbers, step_ends
 
 #: Most characters of a run's message that ``repr(result)`` shows (on its second line).
@@ -125,9 +126,10 @@ class Result:
 
     # --- filling in ------------------------------------------------------------------------------
     def record(self, n, t, solution, fields: Fields | None, *, xi, K, compliance, status, substep: int = 1,
-               k: float = float("nan"), ends_step: bool = True):
+               k: float = float("nan"), ends_step: bool = True, held: dict):
         """Store a converged time level of step n (the step itself, or its sub-step ``substep`` of
-        length k; ``ends_step``: t = t_n): the solver report, the contact state, the fields if computed."""
+        length k; ``ends_step``: t = t_n): the solver report, the contact state, the fields if computed;
+        ``held``: the applied force and the Dirichlet parts' columns (``held_part_columns``)."""
         surface = self.discretization.surface
         w, normals = surface.weights, surface.normals
         rigid = np.divide(solution.lam, w, out=np.zeros_like(w), where=w > 0)
@@ -151,7 +153,8 @@ class Result:
             "nodes_in_compliance": int(np.sum(status == IN_COMPLIANCE)),
             "nodes_at_limit": int(np.sum(status == AT_LIMIT)),
             **{f"contact_force_{c}": force[i] for i, c in enumerate(coordinates(self.dim))},
-            "substep": substep, "k": k,
+            "contact_area": w[d > 0].sum(), "limit_area": w[status == AT_LIMIT].sum(),
+            **held, "substep": substep, "k": k,
         })
         self._times.append(t)
         if ends_step:
@@ -224,7 +227,8 @@ class Result:
     def columns(self) -> tuple[str, ...]:
         """The history columns (history.csv) of this run's dimension, and with ``output.error_estimate``
         the estimate_columns of the estimator's terms."""
-        return history_columns(self.dim) + estimate_columns(self.estimate_terms)
+        held = self.discretization.held_parts if self.discretization is not None else ()
+        return history_columns(self.dim, held) + estimate_columns(self.estimate_terms)
 
     @property
     def steps(self) -> int:
@@ -288,6 +292,8 @@ class Result:
                                                  "penetration_probe", "normal_stress_probe", "nodes_separated",
                                                  "nodes_in_compliance", "nodes_at_limit")}
             final["contact_force"] = [last[f"contact_force_{c}"] for c in coordinates(self.dim)]
+            final.update(contact_area=last["contact_area"], limit_area=last["limit_area"],
+                         **balance(last, self.dim, self.discretization.held_parts))
             if self.estimate_terms:
                 final["error_estimate"] = last["error_estimate"]
         return {

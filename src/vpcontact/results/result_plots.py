@@ -17,14 +17,17 @@ class ResultPlots:
     - ``states(step)``: the node states and the penetration on Γ3 at one step (default: the last);
     - ``deformed(step, field, scale)``: the deformed body coloured by a field
       (:func:`vpcontact.results.plots.body_fields` names them: ``von_mises``, ``displacement``, ``sigma_xx``, …,
-      ``error_indicator``).
+      ``error_indicator``);
+    - ``force_displacement(part, force, displacement)``: a Dirichlet part's reaction against its mean displacement;
+    - ``contact_area()``: the contact and limit areas against t.
     """
 
     def __init__(self, result):
         self.result = result
 
     def __repr__(self) -> str:
-        return "ResultPlots: time_series(columns), contact_pressure(step), states(step), deformed(step, field, scale)"
+        return ("ResultPlots: time_series(columns), contact_pressure(step), states(step), deformed(step, field, scale), "
+                "force_displacement(part, force, displacement), contact_area()")
 
     def time_series(self, columns=plots.TIME_SERIES):
         """History ``columns`` (see ``result.columns``) against t, one panel each."""
@@ -44,3 +47,12 @@ class ResultPlots:
         """The body deformed at a field ``step`` (default: the last one kept), magnified ``scale`` times
         (default: its largest displacement drawn at a tenth of its size), coloured by ``field``."""
         return plots.deformed_body(self.result, step, scale, field)
+
+    def force_displacement(self, part, force="y", displacement="y"):
+        """The reaction of the Dirichlet ``part`` in the component ``force`` against its mean displacement in the
+        component ``displacement`` (``reaction_<part>_<force>``, ``displacement_<part>_<displacement>``)."""
+        return plots.force_displacement(self.result, part, force, displacement)
+
+    def contact_area(self):
+        """The contact area (Σ w_i where d_i > 0) and the limit area against t (``contact_area``, ``limit_area``)."""
+        return plots.time_series(self.result, ("contact_area", "limit_area"))

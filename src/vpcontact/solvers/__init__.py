@@ -3,6 +3,7 @@
 ``make_solver(method, ...)`` returns an object with
     solve(step, previous) -> StepSolution        (previous: the last step's solution or None)
     displacement(step, solution) -> u            (at the free dofs)
+    functionals(M) -> (step, solution) ↦ M u    (a few rows over the free dofs: the reactions)
     work() -> SolverWork                         (its counters of work in the time loop)
     r, name, timings
 Methods: "full" (Newton on the whole system, its SPD systems by a sparse direct solver),

@@ -239,6 +239,22 @@ class CondensedNewton(SemismoothNewton):
         self._free_penetration(step)
         return self._recover(solution)
 
+    def functionals(self, M: sp.csr_matrix):
+        """(step, solution) ↦ M u for a few rows M over the free dofs (the reactions of the Dirichlet parts),
+        without recovering u: M A0⁻¹ (b − Nᵀq) = Yᵀ b − (N Y)ᵀ q with Y = A0⁻¹ Mᵀ, solved here once (as
+        ``rigid_coordinates`` does for Zᵀu)."""
+        Y = self.factorization.solve(M.T.toarray())
+        NY = self.N @ Y
+
+        def apply(step: StepData, solution: StepSolution) -> np.ndarray:
+            if solution.u is not None:
+                return M @ solution.u
+            state = ContactState.evaluate(step, self.weights, solution.d, solution.lam, self.r)
+            b = self._load_vector if step is self._step else step.b
+            return Y.T @ b - NY.T @ self._load(state, solution.d, solution.lam)
+
+        return apply
+
     def rigid_coordinates(self, step: StepData, solution: StepSolution) -> np.ndarray:
         """Zᵀu, the coordinates of the solution's displacement on the rigid motions held only by contact,
         without recovering u: Zᵀ A0⁻¹ (b − Nᵀq) = Yᵀ b − (N Y)ᵀ q with Y = A0⁻¹ Z (solved in the set-up)."""

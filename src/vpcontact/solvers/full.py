@@ -138,6 +138,10 @@ class FullNewton(SemismoothNewton):
         """u at the free dofs (the iterate itself)."""
         return solution.u
 
+    def functionals(self, M: sp.csr_matrix):
+        """(step, solution) ↦ M u for a few rows M over the free dofs (the reactions of the Dirichlet parts)."""
+        return lambda step, solution: M @ solution.u
+
     def rigid_coordinates(self, step: StepData, solution: StepSolution) -> np.ndarray:
         """Zᵀu: the coordinates of the solution's displacement on the rigid motions held only by contact."""
         return self.Z.T @ solution.u

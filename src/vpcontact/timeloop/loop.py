@@ -55,6 +55,7 @@ from ..solvers import DofLayout, SolverWork, StepData, StepSolution, make_solver
 from ..solvers.errors import NotConvergedError, SingularMatrixError
 from .checks import LawShapeError, failure_message, history_failure, invalid_law, pulled_off, viscoplastic_rate
 from .plan import free_operators, plan_run
+from .reactions import Reactions
 from .resting import FreeMotions, room
 from .snapshot import LoopSnapshot
 from .state import Attempt, LoopState, Trend
@@ -93,9 +94,12 @@ class TimeLoop:
                                   factorization=options.factorization, layout=layout, progress=progress,
                                   expected_seconds=plan.setup_seconds)
         self.max_cuts = options.max_step_cuts
-        self._loads = problem.loads.on(free)  # F(t) at the free dofs
+        self._loads = problem.loads.on(free)  # F(t) at the free dofs (where it can be nonzero: its support)
+        discretization = Discretization.of(problem)
+        self.reactions = Reactions(problem, discretization.held_parts)
+        self._functionals = None if self.reactions.M is None else self.solver.functionals(self.reactions.M)
         estimator = ESTIMATORS[EVERY_LEVEL] if output.error_estimate else None
-        self.result = Result.start(Discretization.of(problem), problem.basis.N, self.solver, output,
+        self.result = Result.start(discretization, problem.basis.N, self.solver, output,
                                    () if estimator is None else estimator.terms)
         self.estimator = None if estimator is None else estimator.prepare(problem)
         self._created = started
@@ -218,12 +222,14 @@ class TimeLoop:
         """Solve the step problem of the level at time t, h after the last one (the state is unchanged)."""
         problem, state = self.problem, self.state
         z = state.z_after(h)
-        b = self._loads(t)
+        load = problem.loads(t)  # F(t) at every dof: the free ones' is the step's, the held ones' the reactions'
+        b, history_force = load[problem.free], None
         support = None if z is not None else self._loads.support
         try:
             with np.errstate(all="ignore"):  # the solvers report iterates that are not finite
                 if z is not None:
-                    b -= stress_force(problem.basis, z)[problem.free]
+                    history_force = stress_force(problem.basis, z)
+                    b -= history_force[problem.free]
                 b, support, resultant = self.motions.without_rounding_resultant(b, support)
                 step = StepData(b, problem.law, state.xi, h, support)
                 solution = self.solver.solve(step, state.start(h))
@@ -235,7 +241,7 @@ class TimeLoop:
             solution = self._failed(f"the Newton system was not solved ({error})",
                                     "try smaller time steps (time.steps), or solver.method = \"full\" "
                                     "(a direct solver)")
-        return Attempt(t, h, step, z, solution, resultant)
+        return Attempt(t, h, step, z, solution, resultant, load=load, history_force=history_force)
 
     def _failed(self, message: str, advice: str) -> StepSolution:
         """The record of a step whose Newton iteration stopped on a failed linear solve."""
@@ -296,8 +302,11 @@ class TimeLoop:
             return (f"step {n} (t = {problem.times[n - 1]:g}) failed: {wrong[0]} is not finite at t = "
                     f"{attempt.t:.10g} ({cause})")
         self._substep += 1
+        functionals = None if self._functionals is None else self._functionals(attempt.step, solution)
+        held = self.reactions.row(functionals, compliance, solution.lam, attempt.load, attempt.history_force)
         result.record(n, attempt.t, solution, fields, xi=xi, K=K, compliance=compliance,
-                      status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step)
+                      status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step,
+                      held=held)
         self._level_without_fields = computed if fields is None else None
         if self.estimator is not None:
             level = Level(problem, n, attempt.t, h, fields, result.contact_row())

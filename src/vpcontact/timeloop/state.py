@@ -124,7 +124,8 @@ class Attempt:
     """A (sub-)step tried from the current state: it ends at t, h after the last level, with the step problem
     ``step``, the history z there and the solver's ``solution``; ``resultant``: ‖Zᵀb‖, the loads' resultant on
     the rigid motions held only by contact (0 when there are none); ``rigid``: Zᵀu where the time loop placed
-    the body itself (a level where nothing presses it: :mod:`vpcontact.timeloop.resting`), else None."""
+    the body itself (a level where nothing presses it: :mod:`vpcontact.timeloop.resting`), else None; ``load``: F(t)
+    and ``history_force``: Bᵀz at every dof (None: z = 0), for the reactions of the Dirichlet parts."""
 
     t: float
     h: float
@@ -133,3 +134,5 @@ class Attempt:
     solution: StepSolution
     resultant: float = 0.0
     rigid: np.ndarray | None = None
+    load: np.ndarray | None = None
+    history_force: np.ndarray | None = None

@@ -18,6 +18,10 @@ from ...io.summary import read_summary
 from ...results.norms import COMPARED, Snapshot, differences, norm_column
 from .file import RunSpec, Study
 
+#: The vectors of summary.json's ``final``, one column per component (``contact_force_x``, ...).
+VECTORS = ("contact_force", "reaction", "applied_force", "balance_residual")
+
+
 def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = None,
                       interrupted: Collection[str] = ()) -> list[dict]:
     """DIR/study.csv: per run its overrides, status, wall time, summary values and difference norms
@@ -33,9 +37,9 @@ def write_study_table(study: Study, out: Path, errors: dict[str, str] | None = N
                     "contact_nodes": summary.get("contact_nodes"), "steps": summary.get("steps"),
                     "newton_iterations": summary.get("newton_iterations")})
         final = dict(summary.get("final") or {})
-        force = final.pop("contact_force", [None, None])
+        vectors = {name: final.pop(name, [None, None]) for name in VECTORS}
         row.update(final)
-        row.update({f"contact_force_{c}": value for c, value in zip(COORDINATES, force)})
+        row.update({f"{name}_{c}": value for name, vector in vectors.items() for c, value in zip(COORDINATES, vector)})
         if reference:
             mine = _snapshots(study, spec.id) if summary.get("status") == "complete" else {}
             for t in study.times:
