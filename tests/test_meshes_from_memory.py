@@ -6,6 +6,8 @@ bit for bit; a bad mesh in memory is refused in the one line a mesh file gets.""
 import sys
 
 import meshio
+import signal
+
 import numpy as np
 import pytest
 import skfem
@@ -29,10 +31,12 @@ def model():
     """An open gmsh session (closed after the test). Not interruptible: gmsh's default replaces Python's SIGINT
     handler for good (finalize does not restore it), and the tests run after this one in the same process would
     die of a Ctrl-C they send to themselves instead of raising KeyboardInterrupt."""
+    handler = signal.getsignal(signal.SIGINT)
     gmsh.initialize(interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
     yield gmsh
     gmsh.finalize()
+    assert signal.getsignal(signal.SIGINT) is handler, "gmsh replaced the SIGINT handler of the test process"
 
 
 def block(dim: int = 2, size: float = 0.002) -> None:
