@@ -6,6 +6,8 @@ bit for bit; a bad mesh in memory is refused in the one line a mesh file gets.""
 import sys
 
 import meshio
+import signal
+
 import numpy as np
 import pytest
 import skfem
@@ -26,11 +28,15 @@ WIDTH, HEIGHT = 0.02, 0.005  # m
 
 @pytest.fixture
 def model():
-    """An open gmsh session (closed after the test)."""
-    gmsh.initialize()
+    """An open gmsh session (closed after the test). Not interruptible: gmsh's default replaces Python's SIGINT
+    handler for good (finalize does not restore it), and the tests run after this one in the same process would
+    die of a Ctrl-C they send to themselves instead of raising KeyboardInterrupt."""
+    handler = signal.getsignal(signal.SIGINT)
+    gmsh.initialize(interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
     yield gmsh
     gmsh.finalize()
+    assert signal.getsignal(signal.SIGINT) is handler, "gmsh replaced the SIGINT handler of the test process"
 
 
 def block(dim: int = 2, size: float = 0.002) -> None:
@@ -229,7 +235,7 @@ def test_a_bad_gmsh_model_is_refused_as_its_file(model, tmp_path):
     assert refusal(gmsh).startswith("the gmsh model 'quads' has ") and "quadrilaterals" in refusal(gmsh)
     gmsh.finalize()
     assert refusal(gmsh).startswith("mesh = the gmsh model: gmsh is not initialized: gmsh.initialize()")
-    gmsh.initialize()  # for the fixture's finalize
+    gmsh.initialize(interruptible=False)  # for the fixture's finalize
 
 
 def test_a_meshio_mesh_made_in_python_has_its_cell_sets_as_parts_and_regions():

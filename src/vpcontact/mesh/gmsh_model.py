@@ -2,7 +2,7 @@
 gmsh's API (no file), as the file gmsh would save of it is read (`vpcontact.mesh.from_cells`)::
 
     import gmsh
-    gmsh.initialize()
+    gmsh.initialize(interruptible=False)   # gmsh's default (True) replaces Python's Ctrl-C handler for good
     ...                                    # geometry, physical groups, gmsh.model.mesh.generate(2)
     body = vpcontact.mesh.from_gmsh()      # or vpcontact.compose(gmsh, ...)
 
