@@ -3,11 +3,10 @@ its top clamped) given as a mesh file, as the open gmsh model, as the meshio.Mes
 as a scikit-fem mesh with the same named boundaries is one Mesh (the same arrays, parts and regions) and one run,
 bit for bit; a bad mesh in memory is refused in the one line a mesh file gets."""
 
+import signal
 import sys
 
 import meshio
-import signal
-
 import numpy as np
 import pytest
 import skfem

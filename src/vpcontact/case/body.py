@@ -139,18 +139,28 @@ class InitialSection(Section):
 
 
 class DirichletSection(Section):
-    """u = 0 on a part, for the listed components (all when omitted)."""
+    """u = u_D on a part, for the listed components (all when omitted): u_D = 0, or the expressions of ``value``
+    in x, y, (z,) t, one per listed component (a prescribed displacement, e.g. ``value = ["-0.4*t"]``)."""
 
     part: Part
     components: Optional[list[Literal["x", "y", "z"]]] = None  # None: all
+    value: Optional[Annotated[list[Expression], Field(min_length=1, max_length=3)]] = None  # None: 0
 
     @field_validator("components")
     @classmethod
     def _some(cls, value):
         if value == []:  # not "all": an empty list would hold nothing, and read as None it would hold everything
-            raise ValueError("= []: no component; list the components held at 0, or leave out components to hold "
+            raise ValueError("= []: no component; list the components held, or leave out components to hold "
                              "all of them")
         return value
+
+    @model_validator(mode="after")
+    def _one_value_per_component(self):
+        if self.value is not None and self.components is not None and len(self.value) != len(self.components):
+            raise ValueError(f"value has {len(self.value)} expressions and components lists "
+                             f"{len(self.components)} ({', '.join(self.components)}): give one expression in x, y, "
+                             f"(z,) t per listed component")
+        return self
 
 
 class TractionSection(Section):

@@ -63,8 +63,10 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     - ``material``: a ``[material]`` table ({"E": ..., "nu": ..., "hypothesis": ..., "viscoplastic": {...}}), or
       a list of them, each with its ``region``; ``viscoplastic``: a Python law 𝒢(σ, ε) (or 𝒢(σ, ε, x)) for the
       whole body instead of the tables' laws;
-    - ``dirichlet``: {part: components} (components "x", ["x", "y"], or None for all: u = 0 there; a table of
-      prescribed values is refused, not supported yet), or the list of ``[[boundary.dirichlet]]`` tables;
+    - ``dirichlet``: {part: components} (components "x", ["x", "y"], or None for all: u = 0 there), {part:
+      {component: value}} (a prescribed displacement: value an expression in x, y, (z,) t such as "-0.4*t", a
+      number, or a Python function f(x, y, (z,) t) of the part's nodes), or the list of ``[[boundary.dirichlet]]``
+      tables;
     - ``traction``: {part: value}, value the list of d expressions in x, y, (z,) t, or a Python function
       f(x, y, (z,) t) -> (fx, fy, (fz)); ``body_force``: one such value for the whole body;
     - ``contact``: the ``[contact]`` table; its ``stiffness`` may be a Python law K(ξ) and its ``p`` a law p(r);
@@ -77,8 +79,8 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     CaseError naming it."""
     mesh = _mesh(mesh)
     objects = {} if viscoplastic is None else {"viscoplastic": viscoplastic}
-    tables = {"material": material, "time": time, "solver": {} if solver is None else solver,
-              "boundary": {"dirichlet": _dirichlet(dirichlet)}}
+    tables = {"material": material, "time": time, "solver": {} if solver is None else solver, "boundary": {}}
+    tables["boundary"]["dirichlet"], objects["displacements"] = _dirichlet(dirichlet)
     tables["boundary"]["traction"], objects["tractions"] = _tractions(traction)
     tables["boundary"]["body_force"], objects["body_force"] = _body_force(body_force)
     python_laws: list[str] = []
@@ -136,25 +138,42 @@ def _table(key: str, value) -> dict:
     return dict(value)
 
 
-def _dirichlet(dirichlet) -> list:
-    """The [[boundary.dirichlet]] tables of {part: components} (or of the tables themselves): u = 0 on the
-    part's components, "x", ["x", "y"] (a list, tuple or array of names) or None for all. A table of
-    values ({"z": "-0.01*t"}) would prescribe a displacement, which vpcontact does not do yet: refused, as
-    is any other value, rather than read as u = 0."""
+def _dirichlet(dirichlet) -> tuple[list, dict | None]:
+    """The [[boundary.dirichlet]] tables of {part: components} (or of the tables themselves), and the Python
+    functions among their values ({part: {component: f}}, None when there is none): u = 0 on the part's components,
+    "x", ["x", "y"] (a list, tuple or array of names) or None for all; u = value for {component: value}."""
     if isinstance(dirichlet, Mapping):
-        return [{"part": part, **_components(part, components)} for part, components in dirichlet.items()]
+        tables, functions = [], {}
+        for part, components in dirichlet.items():
+            if isinstance(components, Mapping):
+                table, given = _prescribed(part, components)
+                tables.append(table)
+                if given:
+                    functions[part] = given
+            else:
+                tables.append({"part": part, **_components(part, components)})
+        return tables, functions or None
     if isinstance(dirichlet, Sequence) and not isinstance(dirichlet, str):
-        return list(dirichlet)
+        return list(dirichlet), None
     raise CaseError(f"dirichlet = {brief(dirichlet)}: expected {{part: components}} (components \"x\", [\"x\", \"y\"] "
-                    f"or None for all) or a list of [[boundary.dirichlet]] tables")
+                    f"or None for all), {{part: {{component: value}}}} or a list of [[boundary.dirichlet]] tables")
+
+
+def _prescribed(part, values: Mapping) -> tuple[dict, dict]:
+    """The [[boundary.dirichlet]] table of ``dirichlet[part] = {component: value}``, and its Python functions
+    ({component: f}: their value in the table is 0, build_problem's ``displacements`` replace it)."""
+    if not values:
+        raise CaseError(f"dirichlet[{brief(part)}] = {{}}: no component; give {{component: value}}, e.g. "
+                        f"{{\"z\": \"-0.01*t\"}}")
+    functions = {name: value for name, value in values.items() if callable(value)}
+    table = {"part": part, "components": list(values),
+             "value": [0.0 if callable(value) else value for value in values.values()]}
+    return table, functions
 
 
 def _components(part, components) -> dict:
     """The "components" key of the [[boundary.dirichlet]] table of ``dirichlet[part] = components``."""
     where = f"dirichlet[{brief(part)}] = {brief(components)}"
-    if isinstance(components, Mapping):
-        raise CaseError(f"{where}: prescribed displacements are not supported yet (only u = 0): give the components "
-                        f"held at 0 (\"x\", [\"x\", \"y\"] or None for all)")
     if components is None:
         return {}
     if isinstance(components, str):

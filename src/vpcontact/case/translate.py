@@ -91,7 +91,8 @@ def _material(key: str, entry: MaterialSection) -> MaterialOptions:
 
 def _boundary(boundary: BoundarySection) -> Boundary:
     return Boundary(
-        dirichlet=tuple(Dirichlet(item.part, None if item.components is None else tuple(item.components))
+        dirichlet=tuple(Dirichlet(item.part, None if item.components is None else tuple(item.components),
+                                  None if item.value is None else tuple(item.value))
                         for item in boundary.dirichlet),
         traction=tuple(Traction(item.part, list(item.value)) for item in boundary.traction),
         body_force=tuple(BodyForce(list(item.value)) for item in boundary.body_force),

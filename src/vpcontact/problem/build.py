@@ -27,9 +27,10 @@ from ..laws.stiffness.constant import ConstantStiffness
 from ..laws.elasticity import Elasticity
 from ..laws.materials import Materials, body_materials
 from ..laws.python_laws import api_law, api_viscoplastic
-from ..mesh.cells import SIMPLICES, component, coordinates
+from ..mesh.cells import SIMPLICES, coordinates
 from ..progress import SILENT, Progress
 from ..solvers.factorization import check_installed
+from .constraints import DirichletConditions, dirichlet_conditions
 from .checks import check_contact_can_move, check_dimension, check_first_history, check_rigid_motions
 from .initial import InitialState, initial_state
 from .layers import contact_law
@@ -51,7 +52,7 @@ class Problem:
     basis: Basis
     materials: Materials  # the material of each element, ℰ per element and the case's 𝒢
     A: sp.csr_matrix  # the elastic stiffness on all dofs
-    free: np.ndarray  # dofs not fixed by Dirichlet conditions
+    free: np.ndarray  # dofs not held by Dirichlet conditions
     loads: LoadVector
     surface: ContactSurface  # no nodes when the case has no contact
     law: ContactLaw
@@ -62,6 +63,7 @@ class Problem:
     initial_strain: np.ndarray | None = None  # ε(u_0) per element (d, d, nelements)
     initial_history: np.ndarray | None = None  # z_0 = σ_0 − ℰε(u_0) of (2.28) per element (d, d, nelements)
     source: str | None = None  # the resolved case (TOML) it was built from, for case.resolved.toml and checkpoints
+    constraints: DirichletConditions | None = None  # the held dofs and u_D(t) there (build_problem sets it)
     times: TimeGrid = field(init=False)  # t_1, …, t_steps
 
     def __post_init__(self):
@@ -114,8 +116,9 @@ INITIAL_ARRAYS = ("initial_displacement", "initial_stress", "initial_xi")
 
 def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p: Callable | None = None,
                   stiffness_law: Callable | None = None, tractions: Mapping | None = None,
-                  body_force: Density | None = None, viscoplastic: Callable | None = None, initial_displacement=None,
-                  initial_stress=None, initial_xi=None, progress: Progress = SILENT) -> Problem:
+                  body_force: Density | None = None, displacements: Mapping | None = None,
+                  viscoplastic: Callable | None = None, initial_displacement=None, initial_stress=None,
+                  initial_xi=None, progress: Progress = SILENT) -> Problem:
     """Assemble the problem of ``options`` (a case translated by :mod:`vpcontact.case.translate`: from a
     :class:`~vpcontact.Case`, whose outputs and adaptive meshes are not part of the problem, or from a
     :class:`~vpcontact.Model`) on ``mesh``; the other keyword arguments replace parts of the case by Python objects:
@@ -133,6 +136,9 @@ def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p
       case's traction on that part (the case's tractions on other parts stay);
     - ``body_force``: f(x, y, t) -> (fx, fy) (in 3D f(x, y, z, t) -> (fx, fy, fz)) replaces the case's
       body forces;
+    - ``displacements``: {part: {component: f(x, y, (z,) t)}}: f gives the prescribed displacement u_D of that
+      component on that part (an entry of the case's boundary.dirichlet must hold it), at the part's nodes
+      (:mod:`vpcontact.problem.constraints`);
     - ``viscoplastic``: 𝒢(σ, ε) of (2.1), vectorized over element arrays of shape (d, d, nelements), or
       𝒢(σ, ε, x) with x the element centroids (d, nelements) (𝒢(x, σ, ε) of (2.17)); it replaces the
       viscoplastic laws of the case's materials, in every region;
@@ -149,7 +155,8 @@ def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p
     (the operators, the loads, the contact surface and every check above)."""
     started = time.perf_counter()
     objects = {name: value for name, value in dict(
-        p=p, stiffness_law=stiffness_law, tractions=tractions, body_force=body_force, viscoplastic=viscoplastic,
+        p=p, stiffness_law=stiffness_law, tractions=tractions, body_force=body_force, displacements=displacements,
+        viscoplastic=viscoplastic,
         initial_displacement=initial_displacement, initial_stress=initial_stress, initial_xi=initial_xi).items()
         if value is not None}
     check_installed(options.solver.factorization)
@@ -169,8 +176,8 @@ def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p
     stiffness_law = None if stiffness_law is None else api_law(stiffness_law, "stiffness_law")
     meshed = time.perf_counter()
     with progress.phase("assembly", "stiffness, loads, contact surface and checks") as phase:
-        problem = _assembled(options, mesh, p, stiffness_law, tractions, body_force, viscoplastic, initial_displacement,
-                             initial_stress, initial_xi)
+        problem = _assembled(options, mesh, p, stiffness_law, tractions, body_force, displacements, viscoplastic,
+                             initial_displacement, initial_stress, initial_xi)
         phase.done(f"{problem.free.size:,} free dofs of {problem.basis.N:,}, {problem.surface.size:,} contact nodes, "
                    f"a stiffness of {problem.A.nnz:,} entries")
     done = time.perf_counter()
@@ -179,8 +186,8 @@ def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p
     return problem
 
 
-def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tractions, body_force, viscoplastic,
-               initial_displacement, initial_stress, initial_xi) -> Problem:
+def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tractions, body_force, displacements,
+               viscoplastic, initial_displacement, initial_stress, initial_xi) -> Problem:
     """The problem of ``options`` on ``mesh`` (the laws of the API already wrapped; see build_problem), without
     its timings, the objects of the API and the source."""
     dim = mesh.dim
@@ -194,11 +201,8 @@ def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tra
         raise CaseError(f"{moduli}: the stiffness matrix is not finite in float64 (the moduli or the sizes of the "
                         f"{SIMPLICES[dim].plural} are out of its range); state them in other units")
 
-    fixed = np.zeros(basis.N, dtype=bool)
-    for item in options.boundary.dirichlet:
-        components = [component(c) for c in (item.components or coordinates(dim))]
-        fixed[basis.nodal_dofs[components][:, mesh.nodes(item.part)]] = True
-    free = np.flatnonzero(~fixed)
+    constraints = dirichlet_conditions(options, mesh, basis.nodal_dofs, displacements)
+    free = constraints.free
 
     body_terms = [(key, expression_density(f.value, key)) for key, f in
                   ((f"boundary.body_force[{i}].value", f) for i, f in enumerate(options.boundary.body_force))]
@@ -218,9 +222,10 @@ def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tra
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
     check_contact_can_move(options, mesh, basis, free, surface)
+    constraints.check_contact(surface.operator, mesh.mesh.p, surface.nodes)
     check_rigid_motions(mesh, basis, free, surface)
 
-    initial = initial_state(options, mesh, basis, surface, law, displacement=initial_displacement,
+    initial = initial_state(options, mesh, basis, surface, law, constraints, displacement=initial_displacement,
                             stress=initial_stress, xi=initial_xi)
     strain0 = element_strain(basis, initial.dofs(basis))
     z0 = initial.stress - materials.elasticity.stress(strain0)
@@ -231,9 +236,10 @@ def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tra
         viscoplastic = api_viscoplastic(viscoplastic, mesh)
     grid = TimeGrid(options.time.T, options.time.steps, initial.start)
     loads.check(grid)
+    constraints.check(grid)
     check_first_history(basis, initial, options.initial.stress, strain0, z0, viscoplastic, law_name, grid.k)
     return Problem(options, {}, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic,
-                   initial=initial, initial_strain=strain0, initial_history=z0)
+                   initial=initial, initial_strain=strain0, initial_history=z0, constraints=constraints)
 
 
 def mesh_words(m: MeshSource) -> str:

@@ -35,6 +35,10 @@ def check_dimension(options: ProblemOptions, dim: int) -> None:
     if options.contact is not None:
         vectors += [("contact.probe", options.contact.probe), ("contact.normal", options.contact.normal)]
     vectors.append(("initial.displacement", options.initial.displacement))
+    prescribed = [(f"boundary.dirichlet[{i}].value", item) for i, item in enumerate(options.boundary.dirichlet)
+                  if item.value is not None]
+    vectors += [(key, list(item.value)) for key, item in prescribed if item.components is None]  # all components
+    loads += [(key, list(item.value)) for key, item in prescribed]
     for key, value in vectors:
         if isinstance(value, list) and len(value) != dim:
             raise CaseError(f"{key} has {len(value)} components and {where}: {give}")

@@ -12,8 +12,8 @@ Where each comes from, the first that applies:
    at the element centroids, ``initial.xi`` at the contact nodes;
 4. zero (t_0 = ``time.start``, default 0).
 
-u_0 must lie in V: zero on the Dirichlet components (values within rounding of zero, 1e-12 of the
-largest |u_0|, are set to 0) and admissible on Γ3, u_0·ν − g0 ≤ g at every contact node (to the
+u_0 must lie in V: zero on the Dirichlet components, or the prescribed u_D(t_0) where an entry has a value
+(values within rounding of it, 1e-12 of the largest |u_0|, are set to it) and admissible on Γ3, u_0·ν − g0 ≤ g at every contact node (to the
 solver's complementarity tolerance, ``solver.tolerance`` × the body's size: the state a run reached is
 admissible); ξ_0 ≥ 0; everything finite. A refusal is a CaseError naming the worst node or element.
 """
@@ -34,7 +34,8 @@ from ..fem.contact_surface import ContactSurface
 from ..inputs import check_regular_file
 from ..laws.contact import ContactLaw
 from ..mesh.mesh import Mesh
-from ..mesh.cells import SIMPLICES, component, coordinates
+from ..mesh.cells import SIMPLICES, coordinates
+from .constraints import DirichletConditions
 from .options import ProblemOptions
 from .time_grid import check_time_span
 
@@ -79,10 +80,10 @@ class RunState:
     time: float
 
 
-def initial_state(options: ProblemOptions, mesh: Mesh, basis: Basis, surface: ContactSurface, law: ContactLaw, *,
-                  displacement=None, stress=None, xi=None) -> InitialState:
-    """The checked initial state of ``options`` (see the module's docstring); ``displacement``, ``stress``,
-    ``xi``: arrays of the API that replace the case's."""
+def initial_state(options: ProblemOptions, mesh: Mesh, basis: Basis, surface: ContactSurface, law: ContactLaw,
+                  constraints: DirichletConditions, *, displacement=None, stress=None, xi=None) -> InitialState:
+    """The checked initial state of ``options`` (see the module's docstring) held by ``constraints``;
+    ``displacement``, ``stress``, ``xi``: arrays of the API that replace the case's."""
     d, nodes, elements = mesh.dim, mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
     given = options.initial
     names = {"displacement": "initial.displacement", "stress": "initial.stress", "xi": "initial.xi"}
@@ -132,7 +133,7 @@ def initial_state(options: ProblemOptions, mesh: Mesh, basis: Basis, surface: Co
     state = InitialState(np.array(u0, dtype=float), np.array(sigma0, dtype=float), np.array(xi0, dtype=float),
                          float(start), names)
     _check_finite(state, mesh, surface)
-    _check_dirichlet(state, options, mesh)
+    _check_dirichlet(state, constraints, mesh)
     _check_admissible(state, options, mesh, basis, surface, law)
     _check_history(state, surface)
     return state
@@ -213,24 +214,25 @@ def _check_finite(state: InitialState, mesh: Mesh, surface: ContactSurface) -> N
                             f"expected finite values")
 
 
-def _check_dirichlet(state: InitialState, options: ProblemOptions, mesh: Mesh) -> None:
-    """u_0 = 0 on the Dirichlet components (u_0 ∈ V); values at rounding level are set to 0."""
+def _check_dirichlet(state: InitialState, constraints: DirichletConditions, mesh: Mesh) -> None:
+    """u_0 = u_D(t_0) on the held components (u_0 ∈ V when u_D = 0); values within rounding of it are set to it."""
     u = state.displacement
-    rounding = ROUNDING * np.abs(u).max(initial=0.0)
     p = mesh.mesh.p
-    for i, item in enumerate(options.boundary.dirichlet):
-        names = item.components or coordinates(mesh.dim)
-        nodes = mesh.nodes(item.part)
-        columns = [component(c) for c in names]
-        values = u[np.ix_(nodes, columns)]
-        size = np.abs(values)
-        if np.any(size > rounding):
-            node, c = np.unravel_index(np.argmax(size), size.shape)
-            raise CaseError(f"{state.names['displacement']}: u_{names[c]} = {values[node, c]:g} at the node "
-                            f"{point(p[:, nodes[node]])} of the Dirichlet part '{item.part}' (boundary.dirichlet[{i}], "
-                            f"{int(np.sum(size.max(axis=1) > rounding))} of {nodes.size} nodes): u_0 must be 0 there "
-                            f"(u_0 in V)")
-        u[np.ix_(nodes, columns)] = 0.0
+    for entry in constraints.entries:
+        for c, value in zip(entry.components, entry.values):
+            expected = np.zeros(entry.nodes.size) if value is None else value(state.start)
+            rounding = ROUNDING * max(np.abs(u).max(initial=0.0), np.abs(expected).max(initial=0.0))
+            size = np.abs(u[entry.nodes, c] - expected)
+            if np.any(size > rounding):
+                node = int(np.argmax(size))
+                name = coordinates(mesh.dim)[c]
+                must = ("be 0 there (u_0 in V)" if value is None else
+                        f"equal the prescribed displacement there, {entry.key}.value = {expected[node]:g} at "
+                        f"t_0 = {state.start:g}")
+                raise CaseError(f"{state.names['displacement']}: u_{name} = {u[entry.nodes[node], c]:g} at the node "
+                                f"{point(p[:, entry.nodes[node]])} of the Dirichlet part '{entry.label}' ({entry.key}, "
+                                f"{int(np.sum(size > rounding))} of {entry.nodes.size} nodes): u_0 must {must}")
+            u[entry.nodes, c] = expected
 
 
 def _check_admissible(state: InitialState, options: ProblemOptions, mesh: Mesh, basis: Basis, surface: ContactSurface,

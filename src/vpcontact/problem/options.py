@@ -40,10 +40,12 @@ class MaterialOptions:
 
 @dataclass(frozen=True)
 class Dirichlet:
-    """u = 0 on ``part`` for the ``components`` named (None: all of them)."""
+    """u = u_D on ``part`` for the ``components`` named (None: all of them); ``value``: u_D, one expression in the
+    coordinates and t (or a number) per component held (None: u_D = 0)."""
 
     part: str | int
     components: tuple[str, ...] | None
+    value: tuple | None = None
 
 
 @dataclass(frozen=True)

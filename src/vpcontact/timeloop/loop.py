@@ -95,6 +95,13 @@ class TimeLoop:
                                   expected_seconds=plan.setup_seconds)
         self.max_cuts = options.max_step_cuts
         self._loads = problem.loads.on(free)  # F(t) at the free dofs (where it can be nonzero: its support)
+        constraints = problem.constraints
+        #: A_fh, the coupling of the free and the held dofs: b = F_f − Bᵀz − A_fh u_D(t) (prescribed displacements)
+        self._coupling = problem.A[free][:, constraints.held].tocsr() if constraints.moves else None
+        self._support = self._loads.support  # where b can be nonzero without z: the loads' and the coupling's rows
+        if constraints.moves:
+            moving = np.searchsorted(constraints.held, constraints.moving_dofs())
+            self._support = np.union1d(self._support, np.unique(self._coupling[:, moving].tocoo().row))
         discretization = Discretization.of(problem)
         self.reactions = Reactions(problem, discretization.held_parts)
         self._functionals = None if self.reactions.M is None else self.solver.functionals(self.reactions.M)
@@ -107,7 +114,7 @@ class TimeLoop:
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
         self.earlier_work = SolverWork()  # the step solver's work in earlier sessions (resumed)
         self.state = LoopState.initial(problem, rigid)
-        # (u at the free dofs, ε, σ, z) of the last level when its Fields were not built (a viscoplastic body
+        # (u, ε, σ, z) of the last level when its Fields were not built (a viscoplastic body
         # computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
         self._level_without_fields: tuple | None = None
         self._u = np.zeros(problem.basis.N)
@@ -224,9 +231,12 @@ class TimeLoop:
         z = state.z_after(h)
         load = problem.loads(t)  # F(t) at every dof: the free ones' is the step's, the held ones' the reactions'
         b, history_force = load[problem.free], None
-        support = None if z is not None else self._loads.support
+        held = problem.constraints(t) if self._coupling is not None else None  # u_D(t) at the held dofs
+        support = None if z is not None else self._support
         try:
             with np.errstate(all="ignore"):  # the solvers report iterates that are not finite
+                if held is not None:
+                    b -= self._coupling @ held
                 if z is not None:
                     history_force = stress_force(problem.basis, z)
                     b -= history_force[problem.free]
@@ -241,7 +251,7 @@ class TimeLoop:
             solution = self._failed(f"the Newton system was not solved ({error})",
                                     "try smaller time steps (time.steps), or solver.method = \"full\" "
                                     "(a direct solver)")
-        return Attempt(t, h, step, z, solution, resultant, load=load, history_force=history_force)
+        return Attempt(t, h, step, z, solution, resultant, load=load, history_force=history_force, held=held)
 
     def _failed(self, message: str, advice: str) -> StepSolution:
         """The record of a step whose Newton iteration stopped on a failed linear solve."""
@@ -277,11 +287,13 @@ class TimeLoop:
         wanted = self.estimator is not None or (ends_step and (n in result.field_steps or n == len(problem.times)))
         if G is not None or wanted:
             u = self._u
-            u_free = u[problem.free] = self.solver.displacement(attempt.step, solution)
+            u[problem.free] = self.solver.displacement(attempt.step, solution)
+            if attempt.held is not None:
+                u[problem.constraints.held] = attempt.held
             strain = element_strain(problem.basis, u)
             z = attempt.z
             sigma = problem.elasticity.stress(strain) + (0.0 if z is None else z)  # σ = ℰε(u) + z
-            computed = (u_free, strain, sigma, z)
+            computed = (u.copy(), strain, sigma, z)
             if wanted:
                 fields = self._fields(*computed)
             if G is not None:
@@ -293,7 +305,7 @@ class TimeLoop:
         if fields is not None:
             values.update({"the displacement": fields.displacement, "the stress": fields.von_mises})
         elif computed is not None:
-            values.update({"the displacement": u_free, "the stress": sigma})
+            values.update({"the displacement": computed[0], "the stress": sigma})
         wrong = [name for name, value in values.items() if not np.all(np.isfinite(value))]
         if wrong:
             cause = (f"the viscoplastic history blows up: is the explicit step k = {problem.k:g} small against the "
@@ -303,10 +315,11 @@ class TimeLoop:
                     f"{attempt.t:.10g} ({cause})")
         self._substep += 1
         functionals = None if self._functionals is None else self._functionals(attempt.step, solution)
-        held = self.reactions.row(functionals, compliance, solution.lam, attempt.load, attempt.history_force)
+        parts = self.reactions.row(functionals, compliance, solution.lam, attempt.load, attempt.history_force,
+                                   attempt.held)
         result.record(n, attempt.t, solution, fields, xi=xi, K=K, compliance=compliance,
                       status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step,
-                      held=held)
+                      held=parts)
         self._level_without_fields = computed if fields is None else None
         if self.estimator is not None:
             level = Level(problem, n, attempt.t, h, fields, result.contact_row())
@@ -350,11 +363,9 @@ class TimeLoop:
             state.rigid = self.solver.rigid_coordinates(state.step_problem, state.previous) if known else np.zeros(0)
         return state.rigid
 
-    def _fields(self, u_free: np.ndarray, strain: np.ndarray, sigma: np.ndarray, z: np.ndarray | None) -> Fields:
-        """The Fields of a level from its displacement at the free dofs, ε, σ and z (elements last)."""
+    def _fields(self, u: np.ndarray, strain: np.ndarray, sigma: np.ndarray, z: np.ndarray | None) -> Fields:
+        """The Fields of a level from its displacement at every dof, ε, σ and z (elements last)."""
         problem = self.problem
-        u = np.zeros(problem.basis.N)
-        u[problem.free] = u_free
         sigma33 = problem.elasticity.out_of_plane_stress(strain)
         return Fields(displacement=u[problem.basis.nodal_dofs].T.copy(), stress=np.moveaxis(sigma, -1, 0),
                       stress33=sigma33, von_mises=von_mises(sigma, sigma33),

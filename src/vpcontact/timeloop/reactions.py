@@ -11,9 +11,10 @@ body there, the reaction
 
 A part's reaction in component c is the sum of R over the dofs of component c it holds (a dof held by several
 parts is shared equally among them, so that the parts add up to the whole reaction); its displacement in
-component c is the plain mean of u_c over its nodes (0 in a component it holds). Both are linear in u: their
-rows, restricted to the free dofs, are one small matrix M (2 k rows, k = parts × d) that the step solver
-applies to its solution (``solver.functionals``: the condensed method without recovering u). Summed over every
+component c is the plain mean of u_c over its nodes (the prescribed u_D in a component it holds). Both are linear in
+u: their rows, restricted to the free dofs, are one small matrix M (2 k rows, k = parts × d) that the step solver
+applies to its solution (``solver.functionals``: the condensed method without recovering u), and their rows on the
+held dofs, M_h, apply to the prescribed u_D(t) there (:mod:`vpcontact.problem.constraints`). Summed over every
 dof, A u and Bᵀz vanish (a translation strains nothing), so the reactions, the applied force Σ F(t) and the
 contact force −Σ_i (w_i ρKp + λ_i) ν_i balance, to the residual of the free dofs' equilibrium: summary.json
 reports how well (:func:`vpcontact.results.balance.balance`).
@@ -24,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..mesh.cells import component, coordinates
+from ..mesh.cells import coordinates
 from ..results.columns import held_part_columns
 
 
@@ -33,13 +34,12 @@ class Reactions:
 
     def __init__(self, problem, parts: tuple[str, ...]):
         """``parts``: the Dirichlet parts (``Discretization.held_parts``), the order of the columns."""
-        mesh, basis, dim = problem.mesh, problem.basis, problem.mesh.dim
+        basis, dim = problem.basis, problem.mesh.dim
         dofs = basis.nodal_dofs  # (d, nodes)
         self.parts, self.dim, self._nodal_dofs = parts, dim, dofs
         held = np.zeros((len(parts), basis.N), dtype=bool)
-        for item in problem.options.boundary.dirichlet:
-            components = [component(c) for c in (item.components or coordinates(dim))]
-            held[parts.index(str(item.part)), dofs[components][:, mesh.nodes(item.part)]] = True
+        for entry in problem.constraints.entries:
+            held[parts.index(entry.label), dofs[list(entry.components)][:, entry.nodes]] = True
         share = np.divide(1.0, held.sum(axis=0), out=np.zeros(basis.N), where=held.any(axis=0))
         rows, columns = [], []  # row p d + c of E: part p, component c
         for p in range(len(parts)):
@@ -53,26 +53,32 @@ class Reactions:
         self.E = sp.csr_matrix((share[columns], (rows, columns)), shape=(len(parts) * dim, basis.N))
         mean = []
         for part in parts:
-            nodes = mesh.nodes(part)
+            nodes = np.unique(np.concatenate([e.nodes for e in problem.constraints.entries if e.label == part]))
             mean.append(sp.csr_matrix((np.full(dim * nodes.size, 1.0 / nodes.size),
                                        (np.repeat(np.arange(dim), nodes.size), dofs[:, nodes].ravel())),
                                       shape=(dim, basis.N)))
-        free = problem.free
+        free, constraints = problem.free, problem.constraints
         #: M (2k × free dofs): E A (the elastic part of the reactions) over the mean displacements
         self.M = sp.vstack([self.E @ problem.A[:, free], *(m[:, free] for m in mean)]).tocsr() if parts else None
+        #: M_h (2k × held dofs): the same rows on the held dofs, for a prescribed u_D (None: u_D = 0)
+        self.M_held = sp.vstack([self.E @ problem.A[:, constraints.held], *(m[:, constraints.held] for m in mean)
+                                 ]).tocsr() if parts and constraints.moves else None
         self._contact = (self.E @ problem.surface.operator.T).tocsr()  # k × m: E Nᵀ
         self._weights = problem.surface.weights
         self.columns = held_part_columns(dim, parts)
 
     def row(self, functionals: np.ndarray, compliance: np.ndarray, lam: np.ndarray, load: np.ndarray,
-            history_force: np.ndarray | None) -> dict[str, float]:
+            history_force: np.ndarray | None, held: np.ndarray | None) -> dict[str, float]:
         """The history columns of a level: ``functionals`` = M u (the step solver's), the compliance pressure and
-        λ at the contact nodes, F(t) and Bᵀz (None: z = 0) at every dof; with ``applied_force_<c>``, Σ F(t)_c."""
+        λ at the contact nodes, F(t) and Bᵀz (None: z = 0) at every dof, u_D(t) at the held dofs (None: u_D = 0);
+        with ``applied_force_<c>``, Σ F(t)_c."""
         applied = load[self._nodal_dofs].sum(axis=1)
         values = {f"applied_force_{c}": applied[i] for i, c in enumerate(coordinates(self.dim))}
         if not self.parts:
             return values
         k = len(self.parts) * self.dim
+        if held is not None:
+            functionals = functionals + self.M_held @ held
         R = functionals[:k] + self._contact @ (self._weights * compliance + lam) - self.E @ load
         if history_force is not None:
             R += self.E @ history_force

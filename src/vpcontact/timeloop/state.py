@@ -125,7 +125,8 @@ class Attempt:
     ``step``, the history z there and the solver's ``solution``; ``resultant``: ‖Zᵀb‖, the loads' resultant on
     the rigid motions held only by contact (0 when there are none); ``rigid``: Zᵀu where the time loop placed
     the body itself (a level where nothing presses it: :mod:`vpcontact.timeloop.resting`), else None; ``load``: F(t)
-    and ``history_force``: Bᵀz at every dof (None: z = 0), for the reactions of the Dirichlet parts."""
+    and ``history_force``: Bᵀz at every dof (None: z = 0), for the reactions of the Dirichlet parts; ``held``: the
+    prescribed u_D(t) at the held dofs (None: u_D = 0)."""
 
     t: float
     h: float
@@ -136,3 +137,4 @@ class Attempt:
     rigid: np.ndarray | None = None
     load: np.ndarray | None = None
     history_force: np.ndarray | None = None
+    held: np.ndarray | None = None
