@@ -2,7 +2,9 @@
 reaching its rigid limit mid-run, leaving it and reaching it again: every run (2D plane strain and 3D, β = ±1, each
 step method, and once through the command line) is the uniaxial closed form of tests/uniaxial.py, computed
 without finite elements: the penetration, ξ, K and the two pressures at every contact node, the probe's history,
-the contact force, the displacement at every node and the stress in every element, at every step.
+the contact force, the displacement at every node and the stress in every element, at every step; and the sums
+of the internal forces over the held faces are the reactions of the closed form (what a prescribed top displacement
+and the rollers will report).
 
 The uniaxial state is the exact solution of the discrete problem on any mesh, so the meshes are coarse and the
 agreement is that of rounding (measured: at most 1.1e-12 relative over these runs); RTOL asserts it to 1e-9.
@@ -11,6 +13,7 @@ the same path gives the same state.
 """
 
 import math
+import tomllib
 
 import numpy as np
 import pandas as pd
@@ -19,7 +22,7 @@ import pytest
 import vpcontact
 from vpcontact import mesh as meshes
 
-from conftest import run_cli
+from conftest import run_cli, solved
 from uniaxial import Block, Layer, under_displacement, under_traction
 
 E, NU, HEIGHT, WIDTH, DEPTH, G = 1000.0, 0.3, 0.5, 1.0, 0.5, 0.2
@@ -94,19 +97,20 @@ def assert_the_path_crosses_the_limit(reference: pd.DataFrame):
 
 def assert_the_fields_are_uniaxial(result, reference: pd.DataFrame, dim: int, hypothesis: str = "plane_strain"):
     """At every step: u = (0, (0,) −d + ε_zz z) at every node; σ_zz, the side stresses and no shear in every
-    element (in 2D σ33 = λ ε_zz in plane strain, 0 in plane stress)."""
+    element (in 2D σ33 = L ε_zz in plane strain, 0 in plane stress); relative to the largest top displacement and
+    the largest σ_zz of the run (a step may have none: a block lifted off the layer)."""
     vertical = result.discretization.mesh.mesh.p[dim - 1]
+    u_top, stress_zz = reference.displacement_top.abs().max(), reference.stress_zz.abs().max()
     for n, row in enumerate(reference.itertuples(), start=1):
         fields = result.fields[n]
-        u_top = abs(row.displacement_top)
         agree(fields.displacement[:, dim - 1], -row.penetration + row.strain_zz * vertical, u_top)
         agree(fields.displacement[:, :dim - 1], 0.0, u_top)
         stress = fields.stress
         expected = np.diag([row.stress_side] * (dim - 1) + [row.stress_zz])
-        agree(stress, np.broadcast_to(expected, stress.shape), abs(row.stress_zz))
+        agree(stress, np.broadcast_to(expected, stress.shape), stress_zz)
         if dim == 2:
             side = row.stress_side if hypothesis == "plane_strain" else 0.0
-            agree(fields.stress33, side, abs(row.stress_zz))
+            agree(fields.stress33, side, stress_zz)
 
 
 @pytest.mark.parametrize("method", ["condensed", "full", "iterative"])
@@ -143,7 +147,7 @@ def test_plane_stress_has_its_own_modulus():
     assert not np.allclose(plane_strain.displacement_top, reference.displacement_top, rtol=1e-3)
 
 
-CASE = f"""\
+CASE_3D = f"""\
 [mesh]
 shape = "block"
 width = {WIDTH}
@@ -193,14 +197,19 @@ field_steps = "none"
 """
 
 
+def case_3d_reference() -> pd.DataFrame:
+    """The closed form of CASE_3D: K = 100 exp(−10 ξ), p(r) = r⁺, ρ = 1, s(t) = 10 path(t)."""
+    layer = Layer(K=lambda xi: 100.0 * math.exp(-10.0 * xi), p=lambda r: max(r, 0.0), g=G)
+    return under_traction(block(3), layer, np.linspace(0.0, T, STEPS + 1), lambda t: 10.0 * path(t))
+
+
 def test_the_command_line_run_is_the_closed_form(tmp_path):
     """3D, the exponential law K = 100 exp(−10 ξ) (softening), the solver's own choice of method, run by the
     command line: history.csv and contact.csv, read by pandas, are the closed form."""
-    (tmp_path / "block.toml").write_text(CASE)
+    (tmp_path / "block.toml").write_text(CASE_3D)
     status, _, stderr = run_cli("run", tmp_path / "block.toml", "--out", tmp_path / "run", "--quiet")
     assert status == 0, stderr
-    layer = Layer(K=lambda xi: 100.0 * math.exp(-10.0 * xi), p=lambda r: max(r, 0.0), g=G)
-    reference = under_traction(block(3), layer, np.linspace(0.0, T, STEPS + 1), lambda t: 10.0 * path(t))
+    reference = case_3d_reference()
     assert_the_path_crosses_the_limit(reference)
     history = pd.read_csv(tmp_path / "run" / "history.csv")
     assert (history.substep == 1).all() and len(history) == STEPS
@@ -247,3 +256,26 @@ def test_displacement_control_retraces_the_traction_path():
     unloaded = lifted[["pressure_compliance", "pressure_rigid", "top_force", "contact_area", "limit_area"]].iloc[1:]
     assert (unloaded == 0.0).all().all()
     assert lifted.xi.tolist() == [0.1, 0.1, 0.1] and lifted.contact_area[0] == lifted.limit_area[0] == block(3).area
+
+
+def test_the_internal_forces_on_the_held_faces_are_the_reactions_of_the_closed_form():
+    """The sums of the internal forces A u over the nodes of a face, in the state of the closed form (3D, β = −1,
+    every 5th step): on the rollers the reaction of the wall, ∓ L ε_zz × the face's area (the left and front walls
+    push the body inwards, + x and + y); on the top, in z, σ_zz A, the force a prescribed top displacement's
+    constraint exerts on the body in the same state (the reference's top_force: negative while pressing)."""
+    case = tomllib.loads(CASE_3D)
+    case["output"]["field_steps"] = [5, 10, 15]
+    problem, result = solved(case)
+    assert result.status == "complete"
+    reference = case_3d_reference()
+    mesh, dofs = problem.mesh, problem.basis.nodal_dofs
+    faces = {"left": (0, -HEIGHT * DEPTH), "right": (0, HEIGHT * DEPTH), "front": (1, -HEIGHT * WIDTH),
+             "back": (1, HEIGHT * WIDTH)}
+    for n in (5, 10, 15):
+        u = np.zeros(problem.basis.N)
+        u[dofs] = result.fields[n].displacement.T
+        internal = (problem.A @ u)[dofs]
+        row = reference.iloc[n - 1]
+        for part, (component, signed_area) in faces.items():
+            agree(internal[component, mesh.nodes(part)].sum(), row.stress_side * signed_area)
+        agree(internal[2, mesh.nodes("top")].sum(), row.top_force)
