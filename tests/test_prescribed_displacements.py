@@ -165,8 +165,9 @@ def with_entry(case, **entry):
     (with_entry(block_case(), part="front", components=["z"], value=["-0.004*t"]),
      ["boundary.dirichlet[5].value moves 5 contact node(s) along their normal", "(0, 0, 0)"]),
     (block_case(value="-0.01*t/(t - 0.5)"), ["boundary.dirichlet[4].value[0]", "not finite", "t = 0.5 (step 4)"]),
-    (block_case(value="-0.01*t", time={"T": 1.0, "steps": 4, "start": 0.5}),
-     ["u_z = 0", "boundary.dirichlet[4]", "must equal the prescribed displacement", "t_0 = 0.5"]),
+    (block_case(value="-0.01*t", time={"T": 1.0, "steps": 4, "start": 0.5},
+                initial={"displacement": ["0", "0", "-0.001*z"]}),
+     ["u_z = -0.0005", "boundary.dirichlet[4]", "must equal the prescribed displacement", "-0.005 at t_0 = 0.5"]),
 ])
 def test_a_wrong_prescribed_displacement_is_refused_in_one_line_and_nothing_is_written(tmp_path, case, words):
     out = tmp_path / "out"

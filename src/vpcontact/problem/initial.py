@@ -13,7 +13,8 @@ Where each comes from, the first that applies:
 4. zero (t_0 = ``time.start``, default 0).
 
 u_0 must lie in V: zero on the Dirichlet components, or the prescribed u_D(t_0) where an entry has a value
-(values within rounding of it, 1e-12 of the largest |u_0|, are set to it) and admissible on Γ3, u_0·ν − g0 ≤ g at every contact node (to the
+(values within rounding of it, 1e-12 of the largest |u_0|, are set to it; a body at rest, u_0 = 0, may start away
+from u_D(t_0), its first step moves the held nodes there) and admissible on Γ3, u_0·ν − g0 ≤ g at every contact node (to the
 solver's complementarity tolerance, ``solver.tolerance`` × the body's size: the state a run reached is
 admissible); ξ_0 ≥ 0; everything finite. A refusal is a CaseError naming the worst node or element.
 """
@@ -215,11 +216,14 @@ def _check_finite(state: InitialState, mesh: Mesh, surface: ContactSurface) -> N
 
 
 def _check_dirichlet(state: InitialState, constraints: DirichletConditions, mesh: Mesh) -> None:
-    """u_0 = u_D(t_0) on the held components (u_0 ∈ V when u_D = 0); values within rounding of it are set to it."""
+    """u_0 = u_D(t_0) on the held components (u_0 ∈ V when u_D = 0); values within rounding of it are set to it. A
+    body at rest (u_0 = 0) may start away from a prescribed u_D(t_0): its first step moves the held nodes there."""
     u = state.displacement
     p = mesh.mesh.p
     for entry in constraints.entries:
         for c, value in zip(entry.components, entry.values):
+            if value is not None and not state.moves:
+                continue
             expected = np.zeros(entry.nodes.size) if value is None else value(state.start)
             rounding = ROUNDING * max(np.abs(u).max(initial=0.0), np.abs(expected).max(initial=0.0))
             size = np.abs(u[entry.nodes, c] - expected)
