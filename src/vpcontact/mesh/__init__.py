@@ -5,6 +5,7 @@ reader of mesh files::
 
     from vpcontact import mesh
     body = mesh.half_disc(h=0.05)            # or rectangle, quarter_ball, block, read_mesh("part.msh")
+    top = mesh.nodes_where(body, "abs(y) < 1e-9", where="where")   # nodes by a condition; or nearest_node
 
 They and the submodules (``vpcontact.mesh.<module>``) are imported on first use.
 """
@@ -14,10 +15,10 @@ import importlib
 from .. import submodule
 
 #: The public names, by the module that defines them.
-PUBLIC = {"Mesh": "mesh", "block": "shapes", "half_disc": "shapes", "quarter_ball": "shapes", "read_mesh": "read",
-          "rectangle": "shapes"}
+PUBLIC = {"Mesh": "mesh", "block": "shapes", "half_disc": "shapes", "nearest_node": "node_sets",
+          "nodes_where": "node_sets", "quarter_ball": "shapes", "read_mesh": "read", "rectangle": "shapes"}
 
-__all__ = ["Mesh", "block", "half_disc", "quarter_ball", "read_mesh", "rectangle"]
+__all__ = ["Mesh", "block", "half_disc", "nearest_node", "nodes_where", "quarter_ball", "read_mesh", "rectangle"]
 
 
 def __getattr__(name: str):
