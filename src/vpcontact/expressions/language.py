@@ -12,6 +12,8 @@ given to :func:`~vpcontact.expressions.parse.parse_expression`, the constants ``
 (attributes, subscripts, strings, lambdas, comparisons, keyword arguments, unknown
 names, ...) is a :class:`~vpcontact.errors.CaseError`. The checked tree is then turned
 into a tree of small Python closures over NumPy operations, built once at parse time (:class:`Compiler`).
+Comparisons and and/or/not make a condition, another kind of text over the same arithmetic
+(:mod:`vpcontact.expressions.conditions`).
 
 All numbers are float64 (integer literals are converted), so Python's unbounded
 integers never appear; a constant exponent is limited to ``MAX_EXPONENT`` in absolute
