@@ -12,6 +12,8 @@ given to :func:`~vpcontact.expressions.parse.parse_expression`, the constants ``
 (attributes, subscripts, strings, lambdas, comparisons, keyword arguments, unknown
 names, ...) is a :class:`~vpcontact.errors.CaseError`. The checked tree is then turned
 into a tree of small Python closures over NumPy operations, built once at parse time (:class:`Compiler`).
+Comparisons and and/or/not make a condition, another kind of text over the same arithmetic
+(:mod:`vpcontact.expressions.conditions`).
 
 All numbers are float64 (integer literals are converted), so Python's unbounded
 integers never appear; a constant exponent is limited to ``MAX_EXPONENT`` in absolute
@@ -164,7 +166,14 @@ def check_variables(variables: Iterable[str]) -> tuple[str, ...]:
 
 
 class Compiler:
-    """Checks the syntax tree of one expression and builds its evaluator closure."""
+    """Checks the syntax tree of one expression and builds its evaluator closure.
+
+    A subclass may compile another kind of text over the same arithmetic (the conditions of
+    :mod:`vpcontact.expressions.conditions`): ``kind`` names it in messages, :meth:`compile_tree` compiles the
+    parsed tree's top and :meth:`syntax_hint` adds a hint to a syntax error.
+    """
+
+    kind = "expression"
 
     def __init__(self, source: str, variables: tuple[str, ...], where: str) -> None:
         self.source = source
@@ -182,7 +191,7 @@ class Compiler:
     def compile_source(self) -> tuple[Evaluator, frozenset[str]]:
         """Parse the source, check it and return its evaluator and the variables it uses."""
         if not self.body:
-            raise self.error("empty expression")
+            raise self.error(f"empty {self.kind}")
         try:
             # The newline makes the parser report an incomplete expression ("2*") at the
             # column after its end instead of at column 0.
@@ -190,12 +199,20 @@ class Compiler:
         except SyntaxError as exc:
             if exc.msg.startswith("Exceeds the limit"):  # an integer literal of more than 4300 digits
                 raise self.error("a number of thousands of digits, out of the float64 range") from None
-            raise self.error(f"not a valid expression ({exc.msg}{self.position(exc)})") from None
+            raise self.error(f"not a valid {self.kind} ({exc.msg}{self.position(exc)}){self.syntax_hint()}") from None
         except ValueError as exc:  # e.g. null bytes on some Python versions
-            raise self.error(f"not a valid expression ({exc})") from None
+            raise self.error(f"not a valid {self.kind} ({exc})") from None
         except (RecursionError, MemoryError):
             raise self.error(f"nested too deeply (more than {MAX_DEPTH} levels)") from None
-        return self.compile(tree.body, 1)
+        return self.compile_tree(tree.body)
+
+    def compile_tree(self, node: ast.AST) -> tuple[Evaluator, frozenset[str]]:
+        """Compile the top of the parsed tree: an arithmetic expression."""
+        return self.compile(node, 1)
+
+    def syntax_hint(self) -> str:
+        """What to add to the message of a syntax error in the source: nothing for an expression."""
+        return ""
 
     def position(self, exc: SyntaxError) -> str:
         """`` at column C`` (or `` at line L, column C``) of a syntax error in the source."""

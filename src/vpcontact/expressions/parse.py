@@ -12,11 +12,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import CaseError, shown
 from .language import Compiler, Evaluator, check_variables
+
+if TYPE_CHECKING:
+    from .conditions import Condition
 
 
 class Expression:
@@ -65,17 +69,7 @@ class Expression:
         given still take part in the broadcast shape. Passing a name that is not one of
         ``variables``, or omitting one the expression uses, is a TypeError.
         """
-        unknown = sorted(set(values) - set(self.variables))
-        if unknown:
-            raise TypeError(
-                f"{self!r} got unknown variable(s) {', '.join(unknown)};"
-                f" its variables are {', '.join(self.variables)}"
-            )
-        missing = [name for name in self.variables if name in self._depends_on and name not in values]
-        if missing:
-            raise TypeError(f"{self!r} needs a value for {', '.join(missing)}")
-        arrays = {name: np.asarray(value, dtype=np.float64) for name, value in values.items()}
-        shape = np.broadcast_shapes(*(array.shape for array in arrays.values()))
+        arrays, shape = variable_values(self, values)
         result = self._evaluate(arrays)
         if shape == ():
             return float(result)
@@ -104,6 +98,26 @@ class Expression:
     def __str__(self) -> str:
         """The source text."""
         return self.source
+
+
+def variable_values(
+    parsed: Expression | Condition, values: dict[str, object]
+) -> tuple[dict[str, np.ndarray], tuple[int, ...]]:
+    """The values passed to ``parsed`` (an Expression or a Condition) as float64 arrays and their broadcast shape.
+
+    A name that is not one of its variables, or a missing value of one it uses, is a TypeError.
+    """
+    unknown = sorted(set(values) - set(parsed.variables))
+    if unknown:
+        raise TypeError(
+            f"{parsed!r} got unknown variable(s) {', '.join(unknown)};"
+            f" its variables are {', '.join(parsed.variables)}"
+        )
+    missing = [name for name in parsed.variables if name in parsed.depends_on and name not in values]
+    if missing:
+        raise TypeError(f"{parsed!r} needs a value for {', '.join(missing)}")
+    arrays = {name: np.asarray(value, dtype=np.float64) for name, value in values.items()}
+    return arrays, np.broadcast_shapes(*(array.shape for array in arrays.values()))
 
 
 def parse_expression(
