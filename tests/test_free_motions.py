@@ -98,7 +98,9 @@ def test_compose_names_the_free_motions_of_a_full_block():
         "the Dirichlet conditions and the contact part leave the translations along x and y and the rotation about z "
         "of the body free: hold them with boundary.dirichlet entries on parts that block them (holding a component "
         "on a part blocks the translation along it; a rotation needs a part held off its axis in the direction it "
-        "turns there), e.g. rollers on the symmetry planes of a half or quarter model")
+        "turns there), e.g. rollers on the symmetry planes of a half or quarter model, or with boundary.point entries "
+        "that hold components at single nodes (a full model: the translations at one point, the rotation at a second "
+        "one off its axis)")
 
 
 def test_compose_names_the_translation_of_a_rectangle():

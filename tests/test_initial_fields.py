@@ -257,7 +257,7 @@ REFUSED = [
      ["initial.displacement penetrates the foundation", "u_0.nu - gap = 0.5 > g = 0.2 at the contact node (0, 0)",
       "(9 of 9 nodes)"]),
     ({"initial": {"displacement": ["0.01*y", "0"]}},
-     ["initial.displacement: u_x = 0.005 at the node (0, 0.5) of the Dirichlet part 'left' (boundary.dirichlet[0]",
+     ["initial.displacement: u_x = 0.005 at the node (0, 0.5) held by boundary.dirichlet[0] (part 'left',",
       "u_0 must be 0 there"]),
     ({"initial": {"xi": "x - 0.5"}}, ["initial.xi = -0.5 at the contact node (0, 0)", "must be >= 0"]),
     ({"initial": {"stress": [["t", "0"], ["0", "0"]]}}, ["initial.stress[0][0] = \"t\": unknown name 't'"]),

@@ -138,13 +138,18 @@ class InitialSection(Section):
         return self
 
 
-class DirichletSection(Section):
-    """u = u_D on a part, for the listed components (all when omitted): u_D = 0, or the expressions of ``value``
-    in x, y, (z,) t, one per listed component (a prescribed displacement, e.g. ``value = ["-0.4*t"]``)."""
+#: The name of a held set of nodes in the columns of its reaction and mean displacement (reaction_<name>_<c>).
+HeldName = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]+$", max_length=64)]
 
-    part: Part
+
+class HeldComponents(Section):
+    """The components held (all when omitted) and their prescribed displacement: u_D = 0, or the expressions of
+    ``value`` in x, y, (z,) t, one per listed component (e.g. ``value = ["-0.4*t"]``); ``name``: the name of the
+    columns of the reaction and mean displacement of the nodes held."""
+
     components: Optional[list[Literal["x", "y", "z"]]] = None  # None: all
     value: Optional[Annotated[list[Expression], Field(min_length=1, max_length=3)]] = None  # None: 0
+    name: Optional[HeldName] = None
 
     @field_validator("components")
     @classmethod
@@ -163,6 +168,28 @@ class DirichletSection(Section):
         return self
 
 
+class DirichletSection(HeldComponents):
+    """u = u_D at the nodes of a part, or at the nodes where the condition ``where`` on the coordinates holds
+    (``where = "abs(z - 0.02) < 1e-9"``), or at the nodes of the part where it holds (both given)."""
+
+    part: Optional[Part] = None
+    where: Optional[str] = None
+
+    @model_validator(mode="after")
+    def _nodes(self):
+        if self.part is None and self.where is None:
+            raise ValueError("give the nodes held: part (a part of the mesh), where (a condition on the coordinates, "
+                             "e.g. \"abs(z - 0.02) < 1e-9\") or both")
+        return self
+
+
+class PointSection(HeldComponents):
+    """u = u_D at the node nearest to the point ``at`` (a point constraint: a full model held against its rigid
+    motions)."""
+
+    at: Annotated[list[float], Field(min_length=2, max_length=3)]
+
+
 class TractionSection(Section):
     """σν = f2 on a part: one expression in x, y, (z,) t per component (one per dimension)."""
 
@@ -178,5 +205,6 @@ class BodyForceSection(Section):
 
 class BoundarySection(Section):
     dirichlet: list[DirichletSection] = []
+    point: list[PointSection] = []
     traction: list[TractionSection] = []
     body_force: list[BodyForceSection] = []

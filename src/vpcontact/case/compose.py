@@ -50,8 +50,8 @@ PYTHON_LAWS = {"stiffness": "stiffness_law", "p": "p"}
 INITIAL_ARRAYS = {"displacement": "initial_displacement", "stress": "initial_stress", "xi": "initial_xi"}
 
 
-def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=None, contact=None, solver=None,
-            initial=None, viscoplastic: Callable | None = None) -> Problem:
+def compose(mesh, material, *, time, dirichlet=(), points=(), traction=None, body_force=None, contact=None,
+            solver=None, initial=None, viscoplastic: Callable | None = None) -> Problem:
     """The problem of a body on ``mesh`` made of ``material``, held by ``dirichlet``, loaded by ``traction`` and
     ``body_force``, in ``contact`` with the foundation, over the time grid ``time``, solved with ``solver``:
 
@@ -66,7 +66,10 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     - ``dirichlet``: {part: components} (components "x", ["x", "y"], or None for all: u = 0 there), {part:
       {component: value}} (a prescribed displacement: value an expression in x, y, (z,) t such as "-0.4*t", a
       number, or a Python function f(x, y, (z,) t) of the part's nodes), or the list of ``[[boundary.dirichlet]]``
-      tables;
+      tables (a table may hold the nodes ``where`` a condition on the coordinates holds instead of a part);
+    - ``points``: the list of ``[[boundary.point]]`` tables, each holding components at the node nearest to its
+      point ``at`` ({"at": [0, 0, 0.01], "components": ["x", "y"]}, optional "value" and "name"): a full model
+      held against its rigid motions;
     - ``traction``: {part: value}, value the list of d expressions in x, y, (z,) t, or a Python function
       f(x, y, (z,) t) -> (fx, fy, (fz)); ``body_force``: one such value for the whole body;
     - ``contact``: the ``[contact]`` table; its ``stiffness`` may be a Python law K(ξ) and its ``p`` a law p(r);
@@ -81,6 +84,10 @@ def compose(mesh, material, *, time, dirichlet=(), traction=None, body_force=Non
     objects = {} if viscoplastic is None else {"viscoplastic": viscoplastic}
     tables = {"material": material, "time": time, "solver": {} if solver is None else solver, "boundary": {}}
     tables["boundary"]["dirichlet"], objects["displacements"] = _dirichlet(dirichlet)
+    if isinstance(points, Mapping) or isinstance(points, str) or not isinstance(points, Sequence):
+        raise CaseError(f"points = {brief(points)}: expected a list of [[boundary.point]] tables, e.g. "
+                        f"[{{\"at\": [0, 0, 0.01], \"components\": [\"x\", \"y\"]}}]")
+    tables["boundary"]["point"] = list(points)
     tables["boundary"]["traction"], objects["tractions"] = _tractions(traction)
     tables["boundary"]["body_force"], objects["body_force"] = _body_force(body_force)
     python_laws: list[str] = []

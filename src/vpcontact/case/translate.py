@@ -91,12 +91,17 @@ def _material(key: str, entry: MaterialSection) -> MaterialOptions:
 
 def _boundary(boundary: BoundarySection) -> Boundary:
     return Boundary(
-        dirichlet=tuple(Dirichlet(item.part, None if item.components is None else tuple(item.components),
-                                  None if item.value is None else tuple(item.value))
-                        for item in boundary.dirichlet),
+        dirichlet=(*(Dirichlet(f"boundary.dirichlet[{i}]", item.part, _tuple(item.components), _tuple(item.value),
+                               where=item.where, name=item.name) for i, item in enumerate(boundary.dirichlet)),
+                   *(Dirichlet(f"boundary.point[{i}]", None, _tuple(item.components), _tuple(item.value),
+                               at=tuple(item.at), name=item.name) for i, item in enumerate(boundary.point))),
         traction=tuple(Traction(item.part, list(item.value)) for item in boundary.traction),
         body_force=tuple(BodyForce(list(item.value)) for item in boundary.body_force),
     )
+
+
+def _tuple(values: list | None) -> tuple | None:
+    return None if values is None else tuple(values)
 
 
 def _contact(contact: ContactSection) -> ContactOptions:

@@ -13,8 +13,8 @@ given to the element they bound (an interior facet's half to each of its two ele
          + Σ_{E ⊂ ∂K ∩ Γ3} ∫_E λ_h (g − d_h)⁺ da                           "complementarity"
 
 - Γ_N: every boundary facet not on Γ3, with the tractions f2(t_n) of the parts it belongs to (0 on a
-  free surface); on a facet of a Dirichlet part only the components left free count ("free": a
-  roller's tangential component), so a clamped facet (Γ1) contributes nothing;
+  free surface); on a facet of a Dirichlet part (or all of whose nodes a node set holds) only the components
+  left free count ("free": a roller's tangential component), so a clamped facet (Γ1) contributes nothing;
 - r = σ_h n + P_h ν_h on a facet of Γ3, with P_h ν_h = Σ_i φ_i q_i ν_i the P1 interpolant of the nodal
   contact tractions, q_i = ρK(ξ_i)p(d_i) + λ_i/w_i (compliance + rigid pressure of the level's contact
   row, its nodal normals ν_i): the traction the lumped contact quadrature of the discrete problem
@@ -38,7 +38,6 @@ from skfem import Basis, ElementTetP1, ElementTriP1, FacetBasis, MeshTet1
 
 from .estimators import Estimator
 from .indicators import Indicators, Level
-from ..mesh.cells import component, coordinates
 from ..mesh.simplex import facet_normals, longest_edges
 
 #: The terms of the estimate, in the order of the outputs.
@@ -80,10 +79,12 @@ def _build_geometry(problem) -> _Geometry:
         else np.zeros(0, dtype=np.int64)
     neumann = np.setdiff1d(boundary, contact)
     free = np.ones((neumann.size, d), dtype=bool)
-    for item in problem.options.boundary.dirichlet:
-        rows = _rows(neumann, mesh.facets(item.part))
-        for name in item.components or coordinates(d):
-            free[rows, component(name)] = False
+    for item, entry in zip(problem.options.boundary.dirichlet, problem.constraints.entries):
+        if item.where is None and item.at is None:
+            rows = _rows(neumann, mesh.facets(item.part))
+        else:  # a node set: the facets whose every node it holds (none for a point)
+            rows = np.flatnonzero(np.isin(skmesh.facets[:, neumann], entry.nodes).all(axis=0))
+        free[rows[:, None], list(entry.components)] = False
     scalar = ElementTetP1() if isinstance(skmesh, MeshTet1) else ElementTriP1()
     loads = problem.loads
     neumann_points = neumann_dx = body_points = body_dx = None

@@ -221,7 +221,7 @@ def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tra
         law = contact_law(c, surface, p, stiffness_law)
         target = c.probe if c.probe is not None else surface.coordinates.mean(axis=1)
         probe = surface.nearest_node(target)
-    check_contact_can_move(options, mesh, basis, free, surface)
+    check_contact_can_move(constraints, mesh, basis, surface)
     constraints.check_contact(surface.operator, mesh.mesh.p, surface.nodes)
     check_rigid_motions(mesh, basis, free, surface)
 

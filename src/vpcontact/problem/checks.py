@@ -14,12 +14,13 @@ from ..errors import CaseError, brief, point, quoted
 from ..expressions.parse import parse_expression
 from ..fem.assembly import stress_force
 from ..fem.rigid_modes import RigidModes
-from ..mesh.cells import component, coordinates
+from ..mesh.cells import coordinates
 from ..fem.contact_surface import ContactSurface
 from ..laws.python_laws import check_returned, tried
 from ..mesh.mesh import Mesh
 from .free_motions import free_motions_in_words
 from .initial import InitialState
+from .constraints import DirichletConditions
 from .options import ProblemOptions
 
 
@@ -35,9 +36,9 @@ def check_dimension(options: ProblemOptions, dim: int) -> None:
     if options.contact is not None:
         vectors += [("contact.probe", options.contact.probe), ("contact.normal", options.contact.normal)]
     vectors.append(("initial.displacement", options.initial.displacement))
-    prescribed = [(f"boundary.dirichlet[{i}].value", item) for i, item in enumerate(options.boundary.dirichlet)
-                  if item.value is not None]
+    prescribed = [(f"{item.key}.value", item) for item in options.boundary.dirichlet if item.value is not None]
     vectors += [(key, list(item.value)) for key, item in prescribed if item.components is None]  # all components
+    vectors += [(f"{item.key}.at", list(item.at)) for item in options.boundary.dirichlet if item.at is not None]
     loads += [(key, list(item.value)) for key, item in prescribed]
     for key, value in vectors:
         if isinstance(value, list) and len(value) != dim:
@@ -50,10 +51,10 @@ def check_dimension(options: ProblemOptions, dim: int) -> None:
         if dim == 3 and entry.hypothesis is not None:
             raise CaseError(f"{key}.hypothesis = \"{entry.hypothesis}\" is a 2D reduction and {where} (3D uses the "
                             f"full isotropic tensor): remove {key}.hypothesis")
-    for i, item in enumerate(options.boundary.dirichlet):
+    for item in options.boundary.dirichlet:
         extra = [c for c in item.components or () if c not in names]
         if extra:
-            raise CaseError(f"boundary.dirichlet[{i}].components names \"{extra[0]}\" and {where}: use "
+            raise CaseError(f"{item.key}.components names \"{extra[0]}\" and {where}: use "
                             f"{', '.join(repr(n) for n in names)}")
     expressions = [(f"{key}[{c}]", source) for key, value in loads for c, source in enumerate(value)]
     if options.contact is not None:
@@ -73,25 +74,23 @@ def check_dimension(options: ProblemOptions, dim: int) -> None:
                             f"are {', '.join(names)}")
 
 
-def check_contact_can_move(options: ProblemOptions, mesh: Mesh, basis: Basis, free: np.ndarray,
-                           surface: ContactSurface):
+def check_contact_can_move(constraints: DirichletConditions, mesh: Mesh, basis: Basis, surface: ContactSurface):
     """Refuse a contact part on which the Dirichlet conditions leave no node free to move along its
     normal: its contact force would be 0 (or fixed) whatever the load. (A few clamped nodes, such as
     the corners the contact part shares with a clamped part, are fine.)"""
     if surface.size == 0:
         return
     on_free = np.zeros(basis.N)
-    on_free[free] = 1.0
+    on_free[constraints.free] = 1.0
     normal_freedom = np.sqrt(np.asarray((surface.operator @ sp.diags(on_free)).power(2).sum(axis=1)).ravel())
     if np.any(normal_freedom > 1e-6):
         return
     contact_dofs = basis.nodal_dofs[:, surface.nodes].ravel()
     entries = []
-    for i, item in enumerate(options.boundary.dirichlet):
-        names = item.components or coordinates(mesh.dim)
-        components = [component(c) for c in names]
-        if np.intersect1d(basis.nodal_dofs[components][:, mesh.nodes(item.part)], contact_dofs).size:
-            entries.append(f"boundary.dirichlet[{i}] (part '{item.part}', components {', '.join(names)})")
+    for entry in constraints.entries:
+        if np.intersect1d(basis.nodal_dofs[list(entry.components)][:, entry.nodes], contact_dofs).size:
+            names = ", ".join(coordinates(mesh.dim)[c] for c in entry.components)
+            entries.append(f"{entry.key} ({entry.description}, components {names})")
     parts = f"part '{surface.parts[0]}' is" if len(surface.parts) == 1 else \
         f"parts {', '.join(repr(part) for part in surface.parts)} are"
     raise CaseError(f"contact {parts} clamped: {' and '.join(entries)} fix every contact node "
@@ -120,7 +119,9 @@ def check_rigid_motions(mesh: Mesh, basis: Basis, free: np.ndarray, surface: Con
         raise CaseError(f"{where} leave {motions} of the body free: hold {them} with boundary.dirichlet entries on "
                         f"parts that block {them} (holding a component on a part blocks the translation along it; a "
                         f"rotation needs a part held off its axis in the direction it turns there), e.g. rollers on "
-                        f"the symmetry planes of a half or quarter model")
+                        f"the symmetry planes of a half or quarter model, or with boundary.point entries that hold "
+                        f"components at single nodes (a full model: the translations at one point, the rotation at a "
+                        f"second one off its axis)")
     p = mesh.mesh.p
     inside = np.flatnonzero(modes.body == b)
     point = inside[np.argmin(np.sum((p[:, inside] - modes.centroid[:, b:b + 1]) ** 2, axis=0))]

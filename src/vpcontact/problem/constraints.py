@@ -32,6 +32,7 @@ from ..fem.assembly import CHECK_CHUNK, NonFiniteLoad
 from ..laws.python_laws import accepts, parameters_in_words
 from ..mesh.cells import component, coordinates
 from ..mesh.mesh import Mesh
+from ..mesh.node_sets import nearest_node, nodes_where
 from .options import ProblemOptions
 
 #: A contact node moves along its normal with a held component when the normal's component is above this.
@@ -105,11 +106,13 @@ class PrescribedValue:
 
 @dataclass(frozen=True)
 class HeldEntry:
-    """One entry of ``boundary.dirichlet`` on the mesh: its key, the name of its part (the columns of its reaction
-    and mean displacement), its nodes, the components it holds and u_D of each (None: 0)."""
+    """One entry of ``boundary.dirichlet`` or ``boundary.point`` on the mesh: its key, its name (the columns of its
+    reaction and mean displacement), what it holds in words (``description``: "part 'top'", "the nodes where …",
+    "the node at (…) nearest to (…)"), its nodes, the components it holds and u_D of each (None: 0)."""
 
     key: str
     label: str
+    description: str
     nodes: np.ndarray
     components: tuple[int, ...]
     values: tuple[PrescribedValue | None, ...]
@@ -189,8 +192,9 @@ def dirichlet_conditions(options: ProblemOptions, mesh: Mesh, nodal_dofs: np.nda
     dim, p = mesh.dim, mesh.mesh.p
     functions = _functions(options, displacements, dim)
     entries = []
-    for i, item in enumerate(options.boundary.dirichlet):
-        key, nodes = f"boundary.dirichlet[{i}]", mesh.nodes(item.part)
+    for item in options.boundary.dirichlet:
+        key = item.key
+        nodes, description = held_nodes(item, mesh)
         names = item.components or coordinates(dim)
         sources = item.value if item.value is not None else (0.0,) * len(names)
         if len(sources) != len(names):
@@ -199,15 +203,32 @@ def dirichlet_conditions(options: ProblemOptions, mesh: Mesh, nodal_dofs: np.nda
                             f"component")
         values = []
         for j, (name, source) in enumerate(zip(names, sources)):
-            function = functions.get((str(item.part), name))
+            whole_part = item.where is None and item.at is None
+            function = functions.get((str(item.part), name)) if whole_part else None
             if function is not None:
                 values.append(PrescribedValue(function, p[:, nodes], f"displacements[{brief(item.part)}][\"{name}\"]"))
                 continue
             expression = parse_expression(source, (*coordinates(dim), "t"), where=f"{key}.value[{j}]")
             zero = not expression.depends_on and expression() == 0.0
             values.append(None if zero else PrescribedValue(expression, p[:, nodes], f"{key}.value[{j}]"))
-        entries.append(HeldEntry(key, str(item.part), nodes, tuple(component(c) for c in names), tuple(values)))
+        label = item.name if item.name is not None else str(item.part) if item.where is None and item.at is None \
+            else key.replace("boundary.", "").replace("[", "").replace("]", "")
+        entries.append(HeldEntry(key, label, description, nodes, tuple(component(c) for c in names), tuple(values)))
     return DirichletConditions(entries, nodal_dofs)
+
+
+def held_nodes(item, mesh: Mesh) -> tuple[np.ndarray, str]:
+    """The nodes an entry holds (sorted) and what they are in words: those of its part, those where its condition
+    holds (among its part's, with both), or the node nearest to its point."""
+    if item.at is not None:
+        node, distance = nearest_node(mesh, list(item.at), f"{item.key}.at")
+        return np.array([node]), (f"the node at {point(mesh.mesh.p[:, node])}, {distance:.3g} from {item.key}.at"
+                                  if distance > 0 else f"the node at {point(mesh.mesh.p[:, node])}")
+    if item.where is None:
+        return mesh.nodes(item.part), f"part '{item.part}'"
+    nodes = nodes_where(mesh, item.where, f"{item.key}.where", within=None if item.part is None else str(item.part))
+    within = "" if item.part is None else f" of part '{item.part}'"
+    return nodes, f"the {nodes.size} node(s){within} where {quoted(item.where)}"
 
 
 def _functions(options: ProblemOptions, displacements: Mapping | None, dim: int) -> dict:
@@ -217,7 +238,7 @@ def _functions(options: ProblemOptions, displacements: Mapping | None, dim: int)
         return {}
     if not isinstance(displacements, Mapping):
         raise CaseError(f"displacements = {brief(displacements)}: expected {{part: {{component: f(x, y, (z,) t)}}}}")
-    held = {(str(item.part), name) for item in options.boundary.dirichlet
+    held = {(str(item.part), name) for item in options.boundary.dirichlet if item.where is None and item.at is None
             for name in item.components or coordinates(dim)}
     functions = {}
     for part, by_component in displacements.items():

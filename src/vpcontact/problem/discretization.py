@@ -36,7 +36,7 @@ class Discretization:
     layer: dict[str, np.ndarray]
     probe: int | None
     source: str | None
-    held_parts: tuple[str, ...] = ()  # the Dirichlet parts, in the order of boundary.dirichlet (history columns)
+    held_parts: tuple[str, ...] = ()  # the held parts, node sets and points, in the case's order (history columns)
 
     @classmethod
     def of(cls, problem) -> "Discretization":
@@ -46,7 +46,7 @@ class Discretization:
         if len(surface.parts) > 1:
             layer["part"] = np.asarray(surface.parts)[surface.owner]
         return cls(problem.mesh, surface, problem.times, problem.elasticity, problem.materials.owner, layer,
-                   problem.probe, problem.source, held_parts(problem.options))
+                   problem.probe, problem.source, held_parts(problem))
 
     @property
     def materials(self) -> Materials:
@@ -55,7 +55,7 @@ class Discretization:
         return Materials(self.material, self.elasticity, None)
 
 
-def held_parts(options) -> tuple[str, ...]:
-    """The names of the parts that Dirichlet conditions hold (``boundary.dirichlet``), each once, in the order of
-    their first entry."""
-    return tuple(dict.fromkeys(str(item.part) for item in options.boundary.dirichlet))
+def held_parts(problem) -> tuple[str, ...]:
+    """The names of the parts, node sets and points that Dirichlet conditions hold (``boundary.dirichlet``,
+    ``boundary.point``: :mod:`vpcontact.problem.constraints`), each once, in the order of their first entry."""
+    return tuple(dict.fromkeys(entry.label for entry in problem.constraints.entries))

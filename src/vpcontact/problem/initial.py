@@ -234,7 +234,7 @@ def _check_dirichlet(state: InitialState, constraints: DirichletConditions, mesh
                         f"equal the prescribed displacement there, {entry.key}.value = {expected[node]:g} at "
                         f"t_0 = {state.start:g}")
                 raise CaseError(f"{state.names['displacement']}: u_{name} = {u[entry.nodes[node], c]:g} at the node "
-                                f"{point(p[:, entry.nodes[node]])} of the Dirichlet part '{entry.label}' ({entry.key}, "
+                                f"{point(p[:, entry.nodes[node]])} held by {entry.key} ({entry.description}, "
                                 f"{int(np.sum(size > rounding))} of {entry.nodes.size} nodes): u_0 must {must}")
             u[entry.nodes, c] = expected
 

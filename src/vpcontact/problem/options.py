@@ -40,12 +40,19 @@ class MaterialOptions:
 
 @dataclass(frozen=True)
 class Dirichlet:
-    """u = u_D on ``part`` for the ``components`` named (None: all of them); ``value``: u_D, one expression in the
-    coordinates and t (or a number) per component held (None: u_D = 0)."""
+    """u = u_D for the ``components`` named (None: all of them) at the nodes of ``part``, or at those where the
+    condition ``where`` holds (of ``part`` when both are given), or at the node nearest to the point ``at``;
+    ``value``: u_D, one expression in the coordinates and t (or a number) per component held (None: u_D = 0);
+    ``key``: the entry's key in the case (``boundary.dirichlet[i]``, ``boundary.point[i]``); ``name``: the name of
+    its columns (None: the part's name, or the key's section and index)."""
 
-    part: str | int
+    key: str
+    part: str | int | None
     components: tuple[str, ...] | None
     value: tuple | None = None
+    where: str | None = None
+    at: tuple[float, ...] | None = None
+    name: str | None = None
 
 
 @dataclass(frozen=True)

@@ -14,9 +14,9 @@ the body, the sum over the part's held dofs of the residual (A u + Bᵀz + Σ N_
 equilibrium (a dof held by several parts is shared equally among them, so that the parts' reactions add up
 to the whole reaction), 0 in a component the part does not hold; ``displacement_<part>_<c>``, the mean of u_c
 over the part's nodes (the plain mean of the nodal values, not weighted; in a held component the prescribed u_D, 0
-without a value). At a
-converged level the reactions, the applied force and the contact force balance (summary.json's
-``final.balance_relative_residual``).
+without a value). A node set or a point held (``where``, ``[[boundary.point]]``) counts as a part, named by its
+``name`` (default ``dirichlet<i>``, ``point<i>``). At a converged level the reactions, the applied force and the
+contact force balance (summary.json's ``final.balance_relative_residual``).
 """
 
 from __future__ import annotations
