@@ -79,3 +79,21 @@ def test_the_targets_benchmark_measures_each_target_against_its_limit():
         assert run["status"] == "complete" and run["time_loop_s"] < run["total_s"]
     assert record["targets"][1]["measured"] == finest["beta=1"][0]["time_loop_s"]
     assert record["met"] == "0 of 0"
+
+
+def test_the_displacement_control_benchmark_costs_no_factor_and_no_solve_more():
+    """Pressed by its top's displacement or by the traction of the same force, the block is the same run: the same
+    force at the first peak, the rigid limit reached and the layer left in both; the condensed method solves with
+    its factor twice in the whole run either way (the right-hand sides b − A_fh u_D(t) stay in a span of two)."""
+    done = subprocess.run([sys.executable, str(BENCHMARKS / "displacement_control.py"), "--quick"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    runs = {(r["control"], r["method"]): r for r in json.loads(done.stdout)["runs"]}
+    assert set(runs) == {(c, m) for c in ("displacement", "traction") for m in ("condensed", "full")}
+    for record in runs.values():
+        assert record["status"] == "complete" and record["step_cuts"] == 0, record
+        assert record["nodes_at_limit_max"] == record["nodes_separated_max"] == record["contact_nodes"] > 0, record
+        assert abs(record["force_at_t1_N"] - runs["displacement", "full"]["force_at_t1_N"]) < 1e-9 * \
+            record["force_at_t1_N"]
+    assert runs["displacement", "condensed"]["linear_solves"] == runs["traction", "condensed"]["linear_solves"] == 2
+    assert runs["displacement", "full"]["linear_solves"] == runs["displacement", "full"]["newton_iterations"]

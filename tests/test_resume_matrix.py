@@ -82,8 +82,19 @@ def iterative_3d() -> dict:
     return case
 
 
+def displaced_3d() -> dict:
+    """The 3D block of a Perzyna body pressed by a prescribed top displacement that reverses (u_D(t) at the held
+    dofs, recomputed by the resumed loop from t), its back face held at a node set."""
+    case = elastic_3d()
+    case["boundary"]["traction"] = []
+    case["boundary"]["dirichlet"] += [{"part": "top", "components": ["z"], "value": ["-0.02*sin(3*t)"]},
+                                      {"where": "abs(y - 1) < 1e-9", "components": ["y"], "name": "back"}]
+    case["material"]["viscoplastic"] = {"law": "perzyna", "eta": 0.5, "yield_stress": 5.0}
+    return case
+
+
 CASES = {"2d": elastic_2d, "3d": elastic_3d, "viscoplastic": viscoplastic_2d, "estimate": estimated_3d,
-         "long": long_2d, "iterative": iterative_3d}
+         "long": long_2d, "iterative": iterative_3d, "displacement": displaced_3d}
 #: The cases whose runs with every field step also write the figures of a complete run (PNG files: the
 #: same bytes however the run went).
 FIGURES = ("2d",)
@@ -293,6 +304,7 @@ MATRIX = [
     ("estimate", "all", ("SIGTERM",)),
     ("long", "all", ("SIGKILL",)),
     ("iterative", [4, 15, 30], ("SIGKILL",)),
+    ("displacement", [5, 12, 30], ("SIGKILL", "SIGTERM")),
 ]
 
 
