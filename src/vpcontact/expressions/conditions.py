@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import CaseError, brief
 from .language import MAX_DEPTH, Compiler, Evaluator, check_variables
-from .parse import variable_values
+from .parse import Expression
 
 EXAMPLE = '"abs(z - 0.02) < 1e-9"'
 """The condition messages show as an example."""
@@ -162,8 +162,8 @@ class ConditionCompiler(Compiler):
         return super().compile_unary(node, depth)
 
 
-class Condition:
-    """A parsed condition in a fixed set of variables, evaluated with NumPy.
+class Condition(Expression):
+    """A parsed condition in a fixed set of variables, evaluated with NumPy: an expression whose values are truths.
 
     Create one with :func:`parse_condition`. Calling it with the variables as keyword arguments (arrays or
     scalars, as float64) tells elementwise where it holds: a new boolean array of the broadcast shape of all
@@ -171,61 +171,12 @@ class Condition:
     variables. Pickling stores only ``source``, ``variables`` and ``where`` and parses the text again when loaded.
     """
 
-    __slots__ = ("source", "variables", "where", "_evaluate", "_depends_on")
-
-    source: str
-    variables: tuple[str, ...]
-    where: str
-
-    def __init__(self, source: str, variables: tuple[str, ...], where: str, evaluate: Evaluator,
-                 depends_on: frozenset[str]) -> None:
-        """Wrap an already checked and compiled condition (use :func:`parse_condition`)."""
-        self.source = source
-        self.variables = variables
-        self.where = where
-        self._evaluate = evaluate
-        self._depends_on = depends_on
-
-    @property
-    def depends_on(self) -> frozenset[str]:
-        """The variables that occur in the condition, e.g. ``{"z"}`` for ``"abs(z - 0.02) < 1e-9"``."""
-        return self._depends_on
-
-    def __call__(self, **values: object) -> np.ndarray | bool:
-        """Where the condition holds for the given variable values, broadcast together.
-
-        As for an :class:`~vpcontact.expressions.parse.Expression`: values of variables it does not use may be
-        omitted, those given take part in the shape; an unknown name or a missing value is a TypeError.
-        """
-        arrays, shape = variable_values(self, values)
-        held = self._evaluate(arrays)
-        if shape == ():
-            return bool(held)
-        out = np.empty(shape, dtype=bool)
-        out[...] = held
-        return out
+    __slots__ = ()
+    _scalar = bool
 
     def __reduce__(self) -> tuple[Callable[..., Condition], tuple[str, tuple[str, ...], str]]:
         """Pickle as the call ``parse_condition(source, variables, where)``."""
         return parse_condition, (self.source, self.variables, self.where)
-
-    def __eq__(self, other: object) -> bool:
-        """Conditions are equal when their source text and variables are equal."""
-        if not isinstance(other, Condition):
-            return NotImplemented
-        return (self.source, self.variables) == (other.source, other.variables)
-
-    def __hash__(self) -> int:
-        """Hash of the source text and variables (consistent with ``==``)."""
-        return hash((self.source, self.variables))
-
-    def __repr__(self) -> str:
-        """``Condition('abs(z - 0.02) < 1e-9', variables=('x', 'y', 'z'))``."""
-        return f"Condition({self.source!r}, variables={self.variables!r})"
-
-    def __str__(self) -> str:
-        """The source text."""
-        return self.source
 
 
 def parse_condition(source: str, variables: Iterable[str], where: str = "condition") -> Condition:

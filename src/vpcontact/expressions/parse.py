@@ -12,16 +12,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import CaseError, shown
 from .language import Compiler, Evaluator, check_variables
-
-if TYPE_CHECKING:
-    from .conditions import Condition
-
 
 class Expression:
     """A parsed arithmetic expression in a fixed set of variables, evaluated with NumPy.
@@ -37,6 +32,8 @@ class Expression:
     """
 
     __slots__ = ("source", "variables", "where", "_evaluate", "_depends_on")
+    #: The type of a value: Python floats for scalars, float64 arrays (a Condition's: bool).
+    _scalar = float
 
     source: str
     variables: tuple[str, ...]
@@ -72,8 +69,8 @@ class Expression:
         arrays, shape = variable_values(self, values)
         result = self._evaluate(arrays)
         if shape == ():
-            return float(result)
-        out = np.empty(shape, dtype=np.float64)
+            return self._scalar(result)
+        out = np.empty(shape, dtype=self._scalar)
         out[...] = result
         return out
 
@@ -82,8 +79,8 @@ class Expression:
         return parse_expression, (self.source, self.variables, self.where)
 
     def __eq__(self, other: object) -> bool:
-        """Expressions are equal when their source text and variables are equal."""
-        if not isinstance(other, Expression):
+        """Expressions (conditions) are equal when their source text and variables are equal."""
+        if type(other) is not type(self):
             return NotImplemented
         return (self.source, self.variables) == (other.source, other.variables)
 
@@ -93,7 +90,7 @@ class Expression:
 
     def __repr__(self) -> str:
         """``Expression('-1000*t', variables=('x', 'y', 't'))``."""
-        return f"Expression({self.source!r}, variables={self.variables!r})"
+        return f"{type(self).__name__}({self.source!r}, variables={self.variables!r})"
 
     def __str__(self) -> str:
         """The source text."""
@@ -101,7 +98,7 @@ class Expression:
 
 
 def variable_values(
-    parsed: Expression | Condition, values: dict[str, object]
+    parsed: Expression, values: dict[str, object]
 ) -> tuple[dict[str, np.ndarray], tuple[int, ...]]:
     """The values passed to ``parsed`` (an Expression or a Condition) as float64 arrays and their broadcast shape.
 
