@@ -309,17 +309,18 @@ def test_the_estimate_covers_what_a_run_holds_and_writes(tmp_path):
     finally:
         tracemalloc.stop()
     assert result.status == "complete"
-    parts = memory_needed(steps, steps, result.nodes, result.elements, result.contact_nodes, False)
+    parts = memory_needed(steps, steps, result.nodes, result.elements, result.contact_nodes, False, held_parts=2)
     per_step = parts["history rows"] + parts["contact rows"] + parts["fields"]
     assert held <= per_step <= 2 * held, (held, parts)
     assert max(peaks) <= sum(parts.values()), (peaks, parts)
 
 
 def test_a_million_steps_of_a_small_case_are_accepted_and_start_at_once():
-    """1e6 steps of the block need about 2.6 GiB for their rows: accepted when that much memory is free;
-    building the problem and the loop does not depend on the number of steps."""
-    needed = sum(memory_needed(10**6, 1, 45, 64, 9, False).values())
-    assert needed < 3 * 2**30, needed
+    """1e6 steps of the block need about 3.7 GiB for their rows (with the reactions and mean displacements of its two
+    rollers): accepted when that much memory is free; building the problem and the loop does not depend on the
+    number of steps."""
+    needed = sum(memory_needed(10**6, 1, 45, 64, 9, False, held_parts=2).values())
+    assert needed < 4 * 2**30, needed
     if available_memory() < 1.2 * needed:
         pytest.skip(f"needs {needed / 2**30:.1f} GiB free")
     case = rectangle_case()

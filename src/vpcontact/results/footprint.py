@@ -11,8 +11,9 @@ from ..memory import available_memory
 from .columns import CONTACT_ARRAYS, history_columns
 from .steps import field_step_numbers
 
-#: Bytes of one history row in memory: a dict of the HISTORY_COLUMNS and its time (CPython 3.11, measured).
-HISTORY_ROW_BYTES = 1100
+#: Bytes of one history row in memory: a dict of its columns, ROW_BYTES + COLUMN_BYTES per column (CPython 3.11,
+#: measured: a 2D row of 31 columns 2250 bytes, a 3D one of 55 columns, five held parts, 3700 bytes).
+ROW_BYTES, COLUMN_BYTES = 400, 60
 #: Bytes the columns of the estimate of output.error_estimate add to a history row in memory, and their number (the
 #: residual estimator's η and six terms: 7 float objects and the larger dict; CPython 3.11, measured).
 ESTIMATE_ROW_BYTES, ESTIMATE_ROW_COLUMNS = 900, 7
@@ -23,15 +24,17 @@ WRITING_BYTES = 2**24
 
 
 def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, contact_nodes: int,
-                  history: bool, dim: int = 2, estimate: bool = False) -> dict[str, int]:
+                  history: bool, dim: int = 2, estimate: bool = False, held_parts: int = 0) -> dict[str, int]:
     """Bytes a run of ``steps`` steps keeps for its outputs until they are written, by part: the history
     rows, the per-node contact rows and the fields at ``field_steps`` steps (``history``: with the
-    viscoplastic history z; ``estimate``: with the estimate's columns in every row and η_K in the fields),
+    viscoplastic history z; ``estimate``: with the estimate's columns in every row and η_K in the fields;
+    ``held_parts``: the parts, node sets and points held, each with its reaction and mean displacement columns),
     each with the copy a checkpoint or solution.npz makes of them, and what the writers add. A step cut
     into sub-steps adds rows: this is the least a run needs."""
-    columns = len(history_columns(dim)) + (ESTIMATE_ROW_COLUMNS if estimate else 0)
+    plain = len(history_columns(dim, tuple(map(str, range(held_parts)))))
+    columns = plain + (ESTIMATE_ROW_COLUMNS if estimate else 0)
     copies = 8 * columns
-    row = HISTORY_ROW_BYTES + (ESTIMATE_ROW_BYTES if estimate else 0)
+    row = ROW_BYTES + COLUMN_BYTES * plain + (ESTIMATE_ROW_BYTES if estimate else 0)
     contact = len(CONTACT_ARRAYS) * ARRAY_BYTES + 2 * (8 * (len(CONTACT_ARRAYS) - 1) + 1) * contact_nodes
     tensor = dim * dim
     per_field = 5 * ARRAY_BYTES + 8 * (dim * nodes + (tensor + 2) * elements) + 8 * (dim * nodes + tensor * elements)
@@ -44,13 +47,13 @@ def memory_needed(steps: int, field_steps: int, nodes: int, elements: int, conta
 
 
 def check_memory(steps: int, output, nodes: int, elements: int, contact_nodes: int, history: bool,
-                 dim: int = 2) -> None:
+                 dim: int = 2, held_parts: int = 0) -> None:
     """Refuse, before anything per step is allocated, a run of ``steps`` steps whose outputs (``output``, the
     :class:`~vpcontact.results.output_options.OutputOptions`) would not fit in the memory available now: one line
     naming time.steps (and output.field_steps when the fields are the most)."""
     field_steps = len(field_step_numbers(output.field_steps, steps))
     parts = memory_needed(steps, field_steps, nodes, elements, contact_nodes, history, dim,
-                          estimate=output.error_estimate)
+                          estimate=output.error_estimate, held_parts=held_parts)
     needed, available = sum(parts.values()), available_memory()
     if needed <= available:
         return

@@ -29,6 +29,7 @@ import scipy.sparse as sp
 
 from ..memory import available_memory
 from ..problem.build import Problem
+from ..problem.discretization import held_parts
 from ..results.footprint import check_memory, memory_needed
 from ..results.steps import field_step_numbers
 from ..solvers import augmentation_parameter
@@ -86,7 +87,8 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix) -> Ru
     mesh, surface, times = problem.mesh, problem.surface, problem.times
     nodes, elements = mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
     history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
-    check_memory(len(times), output, nodes, elements, surface.size, history, mesh.dim)
+    held = len(held_parts(problem))
+    check_memory(len(times), output, nodes, elements, surface.size, history, mesh.dim, held)
     r = augmentation_parameter(A, N, problem.solver.augmentation)
     method, reason = chosen_method(problem.solver.method, A, N, mesh.dim)
     solver_memory = None
@@ -98,7 +100,7 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix) -> Ru
         solver_memory = iterative_memory(A)
     field_steps = len(field_step_numbers(output.field_steps, len(times)))
     outputs = memory_needed(len(times), field_steps, nodes, elements, surface.size, history, mesh.dim,
-                            estimate=output.error_estimate)
+                            estimate=output.error_estimate, held_parts=held)
     build = problem.timings.get("build")
     return RunPlan(
         dim=mesh.dim, nodes=nodes, elements=elements, dofs=int(problem.basis.N), free_dofs=problem.free.size,
