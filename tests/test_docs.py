@@ -98,7 +98,8 @@ def test_the_docs_build_without_warnings_and_run_the_gallery(tmp_path):
         assert f'id="{name}"' in reference, f"{name} is not in the API reference (docs/api/)"
     # every example has its page, and the figures it made (our scraper) are on it
     examples = sorted(path.stem for path in (DOCS / "examples").glob("plot_*.py"))
-    assert {"plot_paper_example", "plot_hertz", "plot_rho_limit", "plot_user_stiffness_law"} <= set(examples)
+    assert {"plot_paper_example", "plot_hertz", "plot_rho_limit", "plot_user_stiffness_law",
+            "plot_punch_cyclic"} <= set(examples)
     for name in examples:
         page = (html / "gallery" / f"{name}.html").read_text()
         figures = sorted((html / "_images").glob(f"sphx_glr_{name}_[0-9][0-9][0-9].png"))
