@@ -397,3 +397,30 @@ def test_a_study_whose_directory_is_replaced_stops_and_writes_nothing_there(tmp_
     time.sleep(1.0)
     assert snapshot_tree(out) == before
     assert not (tmp_path / "moved" / ".vpcontact.lock").exists()
+
+
+def test_a_study_after_gmsh_and_a_pardiso_solve_in_the_same_process_does_not_hang(tmp_path):
+    """A script that imported gmsh (its library brings GNU OpenMP), solved a problem by PARDISO, then runs a study
+    on a local pool: the forked workers' MKL hung in its first parallel region before they were put on one thread
+    (the study never ended). In a process of its own, with a deadline."""
+    pytest.importorskip("gmsh")
+    from vpcontact.solvers.factorization import installed_backends
+
+    if "pardiso" not in installed_backends():
+        pytest.skip("MKL PARDISO is not installed")
+    path = write_study(tmp_path, steps=3)
+    script = f"""
+import gmsh, vpcontact
+from vpcontact import mesh
+from vpcontact.drivers.studies import load_study, run_study
+problem = vpcontact.compose(mesh.rectangle(1, 0.5, 0.25), {{"E": 1000.0, "nu": 0.3}}, dirichlet={{"left": "x"}},
+                            traction={{"top": ["0", "-100*t"]}}, time={{"T": 1.0, "steps": 2}},
+                            contact={{"part": "bottom", "g": 0.2, "stiffness": {{"law": "constant", "value": 100.0}}}},
+                            solver={{"factorization": "pardiso"}})
+assert vpcontact.solve(problem).status == "complete"
+report = run_study(load_study({str(path)!r}, {str(tmp_path / 'out')!r}), {str(tmp_path / 'out')!r}, workers=2)
+print(len(report["completed"]))
+"""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split()[-1] == "4"

@@ -68,6 +68,21 @@ def library() -> ctypes.CDLL:
     return _LIBRARY
 
 
+def use_one_thread() -> None:
+    """MKL on one thread in this process from now on (nothing without MKL): what a worker of a local study's pool
+    needs. Its workers share the cores, and a forked MKL whose OpenMP runtime is GNU's (loaded before MKL by another
+    library: gmsh's Python module, imported by a script that meshes in memory) hangs in its first parallel region
+    (measured: gmsh imported, a PARDISO solve, a fork, a solve in the child: it never returns; on one thread it
+    does)."""
+    try:
+        lib = library()
+    except OSError:
+        return
+    lib.MKL_Set_Num_Threads.restype = None
+    lib.MKL_Set_Num_Threads.argtypes = [ctypes.c_int]
+    lib.MKL_Set_Num_Threads(1)
+
+
 class Pardiso:
     """One PARDISO handle: ``Pardiso(A, schur_dofs)`` factors (symbolic analysis, a memory check,
     numerical factorization), then ``solve(b)``; ``schur`` holds the dense Schur complement of A on

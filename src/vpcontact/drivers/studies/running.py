@@ -18,6 +18,7 @@ from ...io import directory, paths
 from ...io.run import check_room, refuse_links
 from ...io.summary import read_summary
 from ...progress import Progress, duration, reporting
+from ...solvers.pardiso import use_one_thread
 from .file import RunSpec, Study
 from .table import write_study_table
 
@@ -179,7 +180,9 @@ def _start_worker(out: Path, identity: tuple[int, int]) -> None:
     """In a worker of the local pool: Ctrl-C (sent to the whole process group) is for the study
     process, which stops the workers; SIGTERM has its default action (not the handler inherited from
     the study process); the study directory stays held by the study process alone, and the worker
-    writes nothing below it once it was replaced (``directory.watch``)."""
+    writes nothing below it once it was replaced (``directory.watch``); MKL runs on one thread
+    (:func:`vpcontact.solvers.pardiso.use_one_thread`: the workers share the cores, and a forked MKL may hang)."""
+    use_one_thread()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     directory.forget_inherited()
