@@ -187,3 +187,28 @@ def test_the_python_api_refuses_a_displacement_function_it_cannot_call():
     case = vpcontact.Case.model_validate(case)
     with pytest.raises(vpcontact.CaseError, match=r"no boundary.dirichlet entry holds component 'x' of part 'left'"):
         vpcontact.build_problem(case, displacements={"left": {"x": lambda x, y, z, t: 0 * x}})
+
+
+@pytest.mark.parametrize("method", ["condensed", "full", "iterative"])
+def test_mixed_control_traction_on_one_part_displacement_on_another_balances(method):
+    """The top moved down by a prescribed displacement while the right side is pulled by a traction that reverses:
+    along x only the left rollers hold the body (their reaction balances the applied force), along y only the top
+    and the layer (the top's reaction balances the contact force); the methods agree."""
+    def solved(method):
+        return vpcontact.solve(vpcontact.compose(
+            meshes.rectangle(1.0, 0.5, 0.125), {"E": E, "nu": NU},
+            dirichlet={"left": "x", "top": {"y": "-0.01*t"}}, traction={"right": ["20*sin(2*pi*t)", "0"]},
+            contact={"part": "bottom", "g": 0.001, "normal": [0, -1],
+                     "stiffness": {"law": "power", "c_v": 1e4, "alpha": 50.0, "beta": -1.0}},
+            time={"T": 1.0, "steps": 8}, solver={"method": method, "tolerance": 1e-12}))
+
+    result, full = solved(method), solved("full")
+    history = result.history
+    force = np.abs(history["reaction_top_y"]).max()
+    assert result.status == "complete" and history["limit_area"].max() > 0  # the layer's limit reached
+    np.testing.assert_allclose(history["reaction_left_x"], -history["applied_force_x"], rtol=0, atol=1e-9 * force)
+    np.testing.assert_allclose(history["reaction_top_y"], -history["contact_force_y"], rtol=0, atol=1e-9 * force)
+    assert np.abs(history["applied_force_x"]).max() == pytest.approx(20.0 * 0.5 * np.sin(2 * np.pi * 0.25))
+    for column in ("reaction_top_y", "reaction_left_x", "displacement_left_y", "contact_area"):
+        np.testing.assert_allclose(history[column], full.history[column], rtol=0,
+                                   atol=1e-9 * max(np.abs(full.history[column]).max(), 1e-300), err_msg=column)
