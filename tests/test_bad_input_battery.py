@@ -168,7 +168,8 @@ KEYS_AND_VALUES = [
     (["adapt.cycles=2", "adapt.theta=1.5"], ["adapt.theta = 1.5", "<= 1"]),
     (["adapt.cycles=2", 'adapt.estimator="magic"'], ['adapt.estimator = "magic"', "'residual'"]),
     (["initial.xi=-1"], ["initial.xi = -1 at the contact node", ">= 0"]),
-    (['initial.displacement=["1", "0"]'], ["u_x = 1 at the node", "Dirichlet part 'axis'", "u_0 must be 0 there"]),
+    (['initial.displacement=["1", "0"]'], ["u_x = 1 at the node", "held by boundary.dirichlet[0] (part 'axis'",
+                                            "u_0 must be 0 there"]),
     (["initial.stress=[[1, 2], [3, 4]]"], ["initial.stress", "symmetric"]),
     (['initial.from_run="nowhere"', "initial.step=1"], ['initial.from_run = "nowhere"', "is not a run directory"]),
     # not finite, empty, huge
