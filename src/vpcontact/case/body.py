@@ -139,7 +139,7 @@ class InitialSection(Section):
 
 
 #: The name of a held set of nodes in the columns of its reaction and mean displacement (reaction_<name>_<c>).
-HeldName = Annotated[str, Field(pattern=r"^[A-Za-z0-9_.-]+$", max_length=64)]
+HeldName = Annotated[str, Field(pattern=r"^[_.A-Za-z0-9-]+$", max_length=64)]
 
 
 class HeldComponents(Section):

@@ -17,8 +17,8 @@ from ..mesh.cells import coordinates
 def balance(row: dict, dim: int, parts: tuple[str, ...]) -> dict:
     """The balance of a history ``row``, as summary.json's ``final`` has it: per component, the sum of the parts'
     reactions (``reaction``), the applied force (``applied_force``), the sum of those and the contact force
-    (``balance_residual``), and ``balance_relative_residual`` = |balance_residual| / max(|reaction|,
-    |applied_force|, |contact_force|) (Euclidean norms of the vectors; 0 when all three are 0)."""
+    (``balance_residual``), and ``balance_relative_residual`` = ‖balance_residual‖ / max(‖reaction‖,
+    ‖applied_force‖, ‖contact_force‖) (Euclidean norms of the vectors; 0 when all three are 0)."""
     names = coordinates(dim)
     reaction = np.array([sum(row[f"reaction_{part}_{c}"] for part in parts) for c in names], dtype=float)
     applied = np.array([row[f"applied_force_{c}"] for c in names], dtype=float)
