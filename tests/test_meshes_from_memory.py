@@ -17,7 +17,8 @@ from vpcontact.errors import CaseError
 
 try:
     import gmsh
-except ImportError:  # gmsh's Python module (in the test extra) missing: only the tests that make gmsh models skip
+except (ImportError, OSError):  # gmsh's module (in the test extra) or its system libraries missing: only the tests
+    # that make gmsh models skip
     gmsh = None
 
 needs_gmsh = pytest.mark.skipif(gmsh is None, reason="gmsh's Python module is not installed (pip install gmsh)")

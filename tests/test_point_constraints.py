@@ -18,7 +18,10 @@ from vpcontact.mesh.cells import coordinates
 
 from conftest import assert_refused, run_cli, snapshot_tree
 
-gmsh = pytest.importorskip("gmsh")
+try:
+    import gmsh
+except (ImportError, OSError) as error:  # its module or the system libraries of its library missing
+    pytest.skip(f"gmsh does not load: {error}", allow_module_level=True)
 
 E, NU = 210e9, 0.3  # steel, Pa
 WIDTH, DEPTH, HEIGHT = 10e-3, 8e-3, 6e-3  # m

@@ -35,6 +35,10 @@ def from_gmsh() -> Mesh:
         import gmsh
     except ImportError:
         raise CaseError("mesh = the gmsh model: gmsh's Python module is not installed (pip install gmsh)") from None
+    except OSError as error:  # the module is there, its library is not loadable
+        raise CaseError(f"mesh = the gmsh model: gmsh's library does not load ({error}): install the system "
+                        f"libraries it names (e.g. apt-get install libglu1-mesa libxcursor1 libxft2 "
+                        f"libxinerama1)") from None
     if not gmsh.isInitialized():
         raise CaseError("mesh = the gmsh model: gmsh is not initialized: gmsh.initialize(), make the model and "
                         "mesh it (gmsh.model.mesh.generate) first")
