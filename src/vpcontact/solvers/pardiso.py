@@ -66,6 +66,7 @@ def library() -> ctypes.CDLL:
         lib.MKL_Set_Num_Threads_Local.argtypes = [ctypes.c_int]
         lib.pardiso.argtypes = ([ctypes.c_void_p] + [_INT_P] * 5 + [ctypes.c_void_p] + [_INT_P] * 6
                                 + [ctypes.c_void_p, ctypes.c_void_p, _INT_P])
+        lib.MKL_Get_Max_Threads()  # MKL chooses its threading layer at its first call: now, not after another library
         _LIBRARY = lib
     return _LIBRARY
 
@@ -75,7 +76,8 @@ def _gnu_openmp_loaded() -> bool:
     it (gmsh's Python module does); MKL loaded after it runs its threads on it, which changes the last bits of
     PARDISO's results against a process without it (measured: the 3D block's stress sum −61423.53930740095 alone,
     …124 after ``import gmsh``) and hangs a forked child in its first parallel region. MKL then runs sequentially
-    (``MKL_THREADING_LAYER``, unless the environment sets it): the bits of a process without it."""
+    (``MKL_THREADING_LAYER``, unless the environment sets it): the bits of a process without it. Loaded before
+    libgomp, MKL keeps the layer it chose at its first call (``library`` makes one at once)."""
     try:
         with open("/proc/self/maps") as maps:
             return "libgomp" in maps.read()
