@@ -94,11 +94,11 @@ class TimeLoop:
                                   factorization=options.factorization, layout=layout, progress=progress,
                                   expected_seconds=plan.setup_seconds)
         self.max_cuts = options.max_step_cuts
-        self._loads = problem.loads.on(free)  # F(t) at the free dofs (where it can be nonzero: its support)
         constraints = problem.constraints
         #: A_fh, the coupling of the free and the held dofs: b = F_f − Bᵀz − A_fh u_D(t) (prescribed displacements)
         self._coupling = problem.A[free][:, constraints.held].tocsr() if constraints.moves else None
-        self._support = self._loads.support  # where b can be nonzero without z: the loads' and the coupling's rows
+        #: where b can be nonzero without z (positions among the free dofs): the loads' and the coupling's rows
+        self._support = problem.loads.on(free).support
         if constraints.moves:
             moving = np.searchsorted(constraints.held, constraints.moving_dofs())
             self._support = np.union1d(self._support, np.unique(self._coupling[:, moving].tocoo().row))
