@@ -41,7 +41,7 @@ from .base import ContactState, SolverWork, StepData, StepSolution, norm
 from ..memory import available_memory
 from ..progress import SILENT, Progress, duration, size
 from .condensed_systems import NewtonSystems
-from .factorization import BACKENDS, chosen_backend, factorize
+from .factorization import BACKENDS, chosen_backend, contact_dofs, factorize
 from .newton import ROUNDOFF, STAGNATION, Evaluation, SemismoothNewton
 from .solved_span import SolvedSpan
 
@@ -78,7 +78,7 @@ class CondensedNewton(SemismoothNewton):
         check_condensed_memory(N, A.shape[0])
         self.A, self.N, self.gap0, self.Z = A, N.tocsr(), gap0, rigid
         #: Nᵀ on N's nonzero columns (the contact dofs): ‖Nᵀx‖ without a vector of every dof
-        self._N_contact_T = self.N[:, np.unique(self.N.indices)].T.tocsr()
+        self._N_contact_T = self.N[:, contact_dofs(self.N)].T.tocsr()
         self.reference = np.full(m, r)
         started = time.perf_counter()
         backend = chosen_backend(factorization)
@@ -270,7 +270,7 @@ def condensed_memory(N: sp.csr_matrix, n: int) -> int:
     """Bytes of the dense algebra of the condensed method for the contact operator N (m × n): the
     Schur complement of A0 on the c contact dofs (c = d m) and its Cholesky factor (PARDISO's route to
     S), S, the Newton matrix and its factor (m × m each), and the block solves (64 columns of n)."""
-    m, c = N.shape[0], np.unique(sp.csr_matrix(N).indices).size
+    m, c = N.shape[0], contact_dofs(N).size
     return 8 * (2 * c * c + 3 * m * m + 2 * 64 * n)
 
 
@@ -289,7 +289,7 @@ def check_condensed_memory(N: sp.csr_matrix, n: int) -> None:
     """Refuse, before allocating, a condensed operator that would not fit in memory."""
     fits, needed, available = condensed_fits(N, n)
     if not fits:
-        m, c = N.shape[0], np.unique(sp.csr_matrix(N).indices).size
+        m, c = N.shape[0], contact_dofs(N).size
         raise CaseError(f"solver.method = \"condensed\" needs about {needed / 2**30:.1f} GiB for its dense "
                         f"{m} x {m} contact operator (and the {c} x {c} Schur complement on the contact dofs), more "
                         f"than half the {available / 2**30:.1f} GiB available; use solver.method = \"iterative\"")

@@ -42,6 +42,15 @@ class SplitSolve:
     finish_solves: int
 
 
+def contact_dofs(N: sp.csr_matrix) -> np.ndarray:
+    """The dofs N acts on: the columns of its nonzero entries, ascending. A contact node's row holds its normal's
+    d components, stored even where they are zero (a flat face's normal (0, 0, −1)): only the nonzero ones
+    count, so that a flat contact face condenses onto its m normal dofs and not onto all d · m (a Schur
+    complement d² times smaller, its factorization d³ times cheaper)."""
+    N = sp.csr_matrix(N)
+    return np.unique(N.indices[N.data != 0.0])
+
+
 def split_by_two_solves(solve, N: sp.csr_matrix, b: np.ndarray) -> SplitSolve:
     """A SplitSolve made of two solves: x = A0⁻¹ b for N x, then A0⁻¹ (b − Nᵀ q)."""
     return SplitSolve(N @ solve(b), lambda q: solve(b - N.T @ q), 1)
@@ -78,7 +87,7 @@ class PardisoFactorization:
         from .pardiso import Pardiso
 
         self._A, self._N = A, N
-        self._dofs = np.unique(N.indices)
+        self._dofs = contact_dofs(N)
         self._N_contact = N[:, self._dofs].toarray()
         self._pardiso = Pardiso(A, self._dofs, analysed=lambda needed: progress.note(
             f"{self.label}'s analysis: the factor and the Schur complement take about {size(needed)} "
