@@ -34,9 +34,13 @@ G, C_V, ALPHA = 0.5e-3, 2e10, 1e4  # m, Pa/m, 1/(m·s)
 DEPTH, LIFT = 0.3e-3, 0.1e-3  # m: the deepest point of a cycle, and how high it lifts off the layer
 DOWN, UP = 0.4, 0.8  # s: the deepest and the highest point of each 1 s cycle
 PHASE = "(t - floor(t))"
-#: w(t), the top's vertical displacement: down to −DEPTH at DOWN, up to +LIFT at UP, back to 0 at the cycle's end
-W = (f"min({LIFT:g}*(1 - {PHASE})/{1 - UP:g}, max(-{DEPTH:g}*{PHASE}/{DOWN:g}, "
-     f"-{DEPTH:g} + {DEPTH + LIFT:g}*({PHASE} - {DOWN:g})/{UP - DOWN:g}))")
+
+
+def top_displacement(depth: float = DEPTH) -> str:
+    """w(t), the top's vertical displacement: down to −depth at DOWN, up to +LIFT at UP, back to 0 at the cycle's
+    end (a depth beyond G presses the flat face onto the rigid base: its nodes reach the limit)."""
+    return (f"min({LIFT:g}*(1 - {PHASE})/{1 - UP:g}, max(-{depth:g}*{PHASE}/{DOWN:g}, "
+            f"-{depth:g} + {depth + LIFT:g}*({PHASE} - {DOWN:g})/{UP - DOWN:g}))")
 #: (h_contact, h_far) in m that give the sizes of the issue's user: about 30k dofs with 1.9k contact nodes, and
 #: 136k dofs with 5.2k
 SIZES = {"7k": (0.25e-3, 1.0e-3), "30k": (0.09e-3, 1.15e-3), "136k": (0.054e-3, 0.63e-3)}
@@ -79,7 +83,7 @@ def make_punch(h_contact: float, h_far: float):
 
 
 def punch_problem(h_contact: float, h_far: float, *, method: str = "auto", steps: int = 60, beta: float = 1.0,
-                  cycles: int = 3):
+                  cycles: int = 3, depth: float = DEPTH):
     """The composed problem of the punch (``cycles`` cycles of 1 s in ``steps`` steps) and the seconds meshing
     took."""
     import vpcontact
@@ -90,7 +94,7 @@ def punch_problem(h_contact: float, h_far: float, *, method: str = "auto", steps
     try:
         problem = vpcontact.compose(
             gmsh, {"E": E, "nu": NU},
-            dirichlet={"sym_x": "x", "sym_y": "y", "top": {"z": W}},
+            dirichlet={"sym_x": "x", "sym_y": "y", "top": {"z": top_displacement(depth)}},
             contact={"part": "contact", "g": G, "probe": [0, 0, 0],
                      "stiffness": {"law": "power", "c_v": C_V, "alpha": ALPHA, "beta": beta}},
             time={"T": float(cycles), "steps": steps}, solver={"method": method, "tolerance": 1e-10})
@@ -99,20 +103,21 @@ def punch_problem(h_contact: float, h_far: float, *, method: str = "auto", steps
     return problem, meshed
 
 
-def run(h_contact: float, h_far: float, method: str, steps: int, beta: float, cycles: int) -> dict:
+def run(h_contact: float, h_far: float, method: str, steps: int, beta: float, cycles: int, depth: float) -> dict:
     """One run of the punch: its JSON record."""
     import vpcontact
     from vpcontact.results.output_options import OutputOptions
     from vpcontact.timeloop.plan import free_operators, plan_run
 
     started = time.perf_counter()
-    problem, meshed = punch_problem(h_contact, h_far, method=method, steps=steps, beta=beta, cycles=cycles)
+    problem, meshed = punch_problem(h_contact, h_far, method=method, steps=steps, beta=beta, cycles=cycles,
+                                    depth=depth)
     built = time.perf_counter()
     plan = plan_run(problem, OutputOptions(), *free_operators(problem))
     result = vpcontact.solve(problem, output={"progress": False})
     done = time.perf_counter()
     history = result.history
-    return {"h_contact_m": h_contact, "h_far_m": h_far, "beta": beta, "steps": steps, "cycles": cycles,
+    return {"h_contact_m": h_contact, "h_far_m": h_far, "beta": beta, "steps": steps, "cycles": cycles, "depth_m": depth,
             "dofs": int(problem.basis.N), "contact_nodes": int(problem.surface.size),
             "method": result.method, "reason": result.method_reason, "status": result.status,
             "mesh_s": meshed, "build_s": built - started - meshed, "solve_s": done - built,
@@ -134,9 +139,11 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=60, help="time steps over all the cycles")
     parser.add_argument("--cycles", type=int, default=3, help="cycles of 1 s (down, off the layer, back)")
     parser.add_argument("--beta", type=float, default=1.0)
+    parser.add_argument("--depth", type=float, default=DEPTH, help=f"deepest point of a cycle (m); beyond G = {G:g} "
+                        "the flat face reaches the rigid base")
     args = parser.parse_args()
     h_contact, h_far = SIZES[args.size] if args.size else (args.h_contact, args.h_far)
-    record = run(h_contact, h_far, args.method, args.steps, args.beta, args.cycles)
+    record = run(h_contact, h_far, args.method, args.steps, args.beta, args.cycles, args.depth)
     print(json.dumps({"machine": {"platform": platform.platform(), "processor": platform.processor(),
                                   "cores": __import__("os").cpu_count(), "load_average": __import__("os").getloadavg()},
                       **record}, indent=1, default=float))

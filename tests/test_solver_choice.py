@@ -6,31 +6,44 @@ import tomli_w
 
 import vpcontact
 from vpcontact.cli import main
-from vpcontact.solvers import amg, choice
+from vpcontact.solvers import amg, choice, cost
 from conftest import half_disc_case
 from test_3d import ball_case
 
 
-def test_auto_runs_the_iterative_method_for_a_3d_body_beyond_the_direct_limit(monkeypatch):
+def test_auto_runs_the_method_the_cost_model_predicts_fastest_and_says_why(monkeypatch):
+    """The small ball: the condensed method is predicted fastest (one factor, then m × m algebra) and runs; with
+    the iterative method's matrix passes made a thousand times cheaper it is the iterative one. Both give the
+    same solution, and the reason names every method's predicted time."""
     case = {**ball_case(h=0.3), "output": {"field_steps": "final"}}
     small = vpcontact.solve(case)
     assert small.method == "condensed", small.method_reason
-    assert "free dofs in 3D are at most" in small.method_reason
-    monkeypatch.setattr(choice, "DIRECT_LIMIT_3D", 100)
+    assert small.method_reason == 'solver.method = "auto": the condensed method is predicted fastest here (then ' \
+                                  'full, iterative)', small.method_reason
+    assert set(small.predicted) == {"condensed", "iterative", "full"}
+    assert small.predicted["condensed"]["total_s"] < small.predicted["iterative"]["total_s"]
+    monkeypatch.setattr(cost, "CG_PASSES", cost.CG_PASSES / 1000)
+    monkeypatch.setattr(cost, "AMG_SETUP_PASSES", cost.AMG_SETUP_PASSES / 1000)
     large = vpcontact.solve(case)
-    assert large.method == "iterative" and large.status == "complete"
-    assert "free dofs in 3D, more than 100: the iterative method is faster" in large.method_reason
+    assert large.method == "iterative" and large.status == "complete", large.method_reason
+    assert large.method_reason.startswith('solver.method = "auto": the iterative method is predicted fastest here')
     # the same solution (both to the case's tolerance, 1e-12)
     (last, fields), = small.fields.items()
     scale = abs(fields.displacement).max()
     assert abs(large.fields[last].displacement - fields.displacement).max() <= 1e-8 * scale
 
 
-def test_auto_keeps_the_condensed_method_in_2d_whatever_the_size(monkeypatch):
-    monkeypatch.setattr(choice, "DIRECT_LIMIT_3D", 100)
-    result = vpcontact.solve(half_disc_case(h=0.2))
-    assert result.method == "condensed"
-    assert "3D" not in result.method_reason
+def test_auto_never_chooses_a_method_that_does_not_fit(monkeypatch):
+    """With the condensed method's dense algebra over its share of the memory, "auto" runs the iterative method and
+    says the condensed one does not fit, however cheap its prediction."""
+    monkeypatch.setattr(cost, "available_memory", lambda: 10_000)
+    monkeypatch.setattr(cost, "ITERATIVE_BYTES_PER_ENTRY", 0)
+    costs = {name: cost.MethodCost(name, 0.0, seconds, 0, name != "condensed")
+             for name, seconds in (("condensed", 1.0), ("iterative", 50.0), ("full", 100.0))}
+    method, reason = choice.chosen_method("auto", costs)
+    assert method == "iterative"
+    assert reason == 'solver.method = "auto": the iterative method is predicted fastest here (then full); ' \
+                     'condensed would not fit in the memory available'
 
 
 def test_the_iterative_method_refuses_a_body_that_does_not_fit(tmp_path, capsys, monkeypatch):

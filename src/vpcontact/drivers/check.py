@@ -7,8 +7,8 @@ mesh is checked against ``adapt.max_dofs``, and the run's plan is made (:mod:`vp
 of the outputs, the augmentation r, the method ``solver.method = "auto"`` chooses and its memory, the time
 estimate), the one the time loop of ``vpcontact run`` makes and runs by. What it skips: the step solver's setup,
 i.e. the factorization of the stiffness (PARDISO's own estimate of its factor's memory comes from the analysis
-that precedes it), the condensed operator and the multigrid hierarchy — the costly part of a run's setup, which
-:mod:`vpcontact.solvers.time_estimate` estimates instead. Nothing is written.
+that precedes it), the condensed operator and the multigrid hierarchy — the costly part of a run's setup, which the cost model
+(:mod:`vpcontact.solvers.cost`) predicts instead, for every method. Nothing is written.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from ..mesh.cells import SIMPLICES
 from ..mesh.quality import mean_ratio, smallest_angles
 from ..mesh.simplex import longest_edges
 from ..problem.build import build_problem
-from ..progress import size
+from ..progress import duration, size
 from ..timeloop.plan import RunPlan, free_operators, plan_run
 
 #: A boundary part: its name and its numbers of facets and nodes.
@@ -90,15 +90,19 @@ class CaseCheck(RunPlan):
         lines.append(f"time: {self.steps:,} steps of k = {self.k:.6g} from t = {self.start:g} to T = {self.T:g}; "
                      f"fields written at {self.field_steps:,} steps")
         lines.append(f"method: {self.method} ({self.method_reason})")
+        for name, cost in sorted(self.predicted.items(), key=lambda item: item[1]["total_s"]):
+            lines.append(f"  {name}: " + (f"set-up {duration(cost['setup_s'])} + time loop {duration(cost['loop_s'])} "
+                                          f"= {duration(cost['total_s'])}, peak {size(cost['memory_bytes'])}"
+                                          if cost["fits"] else "does not fit in the memory available"))
         outputs = {part: nbytes for part, nbytes in self.memory_bytes.items() if part != "solver"}
         solver = self.memory_bytes["solver"]
         lines.append(f"memory: outputs {size(sum(outputs.values()))} (" +
                      ", ".join(f"{part} {size(nbytes)}" for part, nbytes in outputs.items()) + "), solver " +
                      (f"{size(solver)}" if solver is not None else "not estimated") +
-                     f"; {size(self.memory_available_bytes)} available")
+                     f"; peak about {size(self.memory_peak_bytes)} of {size(self.memory_available_bytes)} available")
         t = self.time_seconds
-        lines.append(f"time: about {t['total']:.2g} s (build {t['build']:.2g} s, measured; solver setup "
-                     f"{t['solver setup']:.2g} s and time loop {t['time loop']:.2g} s, estimated to a factor of 2)")
+        lines.append(f"time: about {duration(t['total'])} (build {duration(t['build'])}, measured; solver setup "
+                     f"{duration(t['solver setup'])} and time loop {duration(t['time loop'])}, predicted)")
         return lines
 
 

@@ -50,7 +50,7 @@ def make_solver(method: str, A, N, weights, gap0, *, r: float, reason: str, rigi
     contact operator N (both on the free dofs), with the Alart–Curnier augmentation r; ``rigid``: an orthonormal
     basis of the rigid motions held only by contact, (free dofs, k); ``layout``: the dofs' nodal layout;
     ``progress`` (:mod:`vpcontact.progress`) hears of the method and of the set-up phases, each with
-    ``expected_seconds``, the time its set-up is expected to take (:mod:`vpcontact.solvers.time_estimate`)."""
+    ``expected_seconds``, the time its set-up is expected to take (:mod:`vpcontact.solvers.cost`)."""
     progress.note(f"method: {method} ({reason})")
     common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale, rigid)
     if method == CondensedNewton.name:

@@ -88,7 +88,7 @@ class PardisoFactorization:
 
         self._A, self._N = A, N
         self._dofs = contact_dofs(N)
-        self._N_contact = N[:, self._dofs].toarray()
+        self._N_contact = N[:, self._dofs].tocsr()  # sparse: d entries a row at most, c columns
         self._pardiso = Pardiso(A, self._dofs, analysed=lambda needed: progress.note(
             f"{self.label}'s analysis: the factor and the Schur complement take about {size(needed)} "
             f"({size(available_memory())} available)"))
@@ -156,7 +156,8 @@ class PardisoFactorization:
         except np.linalg.LinAlgError as error:
             raise SingularMatrixError(f"the Schur complement on the contact dofs is not positive definite ({error})") \
                 from None
-        S = self._N_contact @ sla.cho_solve(factor, self._N_contact.T)
+        S = self._N_contact @ sla.cho_solve(factor, self._N_contact.T.toarray())
+        S = np.asarray(S)
         return 0.5 * (S + S.T)
 
 

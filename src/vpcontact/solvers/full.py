@@ -25,7 +25,7 @@ import scipy.sparse as sp
 from ..progress import SILENT, Progress, duration, size
 from .amg import AMGConjugateGradient
 from .base import ContactState, SolverWork, StepData, StepSolution, norm
-from .choice import iterative_memory
+from .cost import iterative_memory
 from .linear import direct_solver
 from .newton import ROUNDOFF, Evaluation, SemismoothNewton
 from .normal_frame import NormalFrame

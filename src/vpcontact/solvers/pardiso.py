@@ -107,14 +107,16 @@ class Pardiso:
     PARDISO stores for its supernodal factor (iparm[17]; more than the factor's nonzeros).
 
     ``analysed(bytes)``, if given, hears of the memory the factorization will take, once the analysis
-    has found it. ``Pardiso(A, refactorable=True)`` only analyses A; ``refactor`` then factors each matrix of A's
+    has found it; ``factor_flops`` and ``factor_bytes`` are the analysis' counts of the factorization's work
+    and memory. ``Pardiso(A, analyse_only=True)`` stops there (what the cost model of :mod:`.cost` asks).
+    ``Pardiso(A, refactorable=True)`` only analyses A; ``refactor`` then factors each matrix of A's
     pattern. Such a handle runs every phase on one MKL thread: with MKL 2026.2 a refactorisation on
     two threads after a solve on one (or after an analysis on two) crashes the process (measured:
     a segmentation fault in phase 22, reproducible on a 3D contact matrix of 1,056 dofs).
     """
 
     def __init__(self, A: sp.spmatrix, schur_dofs: np.ndarray | None = None, refactorable: bool = False,
-                 analysed: Callable[[int], None] | None = None):
+                 analysed: Callable[[int], None] | None = None, analyse_only: bool = False):
         upper = _upper(A)
         self.n = A.shape[0]
         self._data = np.ascontiguousarray(upper.data, dtype=np.float64)
@@ -122,15 +124,22 @@ class Pardiso:
         self._ja = np.ascontiguousarray(upper.indices, dtype=np.int32)
         self._pt = np.zeros(64, dtype=np.int64)
         self._iparm = np.zeros(64, dtype=np.int32)
-        self._iparm[[0, 1, 17, 34]] = 1, 2, -1, 1  # own iparm; METIS; count the factor's nonzeros; zero-based
+        # own iparm; METIS; count the factor's nonzeros and its flops; zero-based
+        self._iparm[[0, 1, 17, 18, 34]] = 1, 2, -1, -1, 1
         self._perm = np.zeros(self.n, dtype=np.int32)
         self.schur = None
-        self._refactorable = refactorable
+        self._refactorable = refactorable or analyse_only
         size = 0 if schur_dofs is None else len(schur_dofs)
         if size:
             self._iparm[35] = 2
             self._perm[np.asarray(schur_dofs)] = 1
         self._call(11)
+        #: the numerical factorization's flops (PARDISO's count, iparm[18] in Mflops) and the bytes it will take
+        self.factor_flops = 1e6 * float(self._iparm[18])
+        self.factor_bytes = self._memory(8 * size * size)
+        if analyse_only:
+            self.factor_nonzeros = int(self._iparm[17])
+            return
         needed = self._check_memory(8 * size * size)
         if analysed is not None:
             analysed(needed)  # the bytes the factorization will take (a progress report)
@@ -154,11 +163,15 @@ class Pardiso:
         self._data[:] = upper.data
         self._call(22)
 
+    def _memory(self, schur_bytes: int) -> int:
+        """After the symbolic analysis (phase 11): the bytes the factorization will take (PARDISO's estimate,
+        max(iparm[14], iparm[15] + iparm[16]) kB, and the dense Schur complement it returns)."""
+        return 1024 * max(int(self._iparm[14]), int(self._iparm[15]) + int(self._iparm[16])) + schur_bytes
+
     def _check_memory(self, schur_bytes: int) -> int:
-        """After the symbolic analysis (phase 11): refuse, before allocating it, a factorization whose
-        memory (PARDISO's estimate, max(iparm[14], iparm[15] + iparm[16]) kB, and the dense Schur
-        complement it returns) is more than the memory available; else that memory (bytes)."""
-        needed = 1024 * max(int(self._iparm[14]), int(self._iparm[15]) + int(self._iparm[16])) + schur_bytes
+        """Refuse, before allocating it, a factorization whose memory (``_memory``) is more than the memory
+        available; else that memory (bytes)."""
+        needed = self._memory(schur_bytes)
         available = available_memory()
         if needed > available:
             raise SolverMemoryError(f"MKL PARDISO needs about {needed / 2**30:.1f} GiB to factor this {self.n} x "

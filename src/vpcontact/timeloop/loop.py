@@ -108,6 +108,7 @@ class TimeLoop:
         estimator = ESTIMATORS[EVERY_LEVEL] if output.error_estimate else None
         self.result = Result.start(discretization, problem.basis.N, self.solver, output,
                                    () if estimator is None else estimator.terms)
+        self.result.predicted = plan.predicted
         self.estimator = None if estimator is None else estimator.prepare(problem)
         self._created = started
         self.setup_time = clock.perf_counter() - started

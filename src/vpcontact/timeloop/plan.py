@@ -14,10 +14,12 @@ refusal before the first step is made here, each one line (CaseError), in this o
    (:func:`~vpcontact.solvers.condensed.check_condensed_memory`) or the iterative method's peak
    (:func:`~vpcontact.solvers.choice.check_iterative_memory`).
 
-The method for ``solver.method = "auto"`` is the choice of :func:`~vpcontact.solvers.choice.chosen_method`, from the
-sizes and the memory available when the plan is made. Not planned: the step solver's set-up itself (the
-factorization of the stiffness, the condensed operator, the multigrid hierarchy), which the time estimate
-(:mod:`vpcontact.solvers.time_estimate`) estimates, and whose failures the solver reports as it is made.
+Each method's time and memory are predicted by the cost model (:mod:`vpcontact.solvers.cost`: this machine's rates
+probed now, the direct factor's work counted by PARDISO's analysis where the condensed or full method may run);
+the method for ``solver.method = "auto"`` is the fastest predicted that fits
+(:func:`~vpcontact.solvers.choice.chosen_method`). Not planned: the step solver's set-up itself (the factorization
+of the stiffness, the condensed operator, the multigrid hierarchy), whose failures the solver reports as it is
+made.
 """
 
 from __future__ import annotations
@@ -33,9 +35,9 @@ from ..problem.discretization import held_parts
 from ..results.footprint import check_memory, memory_needed
 from ..results.steps import field_step_numbers
 from ..solvers import augmentation_parameter
-from ..solvers.choice import check_iterative_memory, chosen_method, iterative_memory
-from ..solvers.condensed import check_condensed_memory, condensed_memory
-from ..solvers.time_estimate import estimate_seconds
+from ..solvers.choice import check_iterative_memory, chosen_method
+from ..solvers.condensed import check_condensed_memory, condensed_fits, condensed_memory
+from ..solvers.cost import MachineRates, factor_work, iterative_memory, predict, resident_memory
 
 
 @dataclass(frozen=True)
@@ -47,8 +49,11 @@ class RunPlan:
     part (:func:`~vpcontact.results.footprint.memory_needed`: "history rows", "contact rows", "fields", "writing"),
     and the step method's own algebra ("solver": the condensed method's dense algebra or the iterative method's
     peak; None for the full method, not estimated), against ``memory_available_bytes`` when the plan was made;
-    ``time_seconds``: "build" (mesh, assembly, checks) as measured, "solver setup", "time loop" and "total"
-    estimated (:mod:`vpcontact.solvers.time_estimate`; None for a problem without a measured build)."""
+    ``time_seconds``: "build" (mesh, assembly, checks) as measured (0 for a problem without a measured build),
+    "solver setup", "time loop" and "total" predicted for the method that runs; ``memory_peak_bytes`` the peak
+    predicted for the whole process (the problem, the method's algebra, the outputs); ``predicted``: each
+    method's predicted cost (:meth:`~vpcontact.solvers.cost.MethodCost.as_dict`: seconds of set-up and time loop,
+    bytes, whether it fits)."""
 
     dim: int
     nodes: int
@@ -66,12 +71,14 @@ class RunPlan:
     augmentation: float
     memory_bytes: dict[str, int | None]
     memory_available_bytes: int
-    time_seconds: dict[str, float] | None
+    memory_peak_bytes: int
+    time_seconds: dict[str, float]
+    predicted: dict[str, dict]
 
     @property
-    def setup_seconds(self) -> float | None:
-        """The seconds the step solver's set-up is expected to take (None without a time estimate)."""
-        return None if self.time_seconds is None else self.time_seconds["solver setup"]
+    def setup_seconds(self) -> float:
+        """The seconds the step solver's set-up is expected to take."""
+        return self.time_seconds["solver setup"]
 
 
 def free_operators(problem: Problem) -> tuple[sp.csr_matrix, sp.csr_matrix]:
@@ -90,7 +97,9 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix) -> Ru
     held = len(held_parts(problem))
     check_memory(len(times), output, nodes, elements, surface.size, history, mesh.dim, held)
     r = augmentation_parameter(A, N, problem.solver.augmentation)
-    method, reason = chosen_method(problem.solver.method, A, N, mesh.dim)
+    field_steps = len(field_step_numbers(output.field_steps, len(times)))
+    costs = predicted_costs(problem.solver.method, A, N, mesh.dim, len(times), history, field_steps)
+    method, reason = chosen_method(problem.solver.method, costs)
     solver_memory = None
     if method == "condensed":
         check_condensed_memory(N, A.shape[0])
@@ -98,14 +107,45 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix) -> Ru
     elif method == "iterative":
         check_iterative_memory(A)
         solver_memory = iterative_memory(A)
-    field_steps = len(field_step_numbers(output.field_steps, len(times)))
     outputs = memory_needed(len(times), field_steps, nodes, elements, surface.size, history, mesh.dim,
                             estimate=output.error_estimate, held_parts=held)
-    build = problem.timings.get("build")
+    build = problem.timings.get("build", 0.0)
+    cost = costs.get(method) or predicted_costs(method, A, N, mesh.dim, len(times), history, field_steps)[method]
     return RunPlan(
         dim=mesh.dim, nodes=nodes, elements=elements, dofs=int(problem.basis.N), free_dofs=problem.free.size,
         contact_nodes=surface.size, start=float(times.start), T=float(times.T), steps=len(times), k=float(times.k),
         field_steps=field_steps, method=method, method_reason=reason, augmentation=r,
         memory_bytes={**outputs, "solver": solver_memory}, memory_available_bytes=available_memory(),
-        time_seconds=None if build is None else estimate_seconds(method, mesh.dim, problem.free.size, len(times),
-                                                                 history, build))
+        memory_peak_bytes=int(cost.memory_bytes + sum(outputs.values())),
+        time_seconds={"build": build, "solver setup": cost.setup_s, "time loop": cost.loop_s,
+                      "total": build + cost.total_s},
+        predicted={name: cost.as_dict() for name, cost in costs.items()})
+
+
+def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, history: bool,
+                    field_steps: int) -> dict:
+    """The methods' predicted costs (:func:`~vpcontact.solvers.cost.predict`) for ``solver.method = method``. The
+    direct factor's work is counted by PARDISO's analysis where a direct method may run: when it is asked for, or,
+    for "auto", when the condensed method's dense algebra fits and its cost by the laws of
+    :func:`~vpcontact.solvers.cost.factor_work` is within COUNT_WITHIN of the iterative method's (an analysis of a
+    factor that cannot win is not made: at 2M dofs it would take a minute)."""
+    rates, resident = MachineRates.probe(A), resident_memory()
+
+    def costs(factor):
+        return predict(A, N, dim, steps, history=history, field_steps=field_steps, rates=rates, factor=factor,
+                       resident=resident)
+
+    if method == "iterative":
+        return costs(None)
+    if method == "auto":
+        if not condensed_fits(N, A.shape[0])[0]:
+            return costs(None)
+        estimated = costs(factor_work(A, N, dim, count=False))
+        if estimated["condensed"].total_s > COUNT_WITHIN * estimated["iterative"].total_s:
+            return estimated
+    return costs(factor_work(A, N, dim))
+
+
+#: "auto" counts the direct factor's work (PARDISO's analysis) when the condensed method's cost by the laws is
+#: within this factor of the iterative method's.
+COUNT_WITHIN = 4.0

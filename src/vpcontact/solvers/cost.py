@@ -1,0 +1,197 @@
+"""What each step method will cost here: the cost model behind ``solver.method = "auto"`` and ``vpcontact check``.
+
+Each method's wall time is predicted as its set-up plus its time loop, from what the work is (flops, or passes
+over a matrix) and how fast this machine does it now:
+
+- **the machine** (:class:`MachineRates`, probed in the process in about 0.1 s): the flop rate of a dense matrix
+  product on one thread, and the seconds of one product with the problem's own stiffness A (a measure of the
+  memory bandwidth that sparse and iterative work runs at);
+- **the direct factor** (:func:`factor_work`): the flops and stored entries of the factorization of A0 that the
+  condensed method makes (in Schur mode on its c contact dofs), as MKL PARDISO's symbolic analysis counts them
+  (the ordering the factorization itself will use; a second or so at 10⁵ dofs), or without PARDISO a law in
+  the dofs fitted to those counts;
+- **constants measured on this machine kind** (below, each with its measurement): the rates PARDISO and the
+  dense Cholesky reach against the dense probe, matrix passes per CG iteration, CG iterations per Newton
+  iteration, GMRES iterations per condensed Newton iteration, Newton iterations per step.
+
+The three methods, for n free dofs, m contact nodes, c contact dofs, and ``steps`` steps:
+
+- condensed: set-up = factorization (flops / PARDISO's rate) + condensation (the Cholesky of the c × c Schur
+  complement, c³/3, and S = N_C S_C⁻¹ N_Cᵀ, 2 c² m); time loop = the first Newton matrix's LU ((2/3) m³ on one
+  thread) + per Newton iteration GMRES_PER_NEWTON × (two passes over an m × m matrix) + per step the solves
+  with the factor that the step needs (one for a viscoplastic history, one for a written field);
+- iterative: set-up = the multigrid hierarchy (AMG_SETUP_PASSES products with A); time loop = per Newton
+  iteration CG_PER_NEWTON × CG_PASSES products with A;
+- full: per Newton iteration one numerical factorization of the Newton matrix (the plain factor's flops).
+
+and each method's memory: the process's own now (the problem) plus the method's peak (:func:`predict`).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import asdict, dataclass
+from functools import lru_cache
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..memory import available_memory
+from .condensed import CONDENSED_SHARE, condensed_memory
+from .factorization import contact_dofs, installed_backends
+
+#: The flop rate of PARDISO's numerical factorization (its two threads, supernodes of dense blocks) over the
+#: one-thread dense product probe's.
+PARDISO_SPEED = 1.0
+#: The flop rate of SciPy's dense Cholesky and triangular solves (all threads) over the one-thread probe's.
+DENSE_SPEED = 1.5
+#: Passes over A (products with A) that one CG iteration preconditioned by pyamg's V-cycle costs, with the
+#: Newton iteration's own work per CG iteration.
+CG_PASSES = 15.0
+#: CG iterations per Newton iteration (7.4–8.8 on the quarter ball from 71k to 2M dofs).
+CG_PER_NEWTON = 8.0
+#: Products with A that the multigrid set-up costs.
+AMG_SETUP_PASSES = 700.0
+#: GMRES iterations per Newton iteration of the condensed method (about 6 on the quarter ball, 3 on the punch).
+GMRES_PER_NEWTON = 5.0
+#: Newton iterations per time step.
+NEWTON_PER_STEP = 2.0
+#: The iterative method's Newton iterations over the direct methods' (its inexact solves: 1.0 on the quarter
+#: ball, 1.5 on the punch).
+INEXACT_NEWTON = 1.25
+#: Bytes per stored entry of the stiffness matrix that the iterative method holds at its peak: the
+#: stiffness, its absolute value, the rotated matrix and the Newton matrix (CSR: 12 bytes an entry
+#: each), the multigrid hierarchy in nodal blocks and its construction's temporaries. Measured peak
+#: resident memory over nnz(A) on the quarter ball: 114–116 bytes per entry beyond the problem's own
+#: memory at 0.5M–2M dofs (docs/performance.md).
+ITERATIVE_BYTES_PER_ENTRY = 120
+
+
+def iterative_memory(A: sp.spmatrix) -> int:
+    """Bytes the iterative method needs for the stiffness A (free dofs), at its peak."""
+    return ITERATIVE_BYTES_PER_ENTRY * A.nnz
+
+
+@dataclass(frozen=True)
+class MachineRates:
+    """How fast this process computes now: ``dense_flops`` (flop/s of a 1024² matrix product on one thread) and
+    ``matrix_pass`` (seconds of one product with the stiffness A)."""
+
+    dense_flops: float
+    matrix_pass: float
+
+    @classmethod
+    def probe(cls, A: sp.csr_matrix) -> "MachineRates":
+        """Measure both (the best of three tries each, about 0.1 s in all)."""
+        from threadpoolctl import threadpool_limits
+
+        x = np.ones(A.shape[1])
+        product = min(_timed(lambda: A @ x) for _ in range(3))
+        with threadpool_limits(limits=1, user_api="blas"):
+            return cls(dense_flops=_dense_flops(), matrix_pass=product)
+
+
+@lru_cache(maxsize=1)
+def _dense_flops() -> float:
+    """Flop/s of a 1024² matrix product on the BLAS's current threads (measured once per process)."""
+    a = np.random.default_rng(0).standard_normal((1024, 1024))
+    return 2 * 1024**3 / min(_timed(lambda: a @ a) for _ in range(3))
+
+
+def _timed(work) -> float:
+    started = time.perf_counter()
+    work()
+    return max(time.perf_counter() - started, 1e-9)
+
+
+@dataclass(frozen=True)
+class FactorWork:
+    """The factorization of A0 that the condensed method makes: its ``flops`` and stored ``entries`` and the
+    ``bytes`` it needs (PARDISO's counts, or the law's); ``counted``: by PARDISO's analysis."""
+
+    flops: float
+    entries: float
+    bytes: float
+    counted: bool
+
+
+#: Without PARDISO, the factorization's flops and entries as laws of the free dofs n in 3D, fitted to PARDISO's
+#: counts on the quarter ball and the punch: flops ≈ FLOPS_3D (n / 10⁵)², entries ≈ ENTRIES_3D (n / 10⁵)^(4/3).
+FLOPS_3D, ENTRIES_3D = 1.5e12, 6.0e7
+FLOPS_2D, ENTRIES_2D = 2.0e9, 4.0e6
+
+
+def factor_work(A: sp.csr_matrix, N: sp.csr_matrix, dim: int, count: bool = True) -> FactorWork:
+    """The work of factoring A0 = A + r NᵀN in Schur mode on N's contact dofs (:func:`.factorization.contact_dofs`):
+    PARDISO's symbolic analysis of it when ``count`` and PARDISO is installed, else the laws above."""
+    if count and "pardiso" in installed_backends():
+        from .pardiso import Pardiso
+
+        A0 = (A + N.T @ N).tocsr()  # A0's pattern (the values do not change the analysis' counts)
+        analysis = Pardiso(A0, contact_dofs(N), analyse_only=True)
+        return FactorWork(analysis.factor_flops, analysis.factor_nonzeros, analysis.factor_bytes, True)
+    n = A.shape[0] / 1e5
+    flops, entries = (FLOPS_3D * n**2, ENTRIES_3D * n ** (4 / 3)) if dim == 3 else (FLOPS_2D * n**1.5, ENTRIES_2D * n)
+    return FactorWork(flops, entries, 12 * entries, False)
+
+
+@dataclass(frozen=True)
+class MethodCost:
+    """The predicted cost of one method: seconds of its set-up and time loop, bytes of memory at its peak (the
+    process's own included), and whether its algebra fits in the memory available."""
+
+    method: str
+    setup_s: float
+    loop_s: float
+    memory_bytes: int
+    fits: bool
+
+    @property
+    def total_s(self) -> float:
+        return self.setup_s + self.loop_s
+
+    def as_dict(self) -> dict:
+        return {**asdict(self), "total_s": self.total_s}
+
+
+def predict(A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, *, history: bool, field_steps: int,
+            rates: MachineRates, factor: FactorWork | None, resident: int) -> dict[str, MethodCost]:
+    """The cost of each method for stiffness A and contact operator N on the free dofs, ``steps`` time steps
+    (``history``: a viscoplastic history, a bulk solve at every step; ``field_steps``: steps whose fields are
+    written), on a machine of ``rates``, the condensed factor's work ``factor`` (None: not wanted, the condensed
+    and full methods are not predicted) and ``resident`` bytes the process holds already (the problem)."""
+    n, m, c = A.shape[0], N.shape[0], contact_dofs(N).size
+    available = available_memory()
+    flops1 = rates.dense_flops
+    newton = NEWTON_PER_STEP * steps
+    costs = {}
+    amg = iterative_memory(A)
+    costs["iterative"] = MethodCost("iterative", AMG_SETUP_PASSES * rates.matrix_pass,
+                                    INEXACT_NEWTON * newton * CG_PER_NEWTON * CG_PASSES * rates.matrix_pass,
+                                    resident + amg, amg <= available)
+    if factor is None:
+        return costs
+    solve = 2 * 12 * factor.entries / (12 * A.nnz) * rates.matrix_pass  # two passes over the factor's entries
+    factorization = factor.flops / (PARDISO_SPEED * flops1)
+    condensation = (c**3 / 3 + 2 * c * c * m) / (DENSE_SPEED * flops1)
+    dense = condensed_memory(N, n)
+    first_lu = (2 / 3) * m**3 / flops1
+    per_newton = GMRES_PER_NEWTON * 2 * 8 * m * m / (8 * A.nnz * 1.5) * rates.matrix_pass
+    solves = steps * (1.0 if history else 0.0) + field_steps
+    costs["condensed"] = MethodCost("condensed", factorization + condensation,
+                                    first_lu + newton * per_newton + solves * solve,
+                                    int(resident + factor.bytes + dense),
+                                    dense <= CONDENSED_SHARE * available and factor.bytes + dense <= available)
+    costs["full"] = MethodCost("full", 0.0, newton * (factorization + solve), int(resident + factor.bytes),
+                               factor.bytes <= available)
+    return costs
+
+
+def resident_memory() -> int:
+    """Bytes this process holds now (its resident set), 0 where it cannot be read."""
+    try:
+        with open("/proc/self/statm") as statm:
+            return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0
