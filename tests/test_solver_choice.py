@@ -7,7 +7,6 @@ import tomli_w
 import vpcontact
 from vpcontact.cli import main
 from vpcontact.solvers import amg, choice, cost
-from conftest import half_disc_case
 from test_3d import ball_case
 
 
