@@ -41,7 +41,7 @@ from .base import ContactState, SolverWork, StepData, StepSolution, norm
 from ..memory import available_memory
 from ..progress import SILENT, Progress, duration, size
 from .condensed_systems import NewtonSystems
-from .factorization import BACKENDS, chosen_backend, contact_dofs, factorize
+from .factorization import BACKENDS, chosen_backend, condensation_dofs, contact_dofs, factorize_on_normals
 from .newton import ROUNDOFF, STAGNATION, Evaluation, SemismoothNewton
 from .solved_span import SolvedSpan
 
@@ -86,7 +86,8 @@ class CondensedNewton(SemismoothNewton):
         with progress.phase("factorization", f"A0 = A + r NᵀN, {A.shape[0]:,} dofs, by {BACKENDS[backend].label}; "
                             f"expected: {expected}{size(condensed_memory(self.N, A.shape[0]))} of dense algebra "
                             f"({size(available_memory())} available)", estimate=expected_seconds) as phase:
-            self.factorization = factorize(A + self.N.T @ sp.diags(self.reference) @ self.N, self.N, backend, progress)
+            self.factorization = factorize_on_normals(A + self.N.T @ sp.diags(self.reference) @ self.N, self.N,
+                                                      backend, progress)
             phase.done(f"a factor of {self.factorization.factor_nonzeros:,} entries")
         factored = time.perf_counter()
         with progress.phase("condensation", f"S = N A0⁻¹ Nᵀ for {m:,} contact nodes "
@@ -268,9 +269,10 @@ class CondensedNewton(SemismoothNewton):
 
 def condensed_memory(N: sp.csr_matrix, n: int) -> int:
     """Bytes of the dense algebra of the condensed method for the contact operator N (m × n): the
-    Schur complement of A0 on the c contact dofs (c = d m) and its Cholesky factor (PARDISO's route to
-    S), S, the Newton matrix and its factor (m × m each), and the block solves (64 columns of n)."""
-    m, c = N.shape[0], contact_dofs(N).size
+    Schur complement of A0 on the c dofs of the condensation (:func:`.factorization.condensation_dofs`: c = m)
+    and its Cholesky factor (PARDISO's route to S), S, the Newton matrix and its factor (m × m each), and the
+    block solves (64 columns of n)."""
+    m, c = N.shape[0], condensation_dofs(N)
     return 8 * (2 * c * c + 3 * m * m + 2 * 64 * n)
 
 
@@ -289,7 +291,7 @@ def check_condensed_memory(N: sp.csr_matrix, n: int) -> None:
     """Refuse, before allocating, a condensed operator that would not fit in memory."""
     fits, needed, available = condensed_fits(N, n)
     if not fits:
-        m, c = N.shape[0], contact_dofs(N).size
+        m, c = N.shape[0], condensation_dofs(N)
         raise CaseError(f"solver.method = \"condensed\" needs about {needed / 2**30:.1f} GiB for its dense "
                         f"{m} x {m} contact operator (and the {c} x {c} Schur complement on the contact dofs), more "
                         f"than half the {available / 2**30:.1f} GiB available; use solver.method = \"iterative\"")

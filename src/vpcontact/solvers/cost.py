@@ -39,16 +39,16 @@ import scipy.sparse as sp
 
 from ..memory import available_memory
 from .condensed import CONDENSED_SHARE, condensed_memory
-from .factorization import contact_dofs, installed_backends
+from .factorization import condensation_dofs, contact_dofs, installed_backends, rotates
 
 #: The flop rate of PARDISO's numerical factorization (its two threads, supernodes of dense blocks) over the
 #: one-thread dense product probe's.
-PARDISO_SPEED = 1.0
+PARDISO_SPEED = 0.6
 #: The flop rate of SciPy's dense Cholesky and triangular solves (all threads) over the one-thread probe's.
 DENSE_SPEED = 1.5
 #: Passes over A (products with A) that one CG iteration preconditioned by pyamg's V-cycle costs, with the
 #: Newton iteration's own work per CG iteration.
-CG_PASSES = 15.0
+CG_PASSES = 25.0
 #: CG iterations per Newton iteration (7.4–8.8 on the quarter ball from 71k to 2M dofs).
 CG_PER_NEWTON = 8.0
 #: Products with A that the multigrid set-up costs.
@@ -56,10 +56,10 @@ AMG_SETUP_PASSES = 700.0
 #: GMRES iterations per Newton iteration of the condensed method (about 6 on the quarter ball, 3 on the punch).
 GMRES_PER_NEWTON = 5.0
 #: Newton iterations per time step.
-NEWTON_PER_STEP = 2.0
+NEWTON_PER_STEP = 1.7
 #: The iterative method's Newton iterations over the direct methods' (its inexact solves: 1.0 on the quarter
 #: ball, 1.5 on the punch).
-INEXACT_NEWTON = 1.25
+INEXACT_NEWTON = 1.0
 #: Bytes per stored entry of the stiffness matrix that the iterative method holds at its peak: the
 #: stiffness, its absolute value, the rotated matrix and the Newton matrix (CSR: 12 bytes an entry
 #: each), the multigrid hierarchy in nodal blocks and its construction's temporaries. Measured peak
@@ -123,13 +123,20 @@ FLOPS_2D, ENTRIES_2D = 2.0e9, 4.0e6
 
 
 def factor_work(A: sp.csr_matrix, N: sp.csr_matrix, dim: int, count: bool = True) -> FactorWork:
-    """The work of factoring A0 = A + r NᵀN in Schur mode on N's contact dofs (:func:`.factorization.contact_dofs`):
-    PARDISO's symbolic analysis of it when ``count`` and PARDISO is installed, else the laws above."""
+    """The work of factoring A0 = A + r NᵀN in Schur mode on the dofs of the condensation (the contact dofs, or
+    in the normal frame the normal dofs: :func:`.factorization.condensation_dofs`): PARDISO's symbolic analysis
+    of it when ``count`` and PARDISO is installed, else the laws above."""
     if count and "pardiso" in installed_backends():
+        from .normal_frame import NormalFrame
         from .pardiso import Pardiso
 
-        A0 = (A + N.T @ N).tocsr()  # A0's pattern (the values do not change the analysis' counts)
-        analysis = Pardiso(A0, contact_dofs(N), analyse_only=True)
+        A0 = (A + N.T @ N).tocsr()  # A0's pattern, Q A0 Q's too (the values do not change the analysis' counts)
+        if rotates(N):
+            frame = NormalFrame(N)
+            dofs = np.sort(frame.normal_dof[frame.has_normal])
+        else:
+            dofs = contact_dofs(N)
+        analysis = Pardiso(A0, dofs, analyse_only=True)
         return FactorWork(analysis.factor_flops, analysis.factor_nonzeros, analysis.factor_bytes, True)
     n = A.shape[0] / 1e5
     flops, entries = (FLOPS_3D * n**2, ENTRIES_3D * n ** (4 / 3)) if dim == 3 else (FLOPS_2D * n**1.5, ENTRIES_2D * n)
@@ -161,7 +168,7 @@ def predict(A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, *, history
     (``history``: a viscoplastic history, a bulk solve at every step; ``field_steps``: steps whose fields are
     written), on a machine of ``rates``, the condensed factor's work ``factor`` (None: not wanted, the condensed
     and full methods are not predicted) and ``resident`` bytes the process holds already (the problem)."""
-    n, m, c = A.shape[0], N.shape[0], contact_dofs(N).size
+    n, m, c = A.shape[0], N.shape[0], condensation_dofs(N)
     available = available_memory()
     flops1 = rates.dense_flops
     newton = NEWTON_PER_STEP * steps

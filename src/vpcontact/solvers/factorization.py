@@ -239,6 +239,65 @@ def chosen_backend(backend: str = "auto") -> str:
     return installed_backends()[0] if backend == "auto" else backend
 
 
+class RotatedFactorization:
+    """The factorization of A0 made in the contact nodes' normal frame (:mod:`.normal_frame`): Q A0 Q factored with
+    N Q = diag(s) E, which has one entry a row, so that S = N A0⁻¹ Nᵀ = (N Q)(Q A0 Q)⁻¹(N Q)ᵀ condenses onto the
+    m normal dofs instead of the d · m dofs a curved contact face's normals touch (the quarter ball: 3,997 normal
+    dofs instead of 11,845; the dense Schur complement 9 times smaller, its Cholesky 27 times cheaper). Every
+    solve is the rotated one between two products with Q (Q = Qᵀ = Q⁻¹): A0⁻¹ b = Q (Q A0 Q)⁻¹ Q b."""
+
+    def __init__(self, Q: sp.csr_matrix, rotated):
+        self.Q, self._rotated = Q, rotated
+        self.name, self.label, self.factor_nonzeros = rotated.name, rotated.label, rotated.factor_nonzeros
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        return self.Q @ self._rotated.solve(self.Q @ b)
+
+    def split(self, b: np.ndarray) -> SplitSolve:
+        """The rotated factor's split of Q b: its N Q (Q A0 Q)⁻¹ Q b is N A0⁻¹ b, its finish rotated back."""
+        rotated = self._rotated.split(self.Q @ b)
+        return SplitSolve(rotated.observed, lambda q: self.Q @ rotated.finish(q), rotated.finish_solves)
+
+    def condensation_words(self) -> str:
+        return self._rotated.condensation_words().replace("contact dofs", "contact nodes' normal dofs")
+
+    def condensed_operator(self) -> np.ndarray:
+        return self._rotated.condensed_operator()
+
+    def kept(self) -> dict[str, np.ndarray]:
+        return self._rotated.kept()
+
+    def restore(self, arrays: dict[str, np.ndarray]) -> None:
+        self._rotated.restore(arrays)
+
+
+def rotates(N: sp.csr_matrix) -> bool:
+    """Is the condensation made in the normal frame (:class:`RotatedFactorization`)? Where a node's normal has more
+    than one nonzero component (a face not along the axes), so that the contact dofs outnumber the nodes."""
+    return contact_dofs(N).size > N.shape[0]
+
+
+def condensation_dofs(N: sp.csr_matrix) -> int:
+    """The dofs the condensed method's Schur complement is on: the contact nodes' normal dofs (one a node with a
+    free normal) when it rotates, else the contact dofs."""
+    if rotates(N):
+        from .normal_frame import NormalFrame
+
+        return int(NormalFrame(N).has_normal.sum())
+    return contact_dofs(N).size
+
+
+def factorize_on_normals(A: sp.spmatrix, N: sp.csr_matrix, backend: str = "auto", progress: Progress = SILENT):
+    """The condensed method's factorization of A0 with N (:func:`factorize`), made in the normal frame where that
+    condenses onto fewer dofs (:func:`rotates`)."""
+    if not rotates(N):
+        return factorize(A, N, backend, progress)
+    from .normal_frame import NormalFrame
+
+    frame = NormalFrame(N)
+    return RotatedFactorization(frame.Q, factorize(frame.rotate(A), frame.normal_operator(), backend, progress))
+
+
 def factorize(A: sp.spmatrix, N: sp.csr_matrix, backend: str = "auto", progress: Progress = SILENT):
     """Factor the SPD matrix A with ``backend`` ("auto": the fastest one installed); ``progress`` hears of the
     memory the factor takes when the backend knows it before (MKL PARDISO's analysis)."""
