@@ -4,11 +4,12 @@ stages (build = mesh + assembly + checks, solver setup, time loop, total) and es
 build measured is the check's: the first in its process, as a fresh ``vpcontact run``'s is (the run's own
 build, a second one in the same process, is faster: "second build").
 
-The same records are the data :mod:`vpcontact.solvers.time_estimate`'s constants were fitted to (its docstring).
+The estimate is the cost model's (:mod:`vpcontact.solvers.cost`); benchmarks/ladder.py checks it, and "auto", on the
+3D sizes users bring, this script on the examples (2D and 3D, elastic and viscoplastic, every method).
 
     python benchmarks/check_estimate.py                 # every configuration (minutes)
     python benchmarks/check_estimate.py --only quarter_ball
-    python benchmarks/check_estimate.py --fit records.jsonl ...   # the constants of vpcontact.solvers.time_estimate
+    python benchmarks/check_estimate.py --validation    # the configurations between those sizes
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ CONFIGURATIONS = [
       for method, sizes in (("condensed", (0.15, 0.1, 0.07)), ("iterative", (0.15, 0.1, 0.07)), ("full", (0.15, 0.1)))
       for h in sizes],
 ]
-#: Configurations not in the fit, between its sizes: how good the estimate is (``--validation``).
+#: More configurations, between those sizes and on a viscoplastic 3D body (``--validation``).
 VALIDATION = [
     ("paper_ball h=0.0044 auto", "paper_ball.toml", {"mesh.h": 0.0044}),
     ("viscoplastic_ball h=0.0088 auto", "viscoplastic_ball.toml", {"mesh.h": 0.0088}),
@@ -67,59 +68,12 @@ def measure(example: str, overrides: dict) -> dict:
             "load_average": os.getloadavg()[0]}
 
 
-def fit(records: list[dict]) -> None:
-    """Print the Rate of each (method, dimension) fitted to the elastic ``records`` (least squares of the logarithms
-    of the setup and of the time loop per step, each over the run's build, against log(n / 10⁵), over the runs of
-    at least MIN_FIT_DOFS free dofs) and the spread of the fit, and HISTORY_FACTOR: the geometric mean, over the
-    viscoplastic records, of their time loop per step over the elastic condensed one's at the same size (each
-    over its build)."""
-    import numpy as np
-
-    def build(r):
-        return r["estimate_s"]["build"]  # the check's, measured
-
-    def setup(r):
-        return r["measured_s"]["solver setup"] / build(r)
-
-    def per_step(r):
-        return r["measured_s"]["time loop"] / r["steps"] / build(r)
-
-    families = {}
-    for r in records:
-        if not r["history"] and r["free_dofs"] >= MIN_FIT_DOFS:
-            families.setdefault((r["method"], r["dim"]), []).append(r)
-    for (method, dim), runs in sorted(families.items()):
-        x = np.log([r["free_dofs"] / 1e5 for r in runs])
-        p, log_a = np.polyfit(x, np.log([setup(r) for r in runs]), 1)
-        q, log_b = np.polyfit(x, np.log([per_step(r) for r in runs]), 1)
-        fitted = [build(r) * (np.exp(log_a + p * xi) + r["steps"] * np.exp(log_b + q * xi)) for r, xi in zip(runs, x)]
-        spread = [f / (r["measured_s"]["solver setup"] + r["measured_s"]["time loop"]) for f, r in zip(fitted, runs)]
-        print(f'    ("{method}", {dim}): Rate(a={np.exp(log_a):.3g}, p={p:.2f}, b={np.exp(log_b):.3g}, q={q:.2f}),'
-              f"  # {len(runs)} runs, {min(r['free_dofs'] for r in runs)}-{max(r['free_dofs'] for r in runs)} "
-              f"free dofs; "
-              f"fitted / measured setup + loop: {', '.join(f'{s:.2f}' for s in spread)}")
-    elastic = {(r["dim"], r["free_dofs"]): r for r in records if not r["history"] and r["method"] == "condensed"}
-    ratios = [per_step(r) / per_step(elastic[r["dim"], r["free_dofs"]]) for r in records
-              if r["history"] and r["method"] == "condensed" and (r["dim"], r["free_dofs"]) in elastic]
-    print(f"HISTORY_FACTOR = {np.exp(np.mean(np.log(ratios))):.2g}  # {len(ratios)} sizes: "
-          f"{', '.join(f'{ratio:.2g}' for ratio in ratios)}")
-
-
-#: The smallest runs fitted (below, fixed costs that the power laws do not describe dominate).
-MIN_FIT_DOFS = 5000
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", default="", help="the configurations whose name contains this")
     parser.add_argument("--validation", action="store_true", help="the configurations not in the fit")
-    parser.add_argument("--fit", nargs="+", metavar="RECORDS", help="fit the constants to these records (JSON lines)")
     parser.add_argument("--inline", nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args()
-    if args.fit:
-        fit([json.loads(line) for name in args.fit for line in Path(name).read_text().splitlines()
-             if "error" not in json.loads(line)])
-        return
     if args.inline:
         print(json.dumps(measure(args.inline[0], json.loads(args.inline[1]))))
         return

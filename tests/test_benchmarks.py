@@ -97,3 +97,40 @@ def test_the_displacement_control_benchmark_costs_no_factor_and_no_solve_more():
             record["force_at_t1_N"]
     assert runs["displacement", "condensed"]["linear_solves"] == runs["traction", "condensed"]["linear_solves"] == 2
     assert runs["displacement", "full"]["linear_solves"] == runs["displacement", "full"]["newton_iterations"]
+
+
+def test_the_ladder_runs_each_method_and_auto_picks_the_one_its_cost_model_predicts_fastest():
+    """benchmarks/ladder.py --quick: the gmsh punch (skipped without gmsh's library) at 7k dofs, condensed and
+    iterative each in a fresh process, and auto; every run records its plan's prediction, and auto runs the
+    method its own prediction puts first."""
+    import pytest
+
+    gmsh = pytest.importorskip("gmsh")
+    try:
+        gmsh.initialize(interruptible=False)
+        gmsh.finalize()
+    except OSError:
+        pytest.skip("gmsh's library does not load here")
+    done = subprocess.run([sys.executable, str(BENCHMARKS / "ladder.py"), "--quick"], capture_output=True, text=True,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    runs = report["runs"]
+    assert [(r["rung"], r["asked"]) for r in runs] == [("punch-quick", method)
+                                                       for method in ("condensed", "iterative", "auto")]
+    for run in runs:
+        assert run["status"] == "complete", run
+        # a method asked for is predicted (with the others whose prediction costs nothing more); auto predicts all
+        assert run["method"] in run["predicted"]
+        assert set(run["predicted"]) == ({"iterative"} if run["asked"] == "iterative" else {"condensed", "iterative",
+                                                                                            "full"})
+        assert all(cost["total_s"] > 0 and cost["memory_bytes"] > 0 for cost in run["predicted"].values())
+        assert run["predicted_peak_bytes"] > 0 and run["peak_rss_bytes"] > 0
+    for auto in (r for r in runs if r["asked"] == "auto"):
+        fitting = {name: cost["total_s"] for name, cost in auto["predicted"].items() if cost["fits"]}
+        assert auto["method"] == min(fitting, key=fitting.get)
+        assert auto["reason"].startswith(f'solver.method = "auto": the {auto["method"]} method is predicted fastest')
+    punch = next(r for r in runs if r["rung"] == "punch-quick")
+    assert punch["contact_nodes"] < punch["dofs"] / 3  # the flat face of the gmsh punch, meshed finer
+    assert [s["rung"] for s in report["summaries"]] == ["punch-quick"]
+    assert all(s["auto_over_fastest"] > 0 for s in report["summaries"])

@@ -27,8 +27,11 @@ def test_run_directory_contract(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "complete" and summary["steps"] == 11
     assert summary["solver_method"] == "condensed"
-    assert summary["solver_reason"].startswith("solver.method = \"auto\": the condensed method's dense algebra for ")
-    assert " GiB) fits in 50% of the " in summary["solver_reason"]
+    assert summary["solver_reason"].startswith("solver.method = \"auto\": the condensed method is predicted fastest")
+    predicted = summary["predicted_costs"]
+    assert set(predicted) == {"condensed", "full", "iterative"} and all(cost["fits"] for cost in predicted.values())
+    assert min(predicted, key=lambda name: predicted[name]["total_s"]) == "condensed"
+    assert all(cost["total_s"] == cost["setup_s"] + cost["loop_s"] > 0 for cost in predicted.values())
     assert SUMMARY_FINAL <= set(summary["final"])
     assert {"vpcontact", "numpy", "scipy", "scikit-fem", "meshio"} <= set(summary["versions"])
 
@@ -84,17 +87,18 @@ def test_run_directory_contract(tmp_path, capsys):
     assert json.loads((out / "summary.json").read_text())["final"]["K_probe"] > summary["final"]["K_probe"]
 
 
-def test_auto_says_why_it_runs_the_iterative_method(monkeypatch):
-    """With less memory than the condensed method's dense algebra needs twice over, "auto" runs the
-    iterative method and says so, with the numbers it weighed; an explicit method is named as the case's choice."""
+def test_auto_says_why_it_does_not_run_the_condensed_method(monkeypatch):
+    """With less memory than the condensed method's dense algebra needs twice over, "auto" runs the fastest
+    method predicted among the others (the full one, on this small 2D body) and says why; an explicit method is named as the case's choice."""
     import vpcontact
     from vpcontact.solvers import condensed
 
     case = vpcontact.load_case(half_disc_case(h=0.2))
     monkeypatch.setattr(condensed, "available_memory", lambda: 1000)
     result = vpcontact.solve(case)
-    assert result.method == "iterative" and result.status == "complete"
-    assert " GiB) exceeds 50% of the 0.0 GiB available" in result.method_reason
+    assert result.method == "full" and result.status == "complete"
+    assert result.predicted["full"]["total_s"] < result.predicted["iterative"]["total_s"]
+    assert result.method_reason.endswith("; condensed would not fit in the memory available"), result.method_reason
     monkeypatch.undo()
     explicit = vpcontact.solve(vpcontact.load_case(half_disc_case(h=0.2), {"solver.method": "condensed"}))
     assert explicit.method_reason == "solver.method = \"condensed\""

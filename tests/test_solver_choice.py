@@ -66,3 +66,19 @@ def test_a_newton_system_cg_cannot_solve_cuts_the_step_then_fails_the_run_with_a
     assert result.status == "failed" and result.steps == 0
     assert "the Newton system was not solved (AMG-preconditioned CG reached a relative residual" in result.message
     assert "in 1 iterations" in result.message
+
+
+def test_a_resumed_auto_run_keeps_the_method_of_the_run_it_continues():
+    """The prediction weighs this session's speed: a run resumed from a checkpoint of the iterative method keeps
+    it where "auto" would now choose the condensed one, and says so (a method changed on resuming would make the
+    resumed run differ from the uninterrupted one beyond its last bits)."""
+    from vpcontact.results.output_options import OutputOptions
+    from vpcontact.timeloop.plan import free_operators, plan_run
+
+    problem = vpcontact.build_problem(vpcontact.load_case(ball_case(h=0.3)))
+    operators = free_operators(problem)
+    assert plan_run(problem, OutputOptions(), *operators).method == "condensed"
+    resumed = plan_run(problem, OutputOptions(), *operators, resumed_method="iterative")
+    assert resumed.method == "iterative"
+    assert resumed.method_reason == 'solver.method = "auto": the iterative method of the run resumed (this session ' \
+                                    'predicts the condensed method fastest)'

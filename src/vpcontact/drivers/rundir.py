@@ -124,8 +124,10 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
                 adaptation = _adapt_locked(problem, case, options, held, clear=overwrite and used, stopper=stopper,
                                            progress=progress)
                 return Outcome(adaptation.last.result, adaptation.status, adaptation.message, stopper.signal)
-            loop = TimeLoop(problem, options.output, progress)
             resuming = resume and checkpoint.exists(out)
+            # a resumed run keeps the method of the run it continues ("auto" would weigh this session's speed)
+            loop = TimeLoop(problem, options.output, progress,
+                            resumed_method=checkpoint.saved_method(out) if resuming else None)
             if resuming:
                 with progress.phase("checkpoint", f"restoring {checkpoint.folder(out)}") as phase:
                     checkpoint.restore(loop, out)

@@ -87,6 +87,15 @@ def saved_step(out: Path) -> int | None:
         return None
 
 
+def saved_method(out: Path) -> str | None:
+    """The step method of the run the checkpoint in ``out`` saved; None when there is none (or it is damaged)."""
+    try:
+        with np.load(folder(out) / STATE, allow_pickle=False) as data:
+            return str(data["solver_method"])
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):
+        return None
+
+
 def remove_unrecorded(out: Path, recorded: Collection[int]) -> None:
     """Delete the fields files of checkpoint/ whose step is not in ``recorded`` (the field steps of the
     state restored; none for a run that starts): a session that stopped before it saved the state

@@ -3,9 +3,10 @@
 Each method's wall time is predicted as its set-up plus its time loop, from what the work is (flops, or passes
 over a matrix) and how fast this machine does it now:
 
-- **the machine** (:class:`MachineRates`, probed in the process in about 0.1 s): the flop rate of a dense matrix
-  product on one thread, and the seconds of one product with the problem's own stiffness A (a measure of the
-  memory bandwidth that sparse and iterative work runs at);
+- **the machine** (:class:`MachineRates`): the flop rate of a dense matrix product on one thread, and the seconds
+  of one product with the problem's own stiffness A (a measure of the memory bandwidth that sparse and iterative
+  work runs at): this machine kind's reference rates, by which "auto" chooses (the same case, the same method,
+  on every run), and the rates probed in the process now (about 0.1 s), by which the times are reported;
 - **the direct factor** (:func:`factor_work`): the flops and stored entries of the factorization of A0 that the
   condensed method makes (in Schur mode on its c contact dofs), as MKL PARDISO's symbolic analysis counts them
   (the ordering the factorization itself will use; a second or so at 10⁵ dofs), or without PARDISO a law in
@@ -38,12 +39,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..memory import available_memory
-from .condensed import CONDENSED_SHARE, condensed_memory
+from .condensed import condensed_fits, condensed_memory
 from .factorization import condensation_dofs, contact_dofs, installed_backends, rotates
 
 #: The flop rate of PARDISO's numerical factorization (its two threads, supernodes of dense blocks) over the
 #: one-thread dense product probe's.
-PARDISO_SPEED = 0.6
+PARDISO_SPEED = 0.35
 #: The flop rate of SciPy's dense Cholesky and triangular solves (all threads) over the one-thread probe's.
 DENSE_SPEED = 1.5
 #: Passes over A (products with A) that one CG iteration preconditioned by pyamg's V-cycle costs, with the
@@ -60,6 +61,10 @@ NEWTON_PER_STEP = 1.7
 #: The iterative method's Newton iterations over the direct methods' (its inexact solves: 1.0 on the quarter
 #: ball, 1.5 on the punch).
 INEXACT_NEWTON = 1.0
+#: Seconds of the time loop's own work per Newton iteration and per step whatever the method (evaluating the laws,
+#: the step's records: the paper's half disc at 1/64 and 1/128, condensed, 1.6–2.4 ms per Newton iteration).
+NEWTON_OVERHEAD_S = 1.5e-3
+STEP_OVERHEAD_S = 1.5e-3
 #: Bytes per stored entry of the stiffness matrix that the iterative method holds at its peak: the
 #: stiffness, its absolute value, the rotated matrix and the Newton matrix (CSR: 12 bytes an entry
 #: each), the multigrid hierarchy in nodal blocks and its construction's temporaries. Measured peak
@@ -73,6 +78,13 @@ def iterative_memory(A: sp.spmatrix) -> int:
     return ITERATIVE_BYTES_PER_ENTRY * A.nnz
 
 
+#: This machine kind's rates (2-core AMD EPYC, 24 GB; ``MachineRates.probe`` on the quarter ball's stiffness at
+#: 24k and 71k dofs, 2026-11-27): 29.4 GF/s for the one-thread dense product, 5–12 GB/s for a product with A
+#: (the smaller matrix partly in cache).
+REFERENCE_FLOPS = 30e9
+REFERENCE_BANDWIDTH = 8e9
+
+
 @dataclass(frozen=True)
 class MachineRates:
     """How fast this process computes now: ``dense_flops`` (flop/s of a 1024² matrix product on one thread) and
@@ -80,6 +92,12 @@ class MachineRates:
 
     dense_flops: float
     matrix_pass: float
+
+    @classmethod
+    def reference(cls, A: sp.csr_matrix) -> "MachineRates":
+        """The rates of this machine kind, quiet: REFERENCE_FLOPS, and a pass over A's 12 bytes an entry at
+        REFERENCE_BANDWIDTH."""
+        return cls(dense_flops=REFERENCE_FLOPS, matrix_pass=12 * A.nnz / REFERENCE_BANDWIDTH)
 
     @classmethod
     def probe(cls, A: sp.csr_matrix) -> "MachineRates":
@@ -172,10 +190,11 @@ def predict(A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, *, history
     available = available_memory()
     flops1 = rates.dense_flops
     newton = NEWTON_PER_STEP * steps
+    overhead = steps * STEP_OVERHEAD_S + newton * NEWTON_OVERHEAD_S
     costs = {}
     amg = iterative_memory(A)
     costs["iterative"] = MethodCost("iterative", AMG_SETUP_PASSES * rates.matrix_pass,
-                                    INEXACT_NEWTON * newton * CG_PER_NEWTON * CG_PASSES * rates.matrix_pass,
+                                    INEXACT_NEWTON * newton * CG_PER_NEWTON * CG_PASSES * rates.matrix_pass + overhead,
                                     resident + amg, amg <= available)
     if factor is None:
         return costs
@@ -187,10 +206,10 @@ def predict(A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, *, history
     per_newton = GMRES_PER_NEWTON * 2 * 8 * m * m / (8 * A.nnz * 1.5) * rates.matrix_pass
     solves = steps * (1.0 if history else 0.0) + field_steps
     costs["condensed"] = MethodCost("condensed", factorization + condensation,
-                                    first_lu + newton * per_newton + solves * solve,
+                                    first_lu + newton * per_newton + solves * solve + overhead,
                                     int(resident + factor.bytes + dense),
-                                    dense <= CONDENSED_SHARE * available and factor.bytes + dense <= available)
-    costs["full"] = MethodCost("full", 0.0, newton * (factorization + solve), int(resident + factor.bytes),
+                                    condensed_fits(N, n)[0] and factor.bytes + dense <= available)
+    costs["full"] = MethodCost("full", 0.0, newton * (factorization + solve) + overhead, int(resident + factor.bytes),
                                factor.bytes <= available)
     return costs
 

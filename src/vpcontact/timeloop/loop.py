@@ -76,14 +76,15 @@ class TimeLoop:
     the time steps in ``run``.
     """
 
-    def __init__(self, problem: Problem, output: OutputOptions | None = None, progress: Progress = SILENT):
+    def __init__(self, problem: Problem, output: OutputOptions | None = None, progress: Progress = SILENT,
+                 resumed_method: str | None = None):
         started = clock.perf_counter()
         self.problem, self.progress = checked_problem(problem), progress
         output = OutputOptions() if output is None else output
         free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
         A, N = free_operators(problem)
-        self.plan = plan = plan_run(problem, output, A, N)  # the refusals before the first step
+        self.plan = plan = plan_run(problem, output, A, N, resumed_method)  # the refusals before the first step
         modes = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs)
         layout = DofLayout(free, mesh.dim(), mesh.nvertices, modes.matrix[free].toarray())
         rigid = modes.free_basis(free)

@@ -87,10 +87,14 @@ def free_operators(problem: Problem) -> tuple[sp.csr_matrix, sp.csr_matrix]:
     return problem.A[free][:, free].tocsr(), problem.surface.operator[:, free].tocsr()
 
 
-def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix) -> RunPlan:
+def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
+             resumed_method: str | None = None) -> RunPlan:
     """The plan of a run of ``problem`` with the output options ``output`` (``output.field_steps`` and
     ``output.error_estimate``), whose stiffness and contact operator on the free dofs are A and N
-    (:func:`free_operators`); CaseError for a run that cannot be made (see the module's docstring)."""
+    (:func:`free_operators`); CaseError for a run that cannot be made (see the module's docstring). A run resumed
+    from a checkpoint made by ``resumed_method`` keeps it for ``solver.method = "auto"`` (the prediction weighs
+    this machine's speed now: another session could choose another method, and the resumed run would then not
+    be the uninterrupted one bit for bit)."""
     mesh, surface, times = problem.mesh, problem.surface, problem.times
     nodes, elements = mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
     history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
@@ -98,8 +102,11 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix) -> Ru
     check_memory(len(times), output, nodes, elements, surface.size, history, mesh.dim, held)
     r = augmentation_parameter(A, N, problem.solver.augmentation)
     field_steps = len(field_step_numbers(output.field_steps, len(times)))
-    costs = predicted_costs(problem.solver.method, A, N, mesh.dim, len(times), history, field_steps)
-    method, reason = chosen_method(problem.solver.method, costs)
+    deciding, costs = predicted_costs(problem.solver.method, A, N, mesh.dim, len(times), history, field_steps)
+    method, reason = chosen_method(problem.solver.method, deciding)
+    if problem.solver.method == "auto" and resumed_method in costs and resumed_method != method:
+        method, reason = resumed_method, (f"solver.method = \"auto\": the {resumed_method} method of the run resumed "
+                                          f"(this session predicts the {method} method fastest)")
     solver_memory = None
     if method == "condensed":
         check_condensed_memory(N, A.shape[0])
@@ -110,7 +117,7 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix) -> Ru
     outputs = memory_needed(len(times), field_steps, nodes, elements, surface.size, history, mesh.dim,
                             estimate=output.error_estimate, held_parts=held)
     build = problem.timings.get("build", 0.0)
-    cost = costs.get(method) or predicted_costs(method, A, N, mesh.dim, len(times), history, field_steps)[method]
+    cost = costs[method]
     return RunPlan(
         dim=mesh.dim, nodes=nodes, elements=elements, dofs=int(problem.basis.N), free_dofs=problem.free.size,
         contact_nodes=surface.size, start=float(times.start), T=float(times.T), steps=len(times), k=float(times.k),
@@ -123,27 +130,30 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix) -> Ru
 
 
 def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, history: bool,
-                    field_steps: int) -> dict:
-    """The methods' predicted costs (:func:`~vpcontact.solvers.cost.predict`) for ``solver.method = method``. The
-    direct factor's work is counted by PARDISO's analysis where a direct method may run: when it is asked for, or,
-    for "auto", when the condensed method's dense algebra fits and its cost by the laws of
-    :func:`~vpcontact.solvers.cost.factor_work` is within COUNT_WITHIN of the iterative method's (an analysis of a
-    factor that cannot win is not made: at 2M dofs it would take a minute)."""
-    rates, resident = MachineRates.probe(A), resident_memory()
+                    field_steps: int) -> tuple[dict, dict]:
+    """The methods' predicted costs (:func:`~vpcontact.solvers.cost.predict`) for ``solver.method = method``, twice:
+    at this machine kind's reference rates (:meth:`~vpcontact.solvers.cost.MachineRates.reference`), by which
+    "auto" chooses (the same case gets the same method on every run, whatever else the machine is doing, and
+    whichever fields it writes: the solves of the ``field_steps`` written are left out), and at the rates probed
+    now, which ``vpcontact check`` and summary.json report. The direct factor's work is counted
+    by PARDISO's analysis where a direct method may run: when it is asked for, or, for "auto", when the condensed
+    method's dense algebra fits and its cost by the laws of :func:`~vpcontact.solvers.cost.factor_work` is within
+    COUNT_WITHIN of the iterative method's (an analysis of a factor that cannot win is not made: at 2M dofs it
+    would take a minute)."""
+    reference, probed, resident = MachineRates.reference(A), MachineRates.probe(A), resident_memory()
 
-    def costs(factor):
-        return predict(A, N, dim, steps, history=history, field_steps=field_steps, rates=rates, factor=factor,
+    def costs(factor, rates, written=0):
+        return predict(A, N, dim, steps, history=history, field_steps=written, rates=rates, factor=factor,
                        resident=resident)
 
-    if method == "iterative":
-        return costs(None)
-    if method == "auto":
-        if not condensed_fits(N, A.shape[0])[0]:
-            return costs(None)
-        estimated = costs(factor_work(A, N, dim, count=False))
-        if estimated["condensed"].total_s > COUNT_WITHIN * estimated["iterative"].total_s:
-            return estimated
-    return costs(factor_work(A, N, dim))
+    factor = None
+    if method != "iterative":
+        factor = factor_work(A, N, dim, count=False)
+        estimated = costs(factor, reference)
+        if method != "auto" or (condensed_fits(N, A.shape[0])[0] and
+                                estimated["condensed"].total_s <= COUNT_WITHIN * estimated["iterative"].total_s):
+            factor = factor_work(A, N, dim)
+    return costs(factor, reference), costs(factor, probed, field_steps)
 
 
 #: "auto" counts the direct factor's work (PARDISO's analysis) when the condensed method's cost by the laws is
