@@ -44,7 +44,7 @@ from .factorization import condensation_dofs, contact_dofs, installed_backends, 
 
 #: The flop rate of PARDISO's numerical factorization (its two threads, supernodes of dense blocks) over the
 #: one-thread dense product probe's.
-PARDISO_SPEED = 0.35
+PARDISO_SPEED = 0.25
 #: The flop rate of SciPy's dense Cholesky and triangular solves (all threads) over the one-thread probe's.
 DENSE_SPEED = 1.5
 #: Passes over A (products with A) that one CG iteration preconditioned by pyamg's V-cycle costs, with the

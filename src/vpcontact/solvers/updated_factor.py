@@ -72,7 +72,14 @@ class UpdatedFactor:
         is, or nearly: see ``NewtonSystems._follow_changes_of_state``) or the correction is not finite."""
         PU = self.apply(U)
         capacitance = np.eye(changed.size) + PU[changed]
-        if not np.linalg.cond(capacitance) < 1.0 / np.finfo(float).eps:
+        if not np.all(np.isfinite(capacitance)):
+            return False
+        # singular to working precision: its smallest singular value at the rounding level of the sum I + E_cᵀK⁻¹U
+        # (relative to its largest one, or to the terms summed: a 1 × 1 capacitance 1 + (−1 + δ) has a condition
+        # number of 1 whatever δ)
+        singular_values = np.linalg.svd(capacitance, compute_uv=False)
+        scale = max(singular_values[0], 1.0 + np.linalg.norm(PU[changed], 2))
+        if not singular_values[-1] > changed.size * np.finfo(float).eps * scale:
             return False
         E = np.zeros((self.lu.shape[0], changed.size))
         E[changed, np.arange(changed.size)] = 1.0
@@ -83,7 +90,7 @@ class UpdatedFactor:
                 correction = la.solve(capacitance, rows.T, check_finite=False)  # C⁻¹ E_cᵀ K⁻¹, k × m
         except (la.LinAlgError, ValueError):
             return False
-        if not (np.all(np.isfinite(correction)) and np.all(np.isfinite(PU))):
+        if not np.all(np.isfinite(correction)):
             return False
         self.X, self.Y = np.hstack([self.X, PU]), np.hstack([self.Y, correction.T])
         return True
