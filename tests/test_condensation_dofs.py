@@ -5,7 +5,6 @@ factors with low-rank corrections instead of a formed inverse."""
 import numpy as np
 import pytest
 
-import vpcontact
 from vpcontact.solvers import factorization
 from vpcontact.solvers.condensed import condensed_memory
 from vpcontact.solvers.updated_factor import UpdatedFactor
