@@ -92,7 +92,8 @@ def run(kind: str, size, steps: int, method: str, memory_limit_mb: float, time_l
     command = [sys.executable, __file__, "--inline", kind, str(size), str(steps), method]
     status, stdout, stderr, stopped, wall, largest = watched(command, memory_limit_mb, time_limit_s, interval_s=0.5)
     if stopped or status != 0:
-        return {"kind": kind, "size": size, "steps": steps, "asked": method, "status": "stopped" if stopped else "error",
+        return {"kind": kind, "size": size, "steps": steps, "asked": method,
+                "status": "stopped" if stopped else "error",
                 "message": stopped or stderr[-2000:], "process_s": wall, "largest_rss_mb": largest}
     return {**json.loads(stdout), "process_s": wall, "largest_rss_mb": largest}
 

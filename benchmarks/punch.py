@@ -117,7 +117,8 @@ def run(h_contact: float, h_far: float, method: str, steps: int, beta: float, cy
     result = vpcontact.solve(problem, output={"progress": False})
     done = time.perf_counter()
     history = result.history
-    return {"h_contact_m": h_contact, "h_far_m": h_far, "beta": beta, "steps": steps, "cycles": cycles, "depth_m": depth,
+    return {"h_contact_m": h_contact, "h_far_m": h_far, "beta": beta, "steps": steps, "cycles": cycles,
+            "depth_m": depth,
             "dofs": int(problem.basis.N), "contact_nodes": int(problem.surface.size),
             "method": result.method, "reason": result.method_reason, "status": result.status,
             "mesh_s": meshed, "build_s": built - started - meshed, "solve_s": done - built,

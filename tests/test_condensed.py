@@ -92,8 +92,8 @@ def test_condensed_refuses_an_operator_that_does_not_fit(tmp_path, capsys, monke
     err = capsys.readouterr().err
     assert 'solver.method = "iterative"' in err and "GiB" in err and err.count("\n") == 1
     assert not (tmp_path / "out").exists()
-    case["solver"]["method"] = "auto"  # the default falls back to the iterative method
-    assert vpcontact.solve(case).method == "iterative"
+    case["solver"]["method"] = "auto"  # the default falls back to the fastest of the others (here the full one)
+    assert vpcontact.solve(case).method == "full"
 
 
 @pytest.mark.parametrize("backend", __import__("vpcontact.solvers.factorization", fromlist=["x"]).installed_backends())

@@ -7,8 +7,8 @@ mesh is checked against ``adapt.max_dofs``, and the run's plan is made (:mod:`vp
 of the outputs, the augmentation r, the method ``solver.method = "auto"`` chooses and its memory, the time
 estimate), the one the time loop of ``vpcontact run`` makes and runs by. What it skips: the step solver's setup,
 i.e. the factorization of the stiffness (PARDISO's own estimate of its factor's memory comes from the analysis
-that precedes it), the condensed operator and the multigrid hierarchy — the costly part of a run's setup, which the cost model
-(:mod:`vpcontact.solvers.cost`) predicts instead, for every method. Nothing is written.
+that precedes it), the condensed operator and the multigrid hierarchy — the costly part of a run's setup, which the
+cost model (:mod:`vpcontact.solvers.cost`) predicts instead, for every method. Nothing is written.
 """
 
 from __future__ import annotations

@@ -71,7 +71,8 @@ class NormalFrame:
     def normal_operator(self) -> sp.csr_matrix:
         """N Q = diag(s) E: each row's one entry s_i at its node's normal dof (none for a clamped node)."""
         rows = np.flatnonzero(self.has_normal)
-        return sp.csr_matrix((self.scale[rows], (rows, self.normal_dof[rows])), shape=(self.scale.size, self.Q.shape[0]))
+        return sp.csr_matrix((self.scale[rows], (rows, self.normal_dof[rows])),
+                             shape=(self.scale.size, self.Q.shape[0]))
 
     def rotate(self, A: sp.spmatrix) -> sp.csr_matrix:
         """Q A Q, whose pattern (with every diagonal entry stored) :meth:`constrained` keeps."""
