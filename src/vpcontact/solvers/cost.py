@@ -134,10 +134,12 @@ class FactorWork:
     counted: bool
 
 
-#: Without PARDISO, the factorization's flops and entries as laws of the free dofs n in 3D, fitted to PARDISO's
-#: counts on the quarter ball and the punch: flops ≈ FLOPS_3D (n / 10⁵)², entries ≈ ENTRIES_3D (n / 10⁵)^(4/3).
-FLOPS_3D, ENTRIES_3D = 1.5e12, 6.0e7
-FLOPS_2D, ENTRIES_2D = 2.0e9, 4.0e6
+#: Without PARDISO's count, the factorization's flops and entries as laws of the free dofs n, fitted to PARDISO's
+#: counts (Schur mode): in 3D flops ≈ FLOPS_3D (n / 10⁵)², entries ≈ ENTRIES_3D (n / 10⁵)^(4/3) (the quarter ball at
+#: 23k, 69k, 172k free dofs: 2.1e11–2.3e11 and 8.2e7–9.7e7); in 2D flops ≈ FLOPS_2D (n / 10⁵)^1.5, entries ≈
+#: ENTRIES_2D n / 10⁵ (the paper's half disc at 23k and 93k: 2.2e9–2.4e9 and 6.8e6–8.5e6).
+FLOPS_3D, ENTRIES_3D = 2.2e11, 9.0e7
+FLOPS_2D, ENTRIES_2D = 2.3e9, 8.0e6
 
 
 def factor_work(A: sp.csr_matrix, N: sp.csr_matrix, dim: int, count: bool = True) -> FactorWork:
@@ -198,12 +200,13 @@ def predict(A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, *, history
                                     resident + amg, amg <= available)
     if factor is None:
         return costs
-    solve = 2 * 12 * factor.entries / (12 * A.nnz) * rates.matrix_pass  # two passes over the factor's entries
+    entry = rates.matrix_pass / A.nnz  # seconds per stored entry read, as in a product with A
+    solve = 2 * factor.entries * entry  # a forward and a backward substitution
     factorization = factor.flops / (PARDISO_SPEED * flops1)
     condensation = (c**3 / 3 + 2 * c * c * m) / (DENSE_SPEED * flops1)
     dense = condensed_memory(N, n)
     first_lu = (2 / 3) * m**3 / flops1
-    per_newton = GMRES_PER_NEWTON * 2 * 8 * m * m / (8 * A.nnz * 1.5) * rates.matrix_pass
+    per_newton = GMRES_PER_NEWTON * 2 * m * m * (8 / 12) * entry  # S and the LU read, 8 bytes an entry (A's: 12)
     solves = steps * (1.0 if history else 0.0) + field_steps
     costs["condensed"] = MethodCost("condensed", factorization + condensation,
                                     first_lu + newton * per_newton + solves * solve + overhead,
