@@ -95,3 +95,29 @@ def test_another_pattern_and_a_solve_that_does_not_converge_are_refused(monkeypa
     with pytest.raises(NotConvergedError, match=r"GAMG-preconditioned CG reached a relative residual of .* in 2 "
                                                 r"iterations"):
         gamg.solve(np.ones(rotated.shape[0]), rtol=1e-12)
+    assert gamg.stale  # a failed solve has the hierarchy built again on the next matrix
+
+
+def test_a_matrix_far_from_the_hierarchys_is_solved_then_the_hierarchy_rebuilt():
+    """The hierarchy built on a Newton matrix without fixed dofs, then a Newton matrix with ten times its contact
+    stiffness and a third of the normal dofs fixed: solved to the tolerance (GAMG on the live matrix, without the
+    copy, broke down here), in more than REBUILD_AFTER iterations, so the next matrix gets a new hierarchy, on
+    which it takes few."""
+    frame, rotated, solver = quarter_ball_system(0.2)
+    gamg = petsc_gamg.GAMGConjugateGradient(solver.free, 3, solver.size // 3, solver.near_nullspace)
+    soft = frame.tangent_diagonal(np.full(frame.scale.size, 50.0))
+    gamg.analyse(frame.constrained(soft, np.zeros(rotated.shape[0], dtype=bool)))
+    active = np.zeros(frame.scale.size, dtype=bool)
+    active[::3] = True
+    rng = np.random.default_rng(0)
+
+    def solve(K):
+        gamg.factor(K)
+        b = rng.normal(size=K.shape[0])
+        assert np.linalg.norm(K @ gamg.solve(b, rtol=1e-10) - b) <= 1e-10 * np.linalg.norm(b)
+
+    solve(frame.constrained(10 * soft, frame.normal_dofs(active)))
+    assert gamg.stale and gamg.most_iterations > petsc_gamg.REBUILD_AFTER
+    before = gamg.iterations
+    solve(frame.constrained(3 * soft, frame.normal_dofs(~active)))
+    assert gamg.setups == 2 and gamg.iterations - before <= 30, gamg.iterations - before
