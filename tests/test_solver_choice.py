@@ -6,7 +6,7 @@ import tomli_w
 
 import vpcontact
 from vpcontact.cli import main
-from vpcontact.solvers import amg, choice, cost
+from vpcontact.solvers import amg, choice, cost, petsc_gamg
 from test_3d import ball_case
 
 
@@ -61,7 +61,7 @@ def test_the_iterative_method_refuses_a_body_that_does_not_fit(tmp_path, capsys,
 def test_a_newton_system_cg_cannot_solve_cuts_the_step_then_fails_the_run_with_advice(monkeypatch):
     monkeypatch.setattr(amg, "MAX_ITERATIONS", 1)
     case = ball_case(h=0.3)
-    case["solver"] = {**case["solver"], "method": "iterative", "max_step_cuts": 2}
+    case["solver"] = {**case["solver"], "method": "iterative", "multigrid": "pyamg", "max_step_cuts": 2}
     result = vpcontact.solve(case)
     assert result.status == "failed" and result.steps == 0
     assert "the Newton system was not solved (AMG-preconditioned CG reached a relative residual" in result.message
@@ -82,3 +82,28 @@ def test_a_resumed_auto_run_keeps_the_method_of_the_run_it_continues():
     assert resumed.method == "iterative"
     assert resumed.method_reason == 'solver.method = "auto": the iterative method of the run resumed (this session ' \
                                     'predicts the condensed method fastest)'
+
+
+def test_petsc_multigrid_without_petsc4py_is_refused_in_one_line_and_writes_nothing(tmp_path, capsys, monkeypatch):
+    """solver.multigrid = "petsc" where petsc4py cannot be imported: exit 2, one line saying how to install it."""
+    monkeypatch.setattr(petsc_gamg, "available", lambda: False)
+    case = ball_case(h=0.3)
+    case["solver"] = {**case["solver"], "method": "iterative", "multigrid": "petsc"}
+    path = tmp_path / "case.toml"
+    path.write_text(tomli_w.dumps(case))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("vpcontact: error: ") and err.count("\n") == 1, err
+    assert 'solver.multigrid = "petsc": petsc4py is not installed here' in err
+    assert 'pip install "vpcontact[petsc]"' in err and '"auto" or "pyamg"' in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_auto_multigrid_without_petsc4py_runs_pyamg_and_says_so(monkeypatch):
+    monkeypatch.setattr(petsc_gamg, "available", lambda: False)
+    case = {**ball_case(h=0.3), "time": {"T": 0.2, "steps": 2}}
+    case["solver"] = {**case["solver"], "method": "iterative"}
+    result = vpcontact.solve(case)
+    assert result.status == "complete", result.message
+    assert result.method_reason == 'solver.method = "iterative"; its CG preconditioned by pyamg\'s smoothed ' \
+                                   'aggregation (solver.multigrid = "auto": petsc4py is not installed)'

@@ -11,6 +11,7 @@ from ..errors import brief
 from ..estimate.estimators import ESTIMATORS
 from ..problem.time_grid import check_time_span
 from ..solvers.factorization import FACTORIZATIONS
+from ..solvers.linear import MULTIGRIDS
 from .values import MAX_STEPS, NonNegativeFloat, PositiveFloat, Section, show
 
 
@@ -35,6 +36,7 @@ class SolverSection(Section):
 
     method: Literal["auto", "condensed", "full", "iterative"] = "auto"
     factorization: str = "auto"  # sparse direct backend of "condensed"
+    multigrid: str = "auto"  # multigrid backend of "iterative": "petsc" (PETSc's GAMG) or "pyamg"
     tolerance: Annotated[float, Field(gt=0, lt=1)] = 1e-10
     max_iterations: Annotated[int, Field(ge=1)] = 50
     max_step_cuts: Annotated[int, Field(ge=0, le=30)] = 4  # halvings of a step whose Newton iteration fails
@@ -49,6 +51,15 @@ class SolverSection(Section):
                              f"{', '.join(repr(b) for b in FACTORIZATIONS)}")
         return value
 
+    @field_validator("multigrid")
+    @classmethod
+    def _known_multigrid(cls, value):
+        """A multigrid backend's name (whether it is installed here is checked when the problem is built)."""
+        if value != "auto" and value not in MULTIGRIDS:
+            raise ValueError(f"solver.multigrid = {show(value)}: unknown; expected \"auto\" or one of "
+                             f"{', '.join(repr(b) for b in MULTIGRIDS)}")
+        return value
+
     @field_validator("augmentation", mode="before")
     @classmethod
     def _automatic(cls, value):
@@ -60,6 +71,9 @@ class SolverSection(Section):
             raise ValueError(f"solver.factorization = {show(self.factorization)} is not used by solver.method = "
                              f"\"iterative\" (it factors nothing): remove it, or choose the method \"condensed\" "
                              f"or \"full\"")
+        if self.method in ("condensed", "full") and self.multigrid != "auto":
+            raise ValueError(f"solver.multigrid = {show(self.multigrid)} is not used by solver.method = "
+                             f"\"{self.method}\" (it solves by factors): remove it, or choose the method \"iterative\"")
         return self
 
 

@@ -30,6 +30,7 @@ from ..laws.python_laws import api_law, api_viscoplastic
 from ..mesh.cells import SIMPLICES, coordinates
 from ..progress import SILENT, Progress
 from ..solvers.factorization import check_installed
+from ..solvers.linear import check_multigrid
 from .constraints import DirichletConditions, dirichlet_conditions
 from .checks import check_contact_can_move, check_dimension, check_first_history, check_rigid_motions
 from .initial import InitialState, initial_state
@@ -160,6 +161,7 @@ def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p
         initial_displacement=initial_displacement, initial_stress=initial_stress, initial_xi=initial_xi).items()
         if value is not None}
     check_installed(options.solver.factorization)
+    check_multigrid(options.solver.multigrid)
     if mesh is not None and not isinstance(mesh, meshes.Mesh):
         raise CaseError(f"mesh = {brief(mesh)}: expected a vpcontact.mesh.Mesh (vpcontact.mesh.half_disc, "
                         f"quarter_ball, rectangle, block or read_mesh)")

@@ -132,11 +132,13 @@ class TimeOptions:
 
 @dataclass(frozen=True)
 class SolverOptions:
-    """The step solver: its method, the sparse direct factorization, the Newton tolerance and iteration
-    limit, the halvings of a step that fails, and the Alart–Curnier r (None: automatic)."""
+    """The step solver: its method, the sparse direct factorization, the iterative method's multigrid, the
+    Newton tolerance and iteration limit, the halvings of a step that fails, and the Alart–Curnier r (None:
+    automatic)."""
 
     method: str
     factorization: str
+    multigrid: str
     tolerance: float
     max_iterations: int
     max_step_cuts: int

@@ -7,10 +7,11 @@
     work() -> SolverWork                         (its counters of work in the time loop)
     r, name, timings
 Methods: "full" (Newton on the whole system, its SPD systems by a sparse direct solver),
-"iterative" (the same Newton iteration, its systems by AMG-preconditioned CG), "condensed" (factor
+"iterative" (the same Newton iteration, its systems by AMG-preconditioned CG, the multigrid PETSc's GAMG or
+pyamg's: ``solver.multigrid``), "condensed" (factor
 once, Newton on the contact nodes); ``solver.method = "auto"`` chooses one from the sizes and the memory
 available (:mod:`.choice`, in the plan of a run: :mod:`vpcontact.timeloop.plan`); ``solver.reason`` says which
-method runs and why.
+method runs and why (and, for the iterative method, which multigrid).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from ..errors import CaseError
 from ..progress import SILENT, Progress
 from .errors import SingularMatrixError, SolverMemoryError
 from .factorization import installed_backends
+from .linear import MULTIGRIDS, chosen_multigrid
 
 SOLVERS = {solver.name: solver for solver in (FullNewton, IterativeNewton, CondensedNewton)}
 METHODS = ("auto", *SOLVERS)
@@ -43,14 +45,17 @@ class DofLayout:
 
 
 def make_solver(method: str, A, N, weights, gap0, *, r: float, reason: str, rigid, tolerance: float,
-                max_iterations: int, length_scale: float, factorization: str = "auto", layout: DofLayout,
-                progress: Progress = SILENT, expected_seconds: float | None = None):
+                max_iterations: int, length_scale: float, factorization: str = "auto", multigrid: str = "auto",
+                layout: DofLayout, progress: Progress = SILENT, expected_seconds: float | None = None):
     """The step solver ``method`` ("full", "iterative" or "condensed": the method of a run's plan, whose
     memory the plan has checked, :mod:`vpcontact.timeloop.plan`; ``reason``: why it runs) for stiffness A and
     contact operator N (both on the free dofs), with the Alart–Curnier augmentation r; ``rigid``: an orthonormal
     basis of the rigid motions held only by contact, (free dofs, k); ``layout``: the dofs' nodal layout;
     ``progress`` (:mod:`vpcontact.progress`) hears of the method and of the set-up phases, each with
-    ``expected_seconds``, the time its set-up is expected to take (:mod:`vpcontact.solvers.cost`)."""
+    ``expected_seconds``, the time its set-up is expected to take (:mod:`vpcontact.solvers.cost`). The iterative
+    method's multigrid is ``multigrid`` (:func:`.linear.chosen_multigrid`), named in ``solver.reason``."""
+    if method == IterativeNewton.name:
+        reason = f"{reason}; {multigrid_reason(multigrid)}"
     progress.note(f"method: {method} ({reason})")
     common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale, rigid)
     if method == CondensedNewton.name:
@@ -58,12 +63,22 @@ def make_solver(method: str, A, N, weights, gap0, *, r: float, reason: str, rigi
                                                 expected_seconds=expected_seconds), factorization, A)
     elif method == IterativeNewton.name:
         solver = IterativeNewton(*common, near_nullspace=layout.rigid_motions, free=layout.free, dim=layout.dim,
-                                 nodes=layout.nodes, progress=progress, expected_seconds=expected_seconds)
+                                 nodes=layout.nodes, multigrid=multigrid, progress=progress,
+                                 expected_seconds=expected_seconds)
     else:
         solver = _built(lambda: FullNewton(*common, factorization, progress=progress,
                                            expected_seconds=expected_seconds), factorization, A)
     solver.reason = reason
     return solver
+
+
+def multigrid_reason(multigrid: str) -> str:
+    """Which multigrid the iterative method runs for ``solver.multigrid`` = ``multigrid``, and why, in words."""
+    label = MULTIGRIDS[chosen_multigrid(multigrid)].label
+    if multigrid != "auto":
+        return f"its CG preconditioned by {label} (solver.multigrid = \"{multigrid}\")"
+    installed = "installed" if chosen_multigrid(multigrid) == "petsc" else "not installed"
+    return f"its CG preconditioned by {label} (solver.multigrid = \"auto\": petsc4py is {installed})"
 
 
 def augmentation_parameter(A, N, augmentation: float | None) -> float:

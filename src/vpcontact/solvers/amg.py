@@ -53,6 +53,7 @@ class AMGConjugateGradient:
     ``near_nullspace`` (free dofs, k) the rigid-body motions in the system's coordinates."""
 
     name = "amg-cg"
+    label = "pyamg's smoothed aggregation"
 
     def __init__(self, free: np.ndarray, dim: int, nodes: int, near_nullspace: np.ndarray,
                  progress: Progress = SILENT, expected: str = ""):

@@ -9,7 +9,8 @@ fixed, and one sparsity pattern for every active set. Two methods solve it:
 
 - "full": a sparse direct solver of the linear-solver layer (:mod:`.linear`), the pattern analysed
   once and the values refactored at every iteration;
-- "iterative": CG preconditioned by algebraic multigrid (:mod:`.amg`), its hierarchy built once,
+- "iterative": CG preconditioned by algebraic multigrid (:mod:`.amg`, pyamg's, or :mod:`.petsc_gamg`, PETSc's
+  GAMG: ``solver.multigrid``), its hierarchy built once,
   each system solved only as accurately as the iteration needs (an inexact Newton method: the linear residual a fraction of the nonlinear one, down to a
   tenth of the tolerance).
 """
@@ -23,10 +24,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..progress import SILENT, Progress, duration, size
-from .amg import AMGConjugateGradient
 from .base import ContactState, SolverWork, StepData, StepSolution, norm
 from .cost import iterative_memory
-from .linear import direct_solver
+from .linear import direct_solver, multigrid_solver
 from .newton import ROUNDOFF, Evaluation, SemismoothNewton
 from .normal_frame import NormalFrame
 
@@ -158,8 +158,10 @@ class IterativeNewton(FullNewton):
     name = "iterative"
 
     def __init__(self, *args, near_nullspace: np.ndarray, free: np.ndarray, dim: int, nodes: int,
-                 progress: Progress = SILENT, expected_seconds: float | None = None):
+                 multigrid: str = "auto", progress: Progress = SILENT, expected_seconds: float | None = None):
+        """``multigrid``: the multigrid backend (``solver.multigrid``, :func:`.linear.multigrid_solver`)."""
         self._layout = (free, dim, nodes, near_nullspace)
+        self._multigrid = multigrid
         super().__init__(*args, progress=progress, expected_seconds=expected_seconds)
         self._hierarchy_system = None  # (diagonal, fixed) of the Newton matrix the AMG hierarchy was built on
 
@@ -195,12 +197,14 @@ class IterativeNewton(FullNewton):
     def timings(self) -> dict[str, float]:
         return {**self.setup_timings, "amg_setup": self.linear.setup_time}
 
-    def _linear_solver(self, factorization: str) -> tuple[AMGConjugateGradient, bool]:
-        """AMG-preconditioned CG, the rigid motions in the normal frame as near-null space."""
+    def _linear_solver(self, factorization: str) -> tuple:
+        """AMG-preconditioned CG (the ``multigrid`` backend), the rigid motions in the normal frame as near-null
+        space."""
         free, dim, nodes, near_nullspace = self._layout
         memory = f"{size(iterative_memory(self.A))} at the method's peak"
         expected = f"{self._expected}, {memory}" if self._expected else f"; expected: {memory}"
-        return AMGConjugateGradient(free, dim, nodes, self.frame.Q @ near_nullspace, self.progress, expected), False
+        return multigrid_solver(self._multigrid, free, dim, nodes, self.frame.Q @ near_nullspace, self.progress,
+                                expected), False
 
     def _linear_tolerance(self, ev: Evaluation, rhs: np.ndarray) -> float:
         """Relative to ‖rhs‖: a linear residual of FORCING × the nonlinear residual squared, at least a

@@ -11,9 +11,11 @@ the full-system methods.
 
 Each backend has a ``label`` and, if it has a separate symbolic phase, its ``analysis`` in words
 (progress reports). Backends: "pardiso" (MKL PARDISO: analysis once, a numeric refactorisation per matrix), "superlu"
-(SciPy's LU, always installed) and "amg-cg" (:mod:`.amg`: conjugate gradients preconditioned by
-smoothed aggregation, its hierarchy built once). Failures are typed (:mod:`.errors`). The Schur
-complement the condensed method needs is PARDISO's too; it lives in :mod:`.factorization`.
+(SciPy's LU, always installed) and the iterative ones, conjugate gradients preconditioned by smoothed
+aggregation with the hierarchy built once: "amg-cg" (:mod:`.amg`, pyamg's, always installed) and "gamg-cg"
+(:mod:`.petsc_gamg`, PETSc's GAMG, when petsc4py is installed), chosen by ``solver.multigrid``
+(:func:`multigrid_solver`). Failures are typed (:mod:`.errors`). The Schur complement the condensed method
+needs is PARDISO's too; it lives in :mod:`.factorization`.
 """
 
 from __future__ import annotations
@@ -21,8 +23,11 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..errors import CaseError
 from ..memory import available_memory
 from ..progress import SILENT, Progress, size
+from . import petsc_gamg
+from .amg import AMGConjugateGradient
 from .factorization import installed_backends, splu
 
 
@@ -91,3 +96,32 @@ def direct_solver(backend: str = "auto", progress: Progress = SILENT):
     """The direct backend ``backend`` ("auto": the fastest one installed); ``progress`` hears of what its
     analysis finds (the memory of a factor)."""
     return DIRECT[installed_backends()[0] if backend == "auto" else backend](progress)
+
+
+#: The multigrid backends of the iterative method (``solver.multigrid``), by name: "auto" takes the first installed.
+MULTIGRIDS = {"petsc": petsc_gamg.GAMGConjugateGradient, "pyamg": AMGConjugateGradient}
+#: How to get PETSc's backend, for the message that refuses it where petsc4py is missing.
+PETSC_INSTALL = 'pip install "vpcontact[petsc]" (it builds PETSc from source: a C compiler, MPI and about 30 minutes)'
+
+
+def chosen_multigrid(multigrid: str = "auto") -> str:
+    """The backend ``multigrid`` stands for ("auto": PETSc's GAMG where petsc4py is installed, else pyamg's)."""
+    if multigrid != "auto":
+        return multigrid
+    return "petsc" if petsc_gamg.available() else "pyamg"
+
+
+def check_multigrid(multigrid: str) -> None:
+    """CaseError unless ``multigrid`` (``solver.multigrid``: "auto" or a name of MULTIGRIDS) works here."""
+    if multigrid == "petsc" and not petsc_gamg.available():
+        raise CaseError(f'solver.multigrid = "petsc": petsc4py is not installed here; install it with {PETSC_INSTALL}, '
+                        f'or use "auto" or "pyamg"')
+
+
+def multigrid_solver(multigrid: str, free: np.ndarray, dim: int, nodes: int, near_nullspace: np.ndarray,
+                     progress: Progress = SILENT, expected: str = ""):
+    """The iterative backend ``multigrid`` ("auto", "petsc" or "pyamg": :func:`chosen_multigrid`) for the dofs
+    ``free`` of the nodal layout of ``nodes`` nodes in dimension ``dim``, the rigid motions ``near_nullspace``
+    (free dofs, k) in the system's coordinates; ``progress`` hears of its hierarchies (their start lines end
+    with ``expected``)."""
+    return MULTIGRIDS[chosen_multigrid(multigrid)](free, dim, nodes, near_nullspace, progress, expected)

@@ -92,8 +92,8 @@ class TimeLoop:
         self.solver = make_solver(plan.method, A, N, surface.weights, surface.gap0, r=plan.augmentation,
                                   reason=plan.method_reason, rigid=rigid, tolerance=options.tolerance,
                                   max_iterations=options.max_iterations, length_scale=problem.mesh.diameter,
-                                  factorization=options.factorization, layout=layout, progress=progress,
-                                  expected_seconds=plan.setup_seconds)
+                                  factorization=options.factorization, multigrid=options.multigrid, layout=layout,
+                                  progress=progress, expected_seconds=plan.setup_seconds)
         self.max_cuts = options.max_step_cuts
         constraints = problem.constraints
         #: A_fh, the coupling of the free and the held dofs: b = F_f − Bᵀz − A_fh u_D(t) (prescribed displacements)

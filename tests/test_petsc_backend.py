@@ -1,0 +1,124 @@
+"""The iterative method with PETSc's GAMG (solver.multigrid = "petsc", :mod:`vpcontact.solvers.petsc_gamg`):
+the same solutions as with pyamg's hierarchy, one hierarchy for a whole run, the fixed dofs solved exactly.
+Needs petsc4py (``pip install "vpcontact[petsc]"``); skipped without it (the refusal of "petsc" where it is
+missing is tests/test_solver_choice.py's)."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+pytest.importorskip("petsc4py")
+
+from conftest import half_disc_case
+from test_3d import ball_case, states
+from test_linear_solvers import quarter_ball_system
+from test_solvers_agree import assert_same_states, relative
+
+import vpcontact
+from vpcontact import build_problem
+from vpcontact.case.translate import output_options
+from vpcontact.solvers import petsc_gamg
+from vpcontact.solvers.errors import NotConvergedError
+from vpcontact.timeloop.loop import TimeLoop
+
+#: a 3D and a 2D case, each with a step where nodes are separated, in compliance and at the limit
+CASES = {
+    "3D ball on a flat foundation": ball_case(h=0.35, g=0.05, normal=[0, 0, -1], gap="z"),
+    "disc with a curved gap": half_disc_case(h=0.1, load=20.0, gap="0.3*x*x",
+                                             stiffness={"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": -1.0}),
+}
+
+
+def iterative(case: dict, multigrid: str) -> dict:
+    return {**case, "solver": {**case["solver"], "method": "iterative", "multigrid": multigrid},
+            "output": {"field_steps": "all"}}
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_petsc_and_pyamg_give_the_same_solution(name):
+    results = {multigrid: vpcontact.solve(iterative(CASES[name], multigrid)) for multigrid in ("pyamg", "petsc")}
+    reference, result = results["pyamg"], results["petsc"]
+    assert reference.status == result.status == "complete", (reference.message, result.message)
+    assert np.all(states(reference) > 0, axis=1).any(), states(reference)
+    assert "PETSc's GAMG" in result.method_reason and "pyamg" in reference.method_reason
+    for step, fields in reference.fields.items():
+        assert relative(result.fields[step].displacement, fields.displacement) < 1e-8, step
+        assert relative(result.fields[step].stress, fields.stress) < 1e-8, step
+    for quantity in ("penetration", "xi", "K", "pressure_compliance", "pressure_rigid"):
+        assert relative(result.contact_history(quantity), reference.contact_history(quantity)) < 1e-8, quantity
+    assert_same_states(result, reference)
+    assert result.krylov_iterations > 0
+
+
+def test_one_hierarchy_serves_a_whole_run_in_few_iterations():
+    """The quarter ball over 11 steps (nodes coming into contact, into compliance and to the limit): one GAMG
+    hierarchy, built on the first Newton matrix, at most 30 CG iterations for any Newton system."""
+    loop = TimeLoop(build_problem(iterative(ball_case(h=0.25), "petsc")), output_options({"field_steps": "none"}))
+    result = loop.run()
+    assert result.status == "complete", result.message
+    linear = loop.solver.linear
+    assert linear.name == "gamg-cg"
+    assert linear.setups == 1 and linear.factorizations == 0
+    assert result.linear_solves >= 2 * result.steps and linear.iterations == result.krylov_iterations
+    assert 0 < linear.most_iterations <= 30, linear.most_iterations
+    assert linear.levels >= 2 and linear.operator_complexity > 1.0
+
+
+def test_fixed_dofs_are_solved_exactly_on_the_same_hierarchy():
+    """Normal dofs fixed (reduced to their diagonal) after the hierarchy was built on the matrix without
+    them: solved exactly, the rest to the tolerance, no new setup; the true residual is within it."""
+    frame, rotated, solver = quarter_ball_system(0.15)
+    gamg = petsc_gamg.GAMGConjugateGradient(solver.free, 3, solver.size // 3, solver.near_nullspace)
+    diagonal = frame.tangent_diagonal(np.full(frame.scale.size, 50.0))
+    nothing_fixed = np.zeros(rotated.shape[0], dtype=bool)
+    gamg.analyse(frame.constrained(diagonal, nothing_fixed))
+    active = np.zeros(frame.scale.size, dtype=bool)
+    active[::3] = True
+    fixed = frame.normal_dofs(active)
+    K = frame.constrained(diagonal, fixed)
+    gamg.factor(K)
+    b = np.random.default_rng(2).normal(size=K.shape[0])
+    x = gamg.solve(b, rtol=1e-10)
+    np.testing.assert_allclose(x[fixed], b[fixed] / K.diagonal()[fixed], rtol=1e-9)
+    assert np.linalg.norm(K @ x - b) <= 1e-10 * np.linalg.norm(b)
+    assert gamg.setups == 1 and gamg.iterations <= 30, gamg.iterations
+
+
+def test_another_pattern_and_a_solve_that_does_not_converge_are_refused(monkeypatch):
+    _, rotated, solver = quarter_ball_system(0.3)
+    gamg = petsc_gamg.GAMGConjugateGradient(solver.free, 3, solver.size // 3, solver.near_nullspace)
+    gamg.analyse(rotated)
+    with pytest.raises(ValueError, match="pattern"):
+        gamg.factor(sp.csr_matrix(sp.diags(rotated.diagonal())))
+    monkeypatch.setattr(petsc_gamg, "MAX_ITERATIONS", 2)
+    gamg.factor(rotated)
+    with pytest.raises(NotConvergedError, match=r"GAMG-preconditioned CG reached a relative residual of .* in 2 "
+                                                r"iterations"):
+        gamg.solve(np.ones(rotated.shape[0]), rtol=1e-12)
+    assert gamg.stale  # a failed solve has the hierarchy built again on the next matrix
+
+
+def test_a_matrix_far_from_the_hierarchys_is_solved_then_the_hierarchy_rebuilt():
+    """The hierarchy built on a Newton matrix without fixed dofs, then a Newton matrix with ten times its contact
+    stiffness and a third of the normal dofs fixed: solved to the tolerance (GAMG on the live matrix, without the
+    copy, broke down here); past REBUILD_AFTER iterations, the next matrix gets a new hierarchy, on which it takes
+    few."""
+    frame, rotated, solver = quarter_ball_system(0.2)
+    gamg = petsc_gamg.GAMGConjugateGradient(solver.free, 3, solver.size // 3, solver.near_nullspace)
+    soft = frame.tangent_diagonal(np.full(frame.scale.size, 50.0))
+    gamg.analyse(frame.constrained(soft, np.zeros(rotated.shape[0], dtype=bool)))
+    active = np.zeros(frame.scale.size, dtype=bool)
+    active[::3] = True
+    rng = np.random.default_rng(0)
+
+    def solve(K):
+        gamg.factor(K)
+        b = rng.normal(size=K.shape[0])
+        assert np.linalg.norm(K @ gamg.solve(b, rtol=1e-10) - b) <= 1e-10 * np.linalg.norm(b)
+
+    solve(frame.constrained(10 * soft, frame.normal_dofs(active)))
+    stale = gamg.most_iterations > petsc_gamg.REBUILD_AFTER  # 42 iterations with PETSc 3.26
+    assert gamg.stale == stale
+    before = gamg.iterations
+    solve(frame.constrained(3 * soft, frame.normal_dofs(~active)))
+    assert gamg.setups == 1 + stale and gamg.iterations - before <= 30, gamg.iterations - before
