@@ -6,7 +6,7 @@ over a matrix) and how fast this machine does it now:
 - **the machine** (:class:`MachineRates`): the flop rate of a dense matrix product on one thread, and the seconds
   of one product with the problem's own stiffness A (a measure of the memory bandwidth that sparse and iterative
   work runs at): this machine kind's reference rates, by which "auto" chooses (the same case, the same method,
-  on every run), and the rates probed in the process now (about 0.1 s), by which the times are reported;
+  on every run), and the rates probed in the process now (about 0.05 s), by which the times are reported;
 - **the direct factor** (:func:`factor_work`): the flops and stored entries of the factorization of A0 that the
   condensed method makes (in Schur mode on its c contact dofs), as MKL PARDISO's symbolic analysis counts them
   (the ordering the factorization itself will use; a second or so at 10⁵ dofs), or without PARDISO a law in
@@ -44,9 +44,9 @@ from .factorization import condensation_dofs, contact_dofs, installed_backends, 
 
 #: The flop rate of PARDISO's numerical factorization (its two threads, supernodes of dense blocks) over the
 #: one-thread dense product probe's.
-PARDISO_SPEED = 0.25
+PARDISO_SPEED = 0.3
 #: The flop rate of SciPy's dense Cholesky and triangular solves (all threads) over the one-thread probe's.
-DENSE_SPEED = 1.5
+DENSE_SPEED = 1.8
 #: Passes over A (products with A) that one CG iteration preconditioned by pyamg's V-cycle costs, with the
 #: Newton iteration's own work per CG iteration.
 CG_PASSES = 25.0
@@ -79,15 +79,15 @@ def iterative_memory(A: sp.spmatrix) -> int:
 
 
 #: This machine kind's rates (2-core AMD EPYC, 24 GB; ``MachineRates.probe`` on the quarter ball's stiffness at
-#: 24k and 71k dofs, 2026-11-27): 29.4 GF/s for the one-thread dense product, 5–12 GB/s for a product with A
-#: (the smaller matrix partly in cache).
-REFERENCE_FLOPS = 30e9
+#: 24k and 71k dofs, 2026-11-27, load average 2–3): 24.1 GF/s for the one-thread 512² product, 5–12 GB/s for a
+#: product with A (the smaller matrix partly in cache).
+REFERENCE_FLOPS = 25e9
 REFERENCE_BANDWIDTH = 8e9
 
 
 @dataclass(frozen=True)
 class MachineRates:
-    """How fast this process computes now: ``dense_flops`` (flop/s of a 1024² matrix product on one thread) and
+    """How fast this process computes now: ``dense_flops`` (flop/s of a 512² matrix product on one thread) and
     ``matrix_pass`` (seconds of one product with the stiffness A)."""
 
     dense_flops: float
@@ -101,7 +101,7 @@ class MachineRates:
 
     @classmethod
     def probe(cls, A: sp.csr_matrix) -> "MachineRates":
-        """Measure both (the best of three tries each, about 0.1 s in all)."""
+        """Measure both (the best of three tries each, about 0.05 s in all)."""
         from threadpoolctl import threadpool_limits
 
         x = np.ones(A.shape[1])
@@ -112,9 +112,9 @@ class MachineRates:
 
 @lru_cache(maxsize=1)
 def _dense_flops() -> float:
-    """Flop/s of a 1024² matrix product on the BLAS's current threads (measured once per process)."""
-    a = np.random.default_rng(0).standard_normal((1024, 1024))
-    return 2 * 1024**3 / min(_timed(lambda: a @ a) for _ in range(3))
+    """Flop/s of a 512² matrix product on the BLAS's current threads (measured once per process: 11 ms a try)."""
+    a = np.random.default_rng(0).standard_normal((512, 512))
+    return 2 * 512**3 / min(_timed(lambda: a @ a) for _ in range(3))
 
 
 def _timed(work) -> float:
