@@ -46,6 +46,15 @@ MAX_ITERATIONS = 500
 REBUILD_AFTER = 40
 
 
+def decoupled_rows(A: sp.csr_matrix) -> np.ndarray:
+    """The unknowns A reduces to their diagonal entry (a mask): rows whose only nonzero is a positive diagonal, the
+    normal frame's fixed dofs, which the preconditioners solve exactly around their V-cycle."""
+    stored = np.diff(A.indptr)
+    nonzeros = np.zeros(stored.size, dtype=np.int64)
+    nonzeros[stored > 0] = np.add.reduceat(A.data != 0.0, A.indptr[:-1][stored > 0])
+    return (nonzeros == 1) & (A.diagonal() > 0.0)
+
+
 class AMGConjugateGradient:
     """CG preconditioned by smoothed aggregation in nodal blocks.
 
@@ -107,11 +116,8 @@ class AMGConjugateGradient:
         if self.stale:
             self.analyse(A)
         self._A = sp.csr_matrix(A)
-        stored = np.diff(self._A.indptr)
-        nonzeros = np.zeros(stored.size, dtype=np.int64)
-        nonzeros[stored > 0] = np.add.reduceat(self._A.data != 0.0, self._A.indptr[:-1][stored > 0])
         diagonal = self._A.diagonal()
-        self._decoupled = (nonzeros == 1) & (diagonal > 0.0)
+        self._decoupled = decoupled_rows(self._A)
         self._decoupled_inverse = np.where(self._decoupled, 1.0 / np.where(self._decoupled, diagonal, 1.0), 0.0)
 
     def _precondition(self, r: np.ndarray) -> np.ndarray:

@@ -38,6 +38,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..progress import SILENT, Progress
+from .amg import MAX_ITERATIONS, REBUILD_AFTER, decoupled_rows  # the limits both multigrids keep
 from .errors import NotConvergedError
 
 #: The prefix of the options database entries this backend sets and reads.
@@ -50,10 +51,6 @@ OPTIONS_PREFIX = "vpcontact_"
 #: 12 of 105 ms; three smoothing steps: 13 of 53 ms. pyamg (:mod:`.amg`): 13 of 64 ms, set-up 4.1 s.
 GAMG_OPTIONS = {"pc_type": "gamg", "pc_gamg_type": "agg", "pc_gamg_threshold": 0.0,
                 "mg_levels_ksp_type": "chebyshev", "mg_levels_pc_type": "jacobi"}
-#: CG iterations at most per solve (a NotConvergedError beyond).
-MAX_ITERATIONS = 500
-#: A solve that needed more CG iterations than this has the hierarchy rebuilt on the next matrix.
-REBUILD_AFTER = 40
 
 
 def available() -> bool:
@@ -191,11 +188,8 @@ class GAMGConjugateGradient:
         if not (np.array_equal(A.indptr, indptr) and np.array_equal(A.indices, indices)):
             raise ValueError("the matrix's pattern is not the analysed one: GAMG's matrix keeps one pattern")
         self._matrix.setValuesCOO(np.concatenate([A.data, np.full(self._dirichlet.size, self._dirichlet_value)]))
-        stored = np.diff(A.indptr)
-        nonzeros = np.zeros(stored.size, dtype=np.int64)
-        nonzeros[stored > 0] = np.add.reduceat(A.data != 0.0, A.indptr[:-1][stored > 0])
         diagonal = A.diagonal()
-        decoupled = (nonzeros == 1) & (diagonal > 0.0)
+        decoupled = decoupled_rows(A)
         self._decoupled = np.concatenate([self.free[decoupled], self._dirichlet])
         self._decoupled_inverse = 1.0 / np.concatenate([diagonal[decoupled],
                                                         np.full(self._dirichlet.size, self._dirichlet_value)])
