@@ -10,8 +10,8 @@ Methods: "full" (Newton on the whole system, its SPD systems by a sparse direct 
 "iterative" (the same Newton iteration, its systems by AMG-preconditioned CG, the multigrid PETSc's GAMG or
 pyamg's: ``solver.multigrid``), "condensed" (factor
 once, Newton on the contact nodes); ``solver.method = "auto"`` chooses one from the sizes and the memory
-available (:mod:`.choice`, in the plan of a run: :mod:`vpcontact.timeloop.plan`); ``solver.reason`` says which
-method runs and why (and, for the iterative method, which multigrid).
+available (:mod:`.choice`, in the plan of a run: :mod:`vpcontact.timeloop.plan`), and weighs them again during the
+run from the work counted (:mod:`.switch`); ``solver.reason`` says which method runs and why (and, for the iterative method, which multigrid).
 """
 
 from __future__ import annotations

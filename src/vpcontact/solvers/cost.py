@@ -182,39 +182,86 @@ class MethodCost:
         return {**asdict(self), "total_s": self.total_s}
 
 
+@dataclass(frozen=True)
+class Prices:
+    """Seconds of each unit of work of a time loop at some rates: a CG iteration of the iterative method (its
+    V-cycle and products with A), a GMRES iteration of the condensed method (two passes over m × m matrices), an
+    LU of its m × m Newton matrix, a solve with the direct factor (a forward and a backward substitution), the
+    direct factorization itself (the full method's per Newton iteration), and the loop's own work per Newton
+    iteration and per step."""
+
+    cg_iteration: float
+    gmres_iteration: float
+    newton_lu: float
+    factor_solve: float
+    factorization: float
+    newton_overhead: float
+    step_overhead: float
+
+    @classmethod
+    def of(cls, A: sp.csr_matrix, N: sp.csr_matrix, rates: MachineRates, factor: FactorWork | None) -> "Prices":
+        """The prices for stiffness A and contact operator N on the free dofs on a machine of ``rates``, with the
+        direct factor's work ``factor`` (None: the direct methods' prices are NaN)."""
+        m = N.shape[0]
+        entry = rates.matrix_pass / max(A.nnz, 1)  # seconds per stored entry read, as in a product with A
+        gmres = 2 * m * m * (8 / 12) * entry  # S and the LU read, 8 bytes an entry (A's: 12)
+        direct = ((np.nan,) * 3 if factor is None else
+                  ((2 / 3) * m**3 / rates.dense_flops, 2 * factor.entries * entry,
+                   factor.flops / (PARDISO_SPEED * rates.dense_flops)))
+        return cls(CG_PASSES * rates.matrix_pass, gmres, *direct, NEWTON_OVERHEAD_S, STEP_OVERHEAD_S)
+
+    def overhead(self, steps: float, newton: float) -> float:
+        """The loop's own work over ``steps`` steps of ``newton`` Newton iterations in all."""
+        return steps * self.step_overhead + newton * self.newton_overhead
+
+
 def predict(A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, *, history: bool, field_steps: int,
-            rates: MachineRates, factor: FactorWork | None, resident: int) -> dict[str, MethodCost]:
+            rates: MachineRates, factor: FactorWork | None, resident: int,
+            newton_per_step: float = NEWTON_PER_STEP) -> dict[str, MethodCost]:
     """The cost of each method for stiffness A and contact operator N on the free dofs, ``steps`` time steps
     (``history``: a viscoplastic history, a bulk solve at every step; ``field_steps``: steps whose fields are
     written), on a machine of ``rates``, the condensed factor's work ``factor`` (None: not wanted, the condensed
-    and full methods are not predicted) and ``resident`` bytes the process holds already (the problem)."""
+    and full methods are not predicted), ``resident`` bytes the process holds already (the problem) and
+    ``newton_per_step`` Newton iterations a step (NEWTON_PER_STEP, or as a run observes them)."""
     n, m, c = A.shape[0], N.shape[0], condensation_dofs(N)
     available = available_memory()
     flops1 = rates.dense_flops
-    newton = NEWTON_PER_STEP * steps
-    overhead = steps * STEP_OVERHEAD_S + newton * NEWTON_OVERHEAD_S
+    price = Prices.of(A, N, rates, factor)
+    newton = newton_per_step * steps
+    overhead = price.overhead(steps, newton)
     costs = {}
     amg = iterative_memory(A)
     costs["iterative"] = MethodCost("iterative", AMG_SETUP_PASSES * rates.matrix_pass,
-                                    INEXACT_NEWTON * newton * CG_PER_NEWTON * CG_PASSES * rates.matrix_pass + overhead,
+                                    INEXACT_NEWTON * newton * CG_PER_NEWTON * price.cg_iteration + overhead,
                                     resident + amg, amg <= available)
     if factor is None:
         return costs
-    entry = rates.matrix_pass / A.nnz  # seconds per stored entry read, as in a product with A
-    solve = 2 * factor.entries * entry  # a forward and a backward substitution
-    factorization = factor.flops / (PARDISO_SPEED * flops1)
     condensation = (c**3 / 3 + 2 * c * c * m) / (DENSE_SPEED * flops1)
     dense = condensed_memory(N, n)
-    first_lu = (2 / 3) * m**3 / flops1
-    per_newton = GMRES_PER_NEWTON * 2 * m * m * (8 / 12) * entry  # S and the LU read, 8 bytes an entry (A's: 12)
     solves = steps * (1.0 if history else 0.0) + field_steps
-    costs["condensed"] = MethodCost("condensed", factorization + condensation,
-                                    first_lu + newton * per_newton + solves * solve + overhead,
+    costs["condensed"] = MethodCost("condensed", price.factorization + condensation,
+                                    price.newton_lu + newton * GMRES_PER_NEWTON * price.gmres_iteration
+                                    + solves * price.factor_solve + overhead,
                                     int(resident + factor.bytes + dense),
                                     condensed_fits(N, n)[0] and factor.bytes + dense <= available)
-    costs["full"] = MethodCost("full", 0.0, newton * (factorization + solve) + overhead, int(resident + factor.bytes),
-                               factor.bytes <= available)
+    costs["full"] = MethodCost("full", 0.0, newton * (price.factorization + price.factor_solve) + overhead,
+                               int(resident + factor.bytes), factor.bytes <= available)
     return costs
+
+
+def observed_loop_seconds(method: str, work, steps: int, newton: int, history: bool, price: Prices) -> float:
+    """The time loop so far of a run of ``method``, priced at ``price``: its counted ``work`` (a
+    :class:`~.base.SolverWork`: Krylov iterations, Newton matrices factored) over ``steps`` steps of ``newton``
+    Newton iterations in all, ``history``: a bulk solve at every step. What the loop computes only for its
+    outputs (the fields written) is left out, as in the choice (:func:`predict` with field_steps 0), and so is the
+    condensed method's first LU, a one-off its prediction counts apart."""
+    overhead = price.overhead(steps, newton)
+    if method == "iterative":
+        return work.krylov_iterations * price.cg_iteration + overhead
+    if method == "condensed":
+        return (work.krylov_iterations * price.gmres_iteration + max(work.newton_factorizations - 1, 0)
+                * price.newton_lu + (steps if history else 0) * price.factor_solve + overhead)
+    return work.newton_factorizations * (price.factorization + price.factor_solve) + overhead
 
 
 def resident_memory() -> int:

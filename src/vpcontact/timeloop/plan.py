@@ -37,7 +37,7 @@ from ..results.steps import field_step_numbers
 from ..solvers import augmentation_parameter
 from ..solvers.choice import check_iterative_memory, chosen_method
 from ..solvers.condensed import check_condensed_memory, condensed_fits, condensed_memory
-from ..solvers.cost import MachineRates, factor_work, iterative_memory, predict, resident_memory
+from ..solvers.cost import FactorWork, MachineRates, factor_work, iterative_memory, predict, resident_memory
 
 
 @dataclass(frozen=True)
@@ -53,7 +53,9 @@ class RunPlan:
     "solver setup", "time loop" and "total" predicted for the method that runs; ``memory_peak_bytes`` the peak
     predicted for the whole process (the problem, the method's algebra, the outputs); ``predicted``: each
     method's predicted cost (:meth:`~vpcontact.solvers.cost.MethodCost.as_dict`: seconds of set-up and time loop,
-    bytes, whether it fits)."""
+    bytes, whether it fits); ``factor``: the direct factor's work these predictions rest on
+    (:class:`~vpcontact.solvers.cost.FactorWork`; None: the direct methods were not weighed), ``history``: a bulk
+    solve at every step (a viscoplastic history)."""
 
     dim: int
     nodes: int
@@ -74,6 +76,8 @@ class RunPlan:
     memory_peak_bytes: int
     time_seconds: dict[str, float]
     predicted: dict[str, dict]
+    factor: FactorWork | None
+    history: bool
 
     @property
     def setup_seconds(self) -> float:
@@ -102,7 +106,7 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
     check_memory(len(times), output, nodes, elements, surface.size, history, mesh.dim, held)
     r = augmentation_parameter(A, N, problem.solver.augmentation)
     field_steps = len(field_step_numbers(output.field_steps, len(times)))
-    deciding, costs = predicted_costs(problem.solver.method, A, N, mesh.dim, len(times), history, field_steps)
+    deciding, costs, factor = predicted_costs(problem.solver.method, A, N, mesh.dim, len(times), history, field_steps)
     method, reason = chosen_method(problem.solver.method, deciding)
     if problem.solver.method == "auto" and resumed_method in costs and resumed_method != method:
         method, reason = resumed_method, (f"solver.method = \"auto\": the {resumed_method} method of the run resumed "
@@ -126,11 +130,11 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
         memory_peak_bytes=int(cost.memory_bytes + sum(outputs.values())),
         time_seconds={"build": build, "solver setup": cost.setup_s, "time loop": cost.loop_s,
                       "total": build + cost.total_s},
-        predicted={name: cost.as_dict() for name, cost in costs.items()})
+        predicted={name: cost.as_dict() for name, cost in costs.items()}, factor=factor, history=history)
 
 
 def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, history: bool,
-                    field_steps: int) -> tuple[dict, dict]:
+                    field_steps: int) -> tuple[dict, dict, FactorWork | None]:
     """The methods' predicted costs (:func:`~vpcontact.solvers.cost.predict`) for ``solver.method = method``, twice:
     at this machine kind's reference rates (:meth:`~vpcontact.solvers.cost.MachineRates.reference`), by which
     "auto" chooses (the same case gets the same method on every run, whatever else the machine is doing, and
@@ -139,7 +143,7 @@ def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, s
     by PARDISO's analysis where a direct method may run: when it is asked for, or, for "auto", when the condensed
     method's dense algebra fits and its cost by the laws of :func:`~vpcontact.solvers.cost.factor_work` is within
     COUNT_WITHIN of the iterative method's (an analysis of a factor that cannot win is not made: at 2M dofs it
-    would take a minute)."""
+    would take a minute). Third, the direct factor's work the predictions rest on (None: not weighed)."""
     reference, probed, resident = MachineRates.reference(A), MachineRates.probe(A), resident_memory()
 
     def costs(factor, rates, written=0):
@@ -153,7 +157,7 @@ def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, s
         if method != "auto" or (condensed_fits(N, A.shape[0])[0] and
                                 estimated["condensed"].total_s <= COUNT_WITHIN * estimated["iterative"].total_s):
             factor = factor_work(A, N, dim)
-    return costs(factor, reference), costs(factor, probed, field_steps)
+    return costs(factor, reference), costs(factor, probed, field_steps), factor
 
 
 #: "auto" counts the direct factor's work (PARDISO's analysis) when the condensed method's cost by the laws is

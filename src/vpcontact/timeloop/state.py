@@ -58,12 +58,13 @@ class LoopState:
 
     def start(self, h: float) -> StepSolution | None:
         """The first Newton iterate of the level h after the last one: the last level's solution
-        extrapolated linearly in time along its trend (λ kept ≥ 0); the last level's solution itself
-        when it has no trend (the first step), None when there is none (start from zero)."""
+        extrapolated linearly in time along its trend (λ kept ≥ 0; u where the trend has it: the level before a
+        change of method may not have u); the last level's solution itself when it has no trend (the first
+        step), None when there is none (start from zero)."""
         previous, trend = self.previous, self.trend
         if previous is None or trend is None:
             return previous
-        u = None if previous.u is None or trend.u is None else previous.u + h * trend.u
+        u = previous.u if previous.u is None or trend.u is None else previous.u + h * trend.u
         return replace(previous, u=u, lam=np.maximum(previous.lam + h * trend.lam, 0.0), d=previous.d + h * trend.d)
 
     def arrays(self, rigid: np.ndarray) -> dict[str, np.ndarray]:
