@@ -2,6 +2,7 @@
 refuses up front what would not fit, and a Newton system it cannot solve cuts the step instead of
 stopping the run with a traceback."""
 
+import pytest
 import tomli_w
 
 import vpcontact
@@ -107,3 +108,25 @@ def test_auto_multigrid_without_petsc4py_runs_pyamg_and_says_so(monkeypatch):
     assert result.status == "complete", result.message
     assert result.method_reason == 'solver.method = "iterative"; its CG preconditioned by pyamg\'s smoothed ' \
                                    'aggregation (solver.multigrid = "auto": petsc4py is not installed)'
+
+
+def test_the_iterative_method_is_predicted_at_the_speed_of_the_multigrid_that_would_run(monkeypatch):
+    """With petsc4py installed "auto" runs PETSc's GAMG, and the plan names it; the cost model predicts its set-up at
+    MULTIGRID_SPEEDS' share of pyamg's and its CG work at the product of the shares of an iteration's time and of
+    the iterations (at the reference rates, which do not change between the two predictions)."""
+    from vpcontact.results.output_options import OutputOptions
+    from vpcontact.timeloop.plan import free_operators, plan_run
+
+    problem = vpcontact.build_problem(vpcontact.load_case(ball_case(h=0.3)))
+    A, N = free_operators(problem)
+    assert plan_run(problem, OutputOptions(), A, N).multigrid == "pyamg"
+    monkeypatch.setattr(petsc_gamg, "available", lambda: True)
+    assert plan_run(problem, OutputOptions(), A, N).multigrid == "petsc"
+    steps, rates = len(problem.times), cost.MachineRates.reference(A)
+    before, after = (cost.predict(A, N, 3, steps, history=False, field_steps=0, rates=rates, factor=None, resident=0,
+                                  multigrid=multigrid)["iterative"] for multigrid in ("pyamg", "petsc"))
+    speed = cost.MULTIGRID_SPEEDS["petsc"]
+    assert after.setup_s == pytest.approx(speed.setup * before.setup_s, rel=1e-12)
+    overhead = cost.Prices.of(A, N, rates, None).overhead(steps, cost.NEWTON_PER_STEP * steps)
+    assert after.loop_s - overhead == pytest.approx(speed.cg_iteration * speed.cg_iterations
+                                                    * (before.loop_s - overhead), rel=1e-12)

@@ -34,6 +34,7 @@ import os
 import time
 from dataclasses import asdict, dataclass
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
@@ -54,6 +55,23 @@ CG_PASSES = 25.0
 CG_PER_NEWTON = 8.0
 #: Products with A that the multigrid set-up costs.
 AMG_SETUP_PASSES = 700.0
+
+
+class MultigridSpeed(NamedTuple):
+    """A multigrid backend of the iterative method against pyamg's, which CG_PASSES, CG_PER_NEWTON and
+    AMG_SETUP_PASSES were measured with: the time of a CG iteration, the CG iterations per Newton system and the
+    time of the set-up, each as a share of pyamg's."""
+
+    cg_iteration: float
+    cg_iterations: float
+    setup: float
+
+
+#: The multigrid backends (``solver.multigrid``) against pyamg's. PETSc's GAMG, on the quarter ball's Newton
+#: matrices at 69k and 172k free dofs (one Newton system to 1e-8, medians of 3, docs/performance.md, "The iterative
+#: method with PETSc's GAMG"): 32 and 85 ms a CG iteration against 64 and 152, 15 and 17 iterations against 13,
+#: set-up 2.3 and 5.5 s against 4.1 and 8.1.
+MULTIGRID_SPEEDS = {"pyamg": MultigridSpeed(1.0, 1.0, 1.0), "petsc": MultigridSpeed(0.53, 1.2, 0.62)}
 #: GMRES iterations per Newton iteration of the condensed method (about 6 on the quarter ball, 3 on the punch).
 GMRES_PER_NEWTON = 5.0
 #: Newton iterations per time step.
@@ -199,16 +217,19 @@ class Prices:
     step_overhead: float
 
     @classmethod
-    def of(cls, A: sp.csr_matrix, N: sp.csr_matrix, rates: MachineRates, factor: FactorWork | None) -> "Prices":
+    def of(cls, A: sp.csr_matrix, N: sp.csr_matrix, rates: MachineRates, factor: FactorWork | None,
+           multigrid: str = "pyamg") -> "Prices":
         """The prices for stiffness A and contact operator N on the free dofs on a machine of ``rates``, with the
-        direct factor's work ``factor`` (None: the direct methods' prices are NaN)."""
+        direct factor's work ``factor`` (None: the direct methods' prices are NaN) and the iterative method's
+        ``multigrid`` backend (a key of MULTIGRID_SPEEDS)."""
         m = N.shape[0]
         entry = rates.matrix_pass / max(A.nnz, 1)  # seconds per stored entry read, as in a product with A
         gmres = 2 * m * m * (8 / 12) * entry  # S and the LU read, 8 bytes an entry (A's: 12)
         direct = ((np.nan,) * 3 if factor is None else
                   ((2 / 3) * m**3 / rates.dense_flops, 2 * factor.entries * entry,
                    factor.flops / (PARDISO_SPEED * rates.dense_flops)))
-        return cls(CG_PASSES * rates.matrix_pass, gmres, *direct, NEWTON_OVERHEAD_S, STEP_OVERHEAD_S)
+        cg = CG_PASSES * rates.matrix_pass * MULTIGRID_SPEEDS[multigrid].cg_iteration
+        return cls(cg, gmres, *direct, NEWTON_OVERHEAD_S, STEP_OVERHEAD_S)
 
     def overhead(self, steps: float, newton: float) -> float:
         """The loop's own work over ``steps`` steps of ``newton`` Newton iterations in all."""
@@ -217,22 +238,25 @@ class Prices:
 
 def predict(A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, *, history: bool, field_steps: int,
             rates: MachineRates, factor: FactorWork | None, resident: int,
-            newton_per_step: float = NEWTON_PER_STEP) -> dict[str, MethodCost]:
+            newton_per_step: float = NEWTON_PER_STEP, multigrid: str = "pyamg") -> dict[str, MethodCost]:
     """The cost of each method for stiffness A and contact operator N on the free dofs, ``steps`` time steps
     (``history``: a viscoplastic history, a bulk solve at every step; ``field_steps``: steps whose fields are
     written), on a machine of ``rates``, the condensed factor's work ``factor`` (None: not wanted, the condensed
     and full methods are not predicted), ``resident`` bytes the process holds already (the problem) and
-    ``newton_per_step`` Newton iterations a step (NEWTON_PER_STEP, or as a run observes them)."""
+    ``newton_per_step`` Newton iterations a step (NEWTON_PER_STEP, or as a run observes them); the iterative
+    method's multigrid is ``multigrid`` (a key of MULTIGRID_SPEEDS)."""
     n, m, c = A.shape[0], N.shape[0], condensation_dofs(N)
     available = available_memory()
     flops1 = rates.dense_flops
-    price = Prices.of(A, N, rates, factor)
+    price = Prices.of(A, N, rates, factor, multigrid)
+    speed = MULTIGRID_SPEEDS[multigrid]
     newton = newton_per_step * steps
     overhead = price.overhead(steps, newton)
     costs = {}
     amg = iterative_memory(A)
-    costs["iterative"] = MethodCost("iterative", AMG_SETUP_PASSES * rates.matrix_pass,
-                                    INEXACT_NEWTON * newton * CG_PER_NEWTON * price.cg_iteration + overhead,
+    costs["iterative"] = MethodCost("iterative", AMG_SETUP_PASSES * rates.matrix_pass * speed.setup,
+                                    INEXACT_NEWTON * newton * CG_PER_NEWTON * speed.cg_iterations * price.cg_iteration
+                                    + overhead,
                                     resident + amg, amg <= available)
     if factor is None:
         return costs

@@ -64,7 +64,7 @@ class MethodWeighing:
     """What weighing the methods during a run needs: the stiffness A and contact operator N on the free dofs, the
     dimension, whether a viscoplastic history makes a bulk solve every step, the run's ``steps`` and the direct
     factor's work (the plan's, :func:`~vpcontact.timeloop.plan.predicted_costs`; None: the direct methods are not
-    weighed)."""
+    weighed) and the iterative method's ``multigrid`` backend (:data:`.cost.MULTIGRID_SPEEDS`)."""
 
     A: sp.csr_matrix
     N: sp.csr_matrix
@@ -72,6 +72,7 @@ class MethodWeighing:
     history: bool
     steps: int
     factor: FactorWork | None
+    multigrid: str = "pyamg"
 
     def consider(self, method: str, done: int, work: SolverWork, newton: int) -> Switch | None:
         """The switch to make after step ``done`` of a run of ``method`` that has done ``work`` in ``newton``
@@ -81,9 +82,10 @@ class MethodWeighing:
             return None
         rates = MachineRates.reference(self.A)
         running = observed_loop_seconds(method, work, done, newton, self.history,
-                                        Prices.of(self.A, self.N, rates, self.factor)) * left / done
+                                        Prices.of(self.A, self.N, rates, self.factor, self.multigrid)) * left / done
         others = predict(self.A, self.N, self.dim, left, history=self.history, field_steps=0, rates=rates,
-                         factor=self.factor, resident=resident_memory(), newton_per_step=newton / done)
+                         factor=self.factor, resident=resident_memory(), newton_per_step=newton / done,
+                         multigrid=self.multigrid)
         fitting = sorted((cost for name, cost in others.items() if name != method and cost.fits),
                          key=lambda cost: cost.total_s)
         if not fitting or fitting[0].total_s * SWITCH_GAIN > running:

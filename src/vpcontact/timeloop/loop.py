@@ -106,8 +106,8 @@ class TimeLoop:
         self._solver_of = solver_of
         self.solver = solver_of(plan.method, plan.method_reason)
         #: "auto" weighs the methods again after each step (:mod:`vpcontact.solvers.switch`) until it switches once
-        self.weighing = (MethodWeighing(A, N, mesh.dim(), plan.history, len(problem.times), plan.factor)
-                         if options.method == "auto" else None)
+        self.weighing = (MethodWeighing(A, N, mesh.dim(), plan.history, len(problem.times), plan.factor,
+                                        plan.multigrid) if options.method == "auto" else None)
         self.switch: Switch | None = None
         self.max_cuts = options.max_step_cuts
         constraints = problem.constraints

@@ -35,6 +35,7 @@ from ..problem.discretization import held_parts
 from ..results.footprint import check_memory, memory_needed
 from ..results.steps import field_step_numbers
 from ..solvers import augmentation_parameter
+from ..solvers.linear import chosen_multigrid
 from ..solvers.choice import check_iterative_memory, chosen_method
 from ..solvers.condensed import check_condensed_memory, condensed_fits, condensed_memory
 from ..solvers.cost import FactorWork, MachineRates, factor_work, iterative_memory, predict, resident_memory
@@ -55,7 +56,8 @@ class RunPlan:
     method's predicted cost (:meth:`~vpcontact.solvers.cost.MethodCost.as_dict`: seconds of set-up and time loop,
     bytes, whether it fits); ``factor``: the direct factor's work these predictions rest on
     (:class:`~vpcontact.solvers.cost.FactorWork`; None: the direct methods were not weighed), ``history``: a bulk
-    solve at every step (a viscoplastic history)."""
+    solve at every step (a viscoplastic history); ``multigrid``: the iterative method's multigrid backend, as it would
+    run (``solver.multigrid`` resolved: "petsc" or "pyamg")."""
 
     dim: int
     nodes: int
@@ -78,6 +80,7 @@ class RunPlan:
     predicted: dict[str, dict]
     factor: FactorWork | None
     history: bool
+    multigrid: str
 
     @property
     def setup_seconds(self) -> float:
@@ -106,7 +109,9 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
     check_memory(len(times), output, nodes, elements, surface.size, history, mesh.dim, held)
     r = augmentation_parameter(A, N, problem.solver.augmentation)
     field_steps = len(field_step_numbers(output.field_steps, len(times)))
-    deciding, costs, factor = predicted_costs(problem.solver.method, A, N, mesh.dim, len(times), history, field_steps)
+    multigrid = chosen_multigrid(problem.solver.multigrid)
+    deciding, costs, factor = predicted_costs(problem.solver.method, A, N, mesh.dim, len(times), history, field_steps,
+                                              multigrid)
     method, reason = chosen_method(problem.solver.method, deciding)
     if problem.solver.method == "auto" and resumed_method in costs and resumed_method != method:
         method, reason = resumed_method, (f"solver.method = \"auto\": the {resumed_method} method of the run resumed "
@@ -130,11 +135,12 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
         memory_peak_bytes=int(cost.memory_bytes + sum(outputs.values())),
         time_seconds={"build": build, "solver setup": cost.setup_s, "time loop": cost.loop_s,
                       "total": build + cost.total_s},
-        predicted={name: cost.as_dict() for name, cost in costs.items()}, factor=factor, history=history)
+        predicted={name: cost.as_dict() for name, cost in costs.items()}, factor=factor, history=history,
+        multigrid=multigrid)
 
 
 def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, history: bool,
-                    field_steps: int) -> tuple[dict, dict, FactorWork | None]:
+                    field_steps: int, multigrid: str = "pyamg") -> tuple[dict, dict, FactorWork | None]:
     """The methods' predicted costs (:func:`~vpcontact.solvers.cost.predict`) for ``solver.method = method``, twice:
     at this machine kind's reference rates (:meth:`~vpcontact.solvers.cost.MachineRates.reference`), by which
     "auto" chooses (the same case gets the same method on every run, whatever else the machine is doing, and
@@ -143,12 +149,14 @@ def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, s
     by PARDISO's analysis where a direct method may run: when it is asked for, or, for "auto", when the condensed
     method's dense algebra fits and its cost by the laws of :func:`~vpcontact.solvers.cost.factor_work` is within
     COUNT_WITHIN of the iterative method's (an analysis of a factor that cannot win is not made: at 2M dofs it
-    would take a minute). Third, the direct factor's work the predictions rest on (None: not weighed)."""
+    would take a minute). Third, the direct factor's work the predictions rest on (None: not weighed). The
+    iterative method is predicted with the ``multigrid`` backend it would run (:data:`~vpcontact.solvers.cost.
+    MULTIGRID_SPEEDS`)."""
     reference, probed, resident = MachineRates.reference(A), MachineRates.probe(A), resident_memory()
 
     def costs(factor, rates, written=0):
         return predict(A, N, dim, steps, history=history, field_steps=written, rates=rates, factor=factor,
-                       resident=resident)
+                       resident=resident, multigrid=multigrid)
 
     factor = None
     if method != "iterative":
