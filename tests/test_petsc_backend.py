@@ -3,13 +3,19 @@ the same solutions as with pyamg's hierarchy, one hierarchy for a whole run, the
 Needs petsc4py (``pip install "vpcontact[petsc]"``); skipped without it (the refusal of "petsc" where it is
 missing is tests/test_solver_choice.py's)."""
 
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
 pytest.importorskip("petsc4py")
 
-from conftest import half_disc_case
+from conftest import block_3d_case, half_disc_case
 from test_3d import ball_case, states
 from test_linear_solvers import quarter_ball_system
 from test_solvers_agree import assert_same_states, relative
@@ -19,6 +25,7 @@ from vpcontact import build_problem
 from vpcontact.case.translate import output_options
 from vpcontact.solvers import petsc_gamg
 from vpcontact.solvers.errors import NotConvergedError
+from vpcontact.solvers.factorization import installed_backends
 from vpcontact.timeloop.loop import TimeLoop
 
 #: a 3D and a 2D case, each with a step where nodes are separated, in compliance and at the limit
@@ -139,3 +146,41 @@ def test_a_newton_matrix_nearly_singular_in_a_rigid_motion_is_solved():
     x = gamg.solve(b, rtol=1e-2)
     assert np.linalg.norm(K @ x - b) <= 1e-2 * np.linalg.norm(b)
     assert gamg.most_iterations <= 40, gamg.most_iterations  # 26 with PETSc 3.26 (pyamg: 24)
+
+
+def fresh_python(script: str, *args: str) -> str:
+    """The standard output of ``script`` run by a Python process of its own, with none of the MPI variables an
+    initialized PETSc leaves in this one's environment (it would pass them on)."""
+    environment = {key: value for key, value in os.environ.items() if not key.startswith(("OMPI_", "PMIX_"))}
+    process = subprocess.run([sys.executable, "-c", script, *args], capture_output=True, text=True, timeout=300,
+                             env=environment, start_new_session=True)
+    assert process.returncode == 0, process.stderr
+    return process.stdout
+
+
+#: A session that solves the 3D block (JSON, argv[1]) by the iterative method with PETSc's GAMG, after the same block
+#: by the condensed method with PARDISO if argv[2] says so; prints a digest of the displacements of every step.
+SESSION = """
+import hashlib, json, sys
+import numpy as np
+import vpcontact
+case = json.loads(sys.argv[1])
+if sys.argv[2] == "pardiso first":
+    vpcontact.solve({**case, "solver": {"method": "condensed", "factorization": "pardiso"}})
+    assert any("libmkl" in line for line in open("/proc/self/maps"))
+result = vpcontact.solve({**case, "solver": {"method": "iterative", "multigrid": "petsc"},
+                          "output": {"field_steps": "all"}})
+print(hashlib.sha256(np.stack([fields.displacement for fields in result.fields.values()]).tobytes()).hexdigest())
+"""
+
+
+@pytest.mark.skipif("pardiso" not in installed_backends() or not Path("/proc/self/maps").exists(),
+                    reason="needs MKL's PARDISO (and /proc to see it loaded)")
+def test_a_run_has_the_same_bits_whatever_its_process_did_before():
+    """The same run of the iterative method in a fresh process and in one that used PARDISO first (MKL, which puts its
+    BLAS under the common names in the whole process): the same displacements, bit for bit (PETSc's vector
+    operations called MKL's BLAS in the second, the reference BLAS in the first: the runs differed in the last bits
+    from the first step on)."""
+    case = json.dumps(block_3d_case())
+    assert fresh_python(SESSION, case, "pardiso first") == fresh_python(SESSION, case, "alone")
+

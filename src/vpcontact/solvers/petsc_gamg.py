@@ -35,6 +35,7 @@ arguments are not PETSc's.
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 
@@ -67,13 +68,25 @@ def available() -> bool:
 
 
 def petsc():
-    """petsc4py's PETSc module, initialized (the first time) without the process's command line and without
-    PETSc's signal handlers: the run's own (a SIGTERM stops it after the step, :mod:`vpcontact.drivers.signals`)
-    stay in place."""
+    """petsc4py's PETSc module, initialized the first time (a module the caller imported before is taken as it is):
+
+    - without the process's command line and without PETSc's signal handlers: the run's own (a SIGTERM stops it
+      after the step, :mod:`vpcontact.drivers.signals`) stay in place;
+    - its library bound to the BLAS and LAPACK it was built with, whatever the process loaded before
+      (``RTLD_DEEPBIND``; without it, as on macOS, a library is bound to its own dependencies anyway). MKL, which
+      PARDISO loads, gives its BLAS to the whole process under the common names: PETSc's vector operations called
+      MKL's in a session that had used PARDISO first and the reference BLAS in one that had not, and the same run
+      differed in the last bits with what its process had done before (a run resumed in such a session was not
+      the uninterrupted one)."""
     if "petsc4py.PETSc" not in sys.modules:
         import petsc4py
 
-        petsc4py.init(["vpcontact", "-no_signal_handler"])
+        flags = sys.getdlopenflags()
+        sys.setdlopenflags(flags | getattr(os, "RTLD_DEEPBIND", 0))
+        try:
+            petsc4py.init(["vpcontact", "-no_signal_handler"])
+        finally:
+            sys.setdlopenflags(flags)
     from petsc4py import PETSc
 
     return PETSc
