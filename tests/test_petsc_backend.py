@@ -184,3 +184,29 @@ def test_a_run_has_the_same_bits_whatever_its_process_did_before():
     case = json.dumps(block_3d_case())
     assert fresh_python(SESSION, case, "pardiso first") == fresh_python(SESSION, case, "alone")
 
+
+#: Initializes PETSc as a run does, then prints its process group and, for each process it started, that
+#: process's group.
+PROCESS_GROUPS = """
+import os
+from vpcontact.solvers import petsc_gamg
+petsc_gamg.petsc()
+print(os.getpgrp())
+for entry in filter(str.isdigit, os.listdir("/proc")):
+    try:
+        parent, group = open(f"/proc/{entry}/stat").read().rsplit(")", 1)[1].split()[1:3]
+    except OSError:
+        continue  # ended meanwhile
+    if int(parent) == os.getpid():
+        print(group)
+"""
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process table in /proc")
+def test_petsc_starts_no_process_outside_the_runs_process_group():
+    """Whatever PETSc's initialization starts stays in the run's process group, which a signal to the group (the
+    way to stop a run and everything it started) reaches: Open MPI 4 started a daemon in a session of its own that
+    held the run's standard output and error, so that one who read them to their end after killing the group
+    waited for the daemon."""
+    group, *children = fresh_python(PROCESS_GROUPS).split()
+    assert all(child == group for child in children), (group, children)
