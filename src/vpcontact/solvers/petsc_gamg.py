@@ -23,7 +23,11 @@ again on the next matrix.
 Unknowns reduced to their diagonal entry (the fixed dofs, the Dirichlet rows of the embedding) are solved
 exactly and the V-cycle applied to the rest, z = P M⁻¹ P r + D⁻¹ (I − P) r (a Python preconditioner around
 GAMG's), so fixing dofs does not disturb the hierarchy. CG stops on the unpreconditioned residual,
-‖A x − b‖ ≤ rtol ‖b‖.
+‖A x − b‖ ≤ rtol ‖b‖, or after MAX_ITERATIONS, never because the residual grew: PETSc's divergence test (a
+residual above 10⁵ times the first) is off, as SciPy's CG (pyamg's) has none. A Newton matrix nearly singular
+in a rigid motion (a body held only by contact, its contact nodes separated: their stiffness is the Newton
+iteration's regularization) has CG's residual rise by 10⁴ and more before it falls; the test stopped the 2D block of
+tests/test_uniaxial_reference.py after 3 iterations (a step cut), where pyamg's CG converged.
 
 PETSc's options are set here, on a private prefix, and never read from the command line: the run's
 arguments are not PETSc's.
@@ -31,6 +35,7 @@ arguments are not PETSc's.
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 
@@ -63,13 +68,30 @@ def available() -> bool:
 
 
 def petsc():
-    """petsc4py's PETSc module, initialized (the first time) without the process's command line and without
-    PETSc's signal handlers: the run's own (a SIGTERM stops it after the step, :mod:`vpcontact.drivers.signals`)
-    stay in place."""
+    """petsc4py's PETSc module, initialized the first time (a module the caller imported before is taken as it is):
+
+    - without the process's command line and without PETSc's signal handlers: the run's own (a SIGTERM stops it
+      after the step, :mod:`vpcontact.drivers.signals`) stay in place;
+    - its library bound to the BLAS and LAPACK it was built with, whatever the process loaded before
+      (``RTLD_DEEPBIND``; without it, as on macOS, a library is bound to its own dependencies anyway). MKL, which
+      PARDISO loads, gives its BLAS to the whole process under the common names: PETSc's vector operations called
+      MKL's in a session that had used PARDISO first and the reference BLAS in one that had not, and the same run
+      differed in the last bits with what its process had done before (a run resumed in such a session was not
+      the uninterrupted one);
+    - as an MPI process of its own (Open MPI's isolated singleton; the backend needs no other process): Open MPI 4
+      otherwise starts a daemon at initialization, in a session of its own, that holds the run's standard output
+      and error, so that a signal to the run's process group does not reach it and whoever reads the run's
+      output to its end waits for the daemon too."""
     if "petsc4py.PETSc" not in sys.modules:
         import petsc4py
 
-        petsc4py.init(["vpcontact", "-no_signal_handler"])
+        os.environ.setdefault("OMPI_MCA_ess_singleton_isolated", "1")
+        flags = sys.getdlopenflags()
+        sys.setdlopenflags(flags | getattr(os, "RTLD_DEEPBIND", 0))
+        try:
+            petsc4py.init(["vpcontact", "-no_signal_handler"])
+        finally:
+            sys.setdlopenflags(flags)
     from petsc4py import PETSc
 
     return PETSc
@@ -217,7 +239,7 @@ class GAMGConjugateGradient:
             return np.zeros_like(b)
         self._b.array[:] = 0.0
         self._b.array[self.free] = b
-        self._ksp.setTolerances(rtol=rtol, atol=0.0, max_it=MAX_ITERATIONS)
+        self._ksp.setTolerances(rtol=rtol, atol=0.0, divtol=np.inf, max_it=MAX_ITERATIONS)
         self._ksp.solve(self._b, self._x)
         count = self._ksp.getIterationNumber()
         x = self._x.array[self.free].copy()
