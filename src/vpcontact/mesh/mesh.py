@@ -27,6 +27,7 @@ from ..errors import CaseError, shown
 from ..memory import available_memory
 from .cells import SIMPLICES
 from .checks_arrays import check_mesh
+from .facets import ELEMENT_FACETS, FACET_ELEMENTS, FACETS
 from .simplex import longest_edges
 
 NormalField = Callable[[np.ndarray], np.ndarray]
@@ -137,7 +138,7 @@ def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
 
 #: scikit-fem's tables of a mesh's facets (the facets, element to facets, facet to elements), attributes it
 #: builds on first use and that depend only on the elements.
-FACET_TABLES = ("_facets", "_t2f", "_f2t")
+FACET_TABLES = (FACETS, ELEMENT_FACETS, FACET_ELEMENTS)
 
 
 def with_parts(mesh, parts: dict[str, np.ndarray], built=None):
