@@ -19,7 +19,7 @@ from skfem import Basis, FacetBasis
 
 from vpcontact.fem import kernels
 from vpcontact.mesh import simplex
-from vpcontact.fem.assembly import LoadVector, displacement_basis, element_strain, stiffness, stress_force
+from vpcontact.fem.assembly import LoadVector, displacement_space, element_strain, stiffness, stress_force
 from vpcontact.laws.elasticity import Elasticity
 from vpcontact.mesh import block, half_disc, quarter_ball
 
@@ -44,7 +44,7 @@ def relative(new, old) -> float:
 @pytest.fixture(scope="module", params=list(MESHES))
 def mesh_and_basis(request):
     mesh = MESHES[request.param]()
-    return request.param, mesh, displacement_basis(mesh)
+    return request.param, mesh, displacement_space(mesh)
 
 
 def per_element(basis, low, high, seed=0):
@@ -55,7 +55,7 @@ def per_element(basis, low, high, seed=0):
 @pytest.mark.parametrize("varying", [False, True], ids=["one material", "E and nu per element"])
 def test_the_stiffness_is_scikit_fems_to_rounding(name, hypothesis, varying):
     mesh = MESHES[name]()
-    basis = displacement_basis(mesh)
+    basis = displacement_space(mesh)
     E, nu = (per_element(basis, 10.0, 5000.0), per_element(basis, -0.2, 0.45, 1)) if varying else (1000.0, 0.3)
     elasticity = Elasticity(E, nu, hypothesis)
     A = stiffness(basis, elasticity)
@@ -65,8 +65,16 @@ def test_the_stiffness_is_scikit_fems_to_rounding(name, hypothesis, varying):
     assert abs(A - A.T).max() <= 1e-13 * abs(A).max()
 
 
+def test_the_space_numbers_the_dofs_as_scikit_fems_basis(mesh_and_basis):
+    """The displacement space holds no basis values, and its dofs are those of scikit-fem's vector basis."""
+    _, mesh, space = mesh_and_basis
+    basis = reference.skfem_basis(space)
+    assert space.N == basis.N and space.nelems == basis.nelems
+    assert space.nodal_dofs.dtype == basis.nodal_dofs.dtype and np.array_equal(space.nodal_dofs, basis.nodal_dofs)
+
+
 def test_the_plane_hypothesis_changes_the_stiffness():
-    basis = displacement_basis(half_disc(0.3))
+    basis = displacement_space(half_disc(0.3))
     strain, stress = (stiffness(basis, Elasticity(1000.0, 0.3, h)) for h in ("plane_strain", "plane_stress"))
     assert relative(stress, strain) > 0.1
 
@@ -138,7 +146,7 @@ def test_the_load_on_chosen_dofs_is_the_load_vector_there_and_vanishes_off_its_s
 
 @pytest.mark.parametrize("make", [lambda: half_disc(0.2), lambda: quarter_ball(0.4)], ids=["2D", "3D"])
 def test_a_chunk_of_seven_elements_gives_the_same_matrix(make, monkeypatch):
-    basis = displacement_basis(make())
+    basis = displacement_space(make())
     elasticity = Elasticity(per_element(basis, 100.0, 200.0), 0.3, "plane_stress" if basis.mesh.dim() == 2 else None)
     whole = stiffness(basis, elasticity)
     monkeypatch.setattr(kernels, "CHUNK", 7)
@@ -149,7 +157,7 @@ def test_a_chunk_of_seven_elements_gives_the_same_matrix(make, monkeypatch):
 def test_the_stiffness_takes_the_bases_dof_numbering():
     """A basis whose dofs are not numbered d·node + c gets its matrix renumbered the same way."""
     mesh = quarter_ball(0.5)
-    basis = displacement_basis(mesh)
+    basis = displacement_space(mesh)
     g = kernels.geometry(basis)
     nodes = mesh.mesh.p.shape[1]
     interleaved = kernels.elastic_stiffness(g, 2.0, 3.0, nodes, basis.nodal_dofs)
@@ -163,7 +171,7 @@ def test_the_stiffness_of_many_elements_is_summed_in_bounded_memory(monkeypatch)
     """With chunks of 1,000 tetrahedra the assembly's peak allocation is a few times the matrix (its blocks
     and the CSR made of them), well below the 144 values, rows and columns per element that an assembly of
     all elements at once holds."""
-    basis = displacement_basis(quarter_ball(0.15))  # 12 · 10³ tetrahedra
+    basis = displacement_space(quarter_ball(0.15))  # 12 · 10³ tetrahedra
     g = kernels.geometry(basis)
     monkeypatch.setattr(kernels, "CHUNK", 1000)
     monkeypatch.setattr(kernels, "PATTERN_CHUNK", 1000)
