@@ -37,8 +37,8 @@ class SimplexGeometry:
 
     gradients: np.ndarray  # (d + 1, d, elements): ∂_j λ_a on each element
     volumes: np.ndarray  # (elements,): |T|
-    cells: np.ndarray  # (d + 1, elements): the nodes of each element
-    dofs: np.ndarray  # (d + 1, d, elements): nodal_dofs[c, cells[a]]
+    cells: np.ndarray  # (d + 1, elements): the nodes of each element (the mesh's array)
+    dofs: np.ndarray  # (d + 1, d, elements): nodal_dofs[c, cells[a]], in the dtype of nodal_dofs (int32)
     ndofs: int
 
     @property
@@ -54,13 +54,13 @@ def geometry(basis) -> SimplexGeometry:
     found = _GEOMETRIES.get(basis)
     if found is None:
         mesh = basis.mesh
-        cells = np.ascontiguousarray(mesh.t, dtype=np.int64)
+        cells = np.ascontiguousarray(mesh.t)
         d, elements = mesh.p.shape[0], cells.shape[1]
         gradients, volumes = np.empty((d + 1, d, elements)), np.empty(elements)
         for start in range(0, elements, CHUNK):  # chunks: the temporaries stay small
             part = slice(start, start + CHUNK)
             gradients[:, :, part], volumes[part] = barycentric_gradients(mesh.p, cells[:, part])
-        dofs = np.ascontiguousarray(basis.nodal_dofs[:, cells].transpose(1, 0, 2), dtype=np.int64)
+        dofs = np.ascontiguousarray(basis.nodal_dofs[:, cells].transpose(1, 0, 2))
         found = _GEOMETRIES[basis] = SimplexGeometry(gradients, volumes, cells, dofs, int(basis.N))
     return found
 
@@ -119,7 +119,7 @@ def elastic_stiffness(g: SimplexGeometry, lam, mu, nodes: int, nodal_dofs: np.nd
         dot = np.einsum("ian,ibn->abn", mu_G, G)
         for c in range(d):
             K[c, c] += dot  # μ|T| δ_ce ∇λ_a·∇λ_b
-        cells = g.cells[:, part]
+        cells = g.cells[:, part].astype(np.int64)  # its keys below are node · nodes + node
         low, high = pattern.indptr[cells.min()], pattern.indptr[cells.max() + 1]  # the node rows it adds to
         where = np.searchsorted(keys[low:high], (cells[:, None] * nodes + cells[None, :]).ravel())  # [a, b, elements]
         first, last = where.min(), where.max() + 1
