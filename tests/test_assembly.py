@@ -17,6 +17,8 @@ import pytest
 import scipy.sparse as sp
 from skfem import Basis, FacetBasis
 
+import vpcontact
+from vpcontact.errors import CaseError
 from vpcontact.fem import kernels
 from vpcontact.mesh import simplex
 from vpcontact.fem.assembly import LoadVector, displacement_space, element_strain, stiffness, stress_force
@@ -24,6 +26,7 @@ from vpcontact.laws.elasticity import Elasticity
 from vpcontact.mesh import block, half_disc, quarter_ball
 
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 sys.path.insert(0, str(BENCHMARKS))  # the benchmark imports its folder's modules, as when it runs as a script
 _spec = importlib.util.spec_from_file_location("assembly_benchmark", BENCHMARKS / "assembly.py")
 reference = importlib.util.module_from_spec(_spec)  # the scikit-fem forms vpcontact used before: the reference
@@ -184,6 +187,32 @@ def test_the_stiffness_of_many_elements_is_summed_in_bounded_memory(monkeypatch)
     all_at_once = 144 * basis.nelems * (8 + 8 + 8)
     matrix = A.data.nbytes + A.indices.nbytes + A.indptr.nbytes
     assert peak < all_at_once / 4 and peak < 3 * matrix, (peak, all_at_once, matrix)
+
+
+def test_the_memory_guard_counts_the_assembly_and_refuses_it_before_allocating(monkeypatch):
+    """The bytes the guard counts for the assembly are its peak allocation (tracemalloc), to 25 %; with less memory
+    available than that, the build refuses the mesh in one line naming the need and the memory available."""
+    mesh = quarter_ball(0.1)
+    basis = displacement_space(mesh)
+    g = kernels.geometry(basis)
+    blocks = kernels.node_pattern(g.cells, mesh.mesh.p.shape[1]).nnz
+    tracemalloc.start()
+    try:
+        kernels.elastic_stiffness(g, 2.0, 3.0, mesh.mesh.p.shape[1], basis.nodal_dofs)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    counted = kernels.assembly_bytes(blocks, 3, basis.nelems)
+    assert 0.8 * peak <= counted <= 1.25 * peak, (counted, peak)
+    monkeypatch.setattr(kernels, "available_memory", lambda: counted - 1)
+    with pytest.raises(CaseError) as refused:
+        vpcontact.build_problem(vpcontact.load_case(EXAMPLES / "quarter_ball.toml"))
+    message = str(refused.value)
+    assert "\n" not in message and "40,500 elements" in message and "to assemble" in message
+    assert f"{counted / 2**30:.3g} GiB" in message and "mesh.h" in message
+    monkeypatch.setattr(kernels, "available_memory", lambda: counted)
+    built = vpcontact.build_problem(vpcontact.load_case(EXAMPLES / "quarter_ball.toml"))  # just enough memory
+    assert relative(built.A, stiffness(basis, Elasticity(1000.0, 0.3, None))) == 0.0
 
 
 def test_a_flat_element_gives_gradients_that_are_not_finite():
