@@ -17,13 +17,14 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Basis, FacetBasis
+from skfem import Basis
 from skfem.assembly.basis import AbstractBasis
 
 from ..errors import CaseError, point, quoted
 from ..expressions.parse import Expression
 from ..laws.elasticity import Elasticity
 from ..mesh.mesh import Mesh
+from .facet_basis import facet_basis
 from .kernels import elastic_stiffness, geometry, strains, stress_work
 from .space import DisplacementSpace
 from ..mesh.cells import coordinates
@@ -83,8 +84,9 @@ class _Term:
     """One load density and where it is applied: the quadrature points of its facets or elements, and
     the map from the density's values there to the nodal loads of one component."""
 
-    def __init__(self, name: str, basis: AbstractBasis, density: Density):
-        """``basis``: the scalar P1 basis of the facets or elements with the load's quadrature."""
+    def __init__(self, name: str, basis: AbstractBasis, nodes: np.ndarray | None, density: Density):
+        """``basis``: the scalar P1 basis of the facets or elements with the load's quadrature; ``nodes``: the
+        mesh's nodes that its nodes are (None: the same numbers)."""
         self.points = np.asarray(basis.global_coordinates())  # (d, cells, points of a cell)
         self.names = coordinates(self.points.shape[0])
         self.signature = f"f({', '.join(self.names)}, t)"
@@ -93,6 +95,8 @@ class _Term:
             raise CaseError(f"{name} = {type(density).__name__}: expected a function {self.signature} -> {self.returns}")
         self.name, self.density = name, density
         self.nodes, self.map = _load_map(basis)
+        if nodes is not None:
+            self.nodes = nodes[self.nodes]
 
     def values(self, t: float, step: int | None = None) -> np.ndarray:
         """The density's components at the quadrature points at time t (of time step ``step``, if
@@ -209,9 +213,9 @@ class LoadVector:
         #: residual of an error estimate (:mod:`vpcontact.estimate.residual`)
         self.tractions = [(mesh.facets(part), f) for _, part, f in tractions]
         self.body_forces = [f for _, f in body_forces]
-        self._terms = [_Term(name, FacetBasis(mesh.mesh, scalar, facets=mesh.facets(part), intorder=4), f)
+        self._terms = [_Term(name, *facet_basis(mesh.mesh, mesh.facets(part), scalar, 4), f)
                        for name, part, f in tractions]
-        self._terms += [_Term(name, Basis(mesh.mesh, scalar, intorder=4), f) for name, f in body_forces]
+        self._terms += [_Term(name, Basis(mesh.mesh, scalar, intorder=4), None, f) for name, f in body_forces]
         self._everywhere = self.on(np.arange(self._ndofs))
 
     def __call__(self, t: float) -> np.ndarray:
