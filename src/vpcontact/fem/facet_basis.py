@@ -22,6 +22,7 @@ def facet_basis(mesh: skfem.Mesh, facets: np.ndarray, element: skfem.Element, in
     (in their order), and the nodes of ``mesh`` that its nodes are (its node k is ``nodes[k]``)."""
     elements = np.unique(mesh.f2t[0, facets])
     nodes, t = np.unique(mesh.t[:, elements], return_inverse=True)
-    near = with_facet_tables(type(mesh)(mesh.p[:, nodes], t.reshape(mesh.t.shape[0], -1).astype(mesh.t.dtype)))
+    p, t = np.ascontiguousarray(mesh.p[:, nodes]), t.reshape(mesh.t.shape[0], -1).astype(mesh.t.dtype)
+    near = with_facet_tables(type(mesh)(p, t))
     local = find_columns(near.facets, np.searchsorted(nodes, mesh.facets[:, facets]))
     return FacetBasis(near, element, facets=local, intorder=intorder), nodes
