@@ -116,10 +116,11 @@ class Mesh:
 BYTES_PER_TRIANGLE = 4000
 #: The same per tetrahedron, for the method that needs least, the iterative one (no factor: the
 #: factorizations of the direct methods are checked before they are made, by PARDISO's analysis and
-#: the condensed method's guard). Measured (peak resident memory of the quarter ball's 11 steps,
-#: ``python benchmarks/scaling.py --dim 3 --method iterative``): 324k tetrahedra 1.73 GB, 954k
-#: tetrahedra 4.16 GB, i.e. 4.4–5.3 kB each.
-BYTES_PER_TETRAHEDRON = 5500
+#: the condensed method's guard). Measured (peak resident memory of the quarter ball's 10 steps, the whole
+#: process, ``python benchmarks/setup_phases.py --h H --steps 10``): 560k tetrahedra 1.67 GiB, 3.94M
+#: tetrahedra 10.9 GiB, i.e. 3.0–3.2 kB each (4.4–5.3 kB before the set-up kept no scikit-fem basis and
+#: mapping of the whole mesh).
+BYTES_PER_TETRAHEDRON = 3500
 
 
 def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
