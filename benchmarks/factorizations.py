@@ -53,14 +53,14 @@ def h_for_dofs(target: float) -> float:
 
 def build_matrix(h: float):
     """A0 (CSC, SPD), N (CSR, m × n) and the assembly time, exactly as the condensed solver sees them."""
-    from vpcontact.fem.assembly import displacement_basis, stiffness
+    from vpcontact.fem.assembly import displacement_space, stiffness
     from vpcontact.fem.contact_surface import contact_surface
     from vpcontact.laws.elasticity import Elasticity
     from vpcontact.mesh import half_disc
 
     t0 = time.perf_counter()
     m = half_disc(h)
-    basis = displacement_basis(m)
+    basis = displacement_space(m)
     A = stiffness(basis, Elasticity(1000.0, 0.3))
     free = np.setdiff1d(np.arange(basis.N), basis.nodal_dofs[0, m.nodes("axis")])  # roller on the axis
     surf = contact_surface(m, "bottom_arc", basis.nodal_dofs)

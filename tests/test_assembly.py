@@ -17,13 +17,16 @@ import pytest
 import scipy.sparse as sp
 from skfem import Basis, FacetBasis
 
+import vpcontact
+from vpcontact.errors import CaseError
 from vpcontact.fem import kernels
 from vpcontact.mesh import simplex
-from vpcontact.fem.assembly import LoadVector, displacement_basis, element_strain, stiffness, stress_force
+from vpcontact.fem.assembly import LoadVector, displacement_space, element_strain, stiffness, stress_force
 from vpcontact.laws.elasticity import Elasticity
 from vpcontact.mesh import block, half_disc, quarter_ball
 
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 sys.path.insert(0, str(BENCHMARKS))  # the benchmark imports its folder's modules, as when it runs as a script
 _spec = importlib.util.spec_from_file_location("assembly_benchmark", BENCHMARKS / "assembly.py")
 reference = importlib.util.module_from_spec(_spec)  # the scikit-fem forms vpcontact used before: the reference
@@ -44,7 +47,7 @@ def relative(new, old) -> float:
 @pytest.fixture(scope="module", params=list(MESHES))
 def mesh_and_basis(request):
     mesh = MESHES[request.param]()
-    return request.param, mesh, displacement_basis(mesh)
+    return request.param, mesh, displacement_space(mesh)
 
 
 def per_element(basis, low, high, seed=0):
@@ -55,7 +58,7 @@ def per_element(basis, low, high, seed=0):
 @pytest.mark.parametrize("varying", [False, True], ids=["one material", "E and nu per element"])
 def test_the_stiffness_is_scikit_fems_to_rounding(name, hypothesis, varying):
     mesh = MESHES[name]()
-    basis = displacement_basis(mesh)
+    basis = displacement_space(mesh)
     E, nu = (per_element(basis, 10.0, 5000.0), per_element(basis, -0.2, 0.45, 1)) if varying else (1000.0, 0.3)
     elasticity = Elasticity(E, nu, hypothesis)
     A = stiffness(basis, elasticity)
@@ -65,8 +68,16 @@ def test_the_stiffness_is_scikit_fems_to_rounding(name, hypothesis, varying):
     assert abs(A - A.T).max() <= 1e-13 * abs(A).max()
 
 
+def test_the_space_numbers_the_dofs_as_scikit_fems_basis(mesh_and_basis):
+    """The displacement space holds no basis values, and its dofs are those of scikit-fem's vector basis."""
+    _, mesh, space = mesh_and_basis
+    basis = reference.skfem_basis(space)
+    assert space.N == basis.N and space.nelems == basis.nelems
+    assert space.nodal_dofs.dtype == basis.nodal_dofs.dtype and np.array_equal(space.nodal_dofs, basis.nodal_dofs)
+
+
 def test_the_plane_hypothesis_changes_the_stiffness():
-    basis = displacement_basis(half_disc(0.3))
+    basis = displacement_space(half_disc(0.3))
     strain, stress = (stiffness(basis, Elasticity(1000.0, 0.3, h)) for h in ("plane_strain", "plane_stress"))
     assert relative(stress, strain) > 0.1
 
@@ -138,7 +149,7 @@ def test_the_load_on_chosen_dofs_is_the_load_vector_there_and_vanishes_off_its_s
 
 @pytest.mark.parametrize("make", [lambda: half_disc(0.2), lambda: quarter_ball(0.4)], ids=["2D", "3D"])
 def test_a_chunk_of_seven_elements_gives_the_same_matrix(make, monkeypatch):
-    basis = displacement_basis(make())
+    basis = displacement_space(make())
     elasticity = Elasticity(per_element(basis, 100.0, 200.0), 0.3, "plane_stress" if basis.mesh.dim() == 2 else None)
     whole = stiffness(basis, elasticity)
     monkeypatch.setattr(kernels, "CHUNK", 7)
@@ -149,7 +160,7 @@ def test_a_chunk_of_seven_elements_gives_the_same_matrix(make, monkeypatch):
 def test_the_stiffness_takes_the_bases_dof_numbering():
     """A basis whose dofs are not numbered d·node + c gets its matrix renumbered the same way."""
     mesh = quarter_ball(0.5)
-    basis = displacement_basis(mesh)
+    basis = displacement_space(mesh)
     g = kernels.geometry(basis)
     nodes = mesh.mesh.p.shape[1]
     interleaved = kernels.elastic_stiffness(g, 2.0, 3.0, nodes, basis.nodal_dofs)
@@ -163,7 +174,7 @@ def test_the_stiffness_of_many_elements_is_summed_in_bounded_memory(monkeypatch)
     """With chunks of 1,000 tetrahedra the assembly's peak allocation is a few times the matrix (its blocks
     and the CSR made of them), well below the 144 values, rows and columns per element that an assembly of
     all elements at once holds."""
-    basis = displacement_basis(quarter_ball(0.15))  # 12 · 10³ tetrahedra
+    basis = displacement_space(quarter_ball(0.15))  # 12 · 10³ tetrahedra
     g = kernels.geometry(basis)
     monkeypatch.setattr(kernels, "CHUNK", 1000)
     monkeypatch.setattr(kernels, "PATTERN_CHUNK", 1000)
@@ -176,6 +187,32 @@ def test_the_stiffness_of_many_elements_is_summed_in_bounded_memory(monkeypatch)
     all_at_once = 144 * basis.nelems * (8 + 8 + 8)
     matrix = A.data.nbytes + A.indices.nbytes + A.indptr.nbytes
     assert peak < all_at_once / 4 and peak < 3 * matrix, (peak, all_at_once, matrix)
+
+
+def test_the_memory_guard_counts_the_assembly_and_refuses_it_before_allocating(monkeypatch):
+    """The bytes the guard counts for the assembly are its peak allocation (tracemalloc), to 25 %; with less memory
+    available than that, the build refuses the mesh in one line naming the need and the memory available."""
+    mesh = quarter_ball(0.1)
+    basis = displacement_space(mesh)
+    g = kernels.geometry(basis)
+    blocks = kernels.node_pattern(g.cells, mesh.mesh.p.shape[1]).nnz
+    tracemalloc.start()
+    try:
+        kernels.elastic_stiffness(g, 2.0, 3.0, mesh.mesh.p.shape[1], basis.nodal_dofs)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    counted = kernels.assembly_bytes(blocks, 3, basis.nelems)
+    assert 0.8 * peak <= counted <= 1.25 * peak, (counted, peak)
+    monkeypatch.setattr(kernels, "available_memory", lambda: counted - 1)
+    with pytest.raises(CaseError) as refused:
+        vpcontact.build_problem(vpcontact.load_case(EXAMPLES / "quarter_ball.toml"))
+    message = str(refused.value)
+    assert "\n" not in message and "40,500 elements" in message and "to assemble" in message
+    assert f"{counted / 2**30:.3g} GiB" in message and "mesh.h" in message
+    monkeypatch.setattr(kernels, "available_memory", lambda: counted)
+    built = vpcontact.build_problem(vpcontact.load_case(EXAMPLES / "quarter_ball.toml"))  # just enough memory
+    assert relative(built.A, stiffness(basis, Elasticity(1000.0, 0.3, None))) == 0.0
 
 
 def test_a_flat_element_gives_gradients_that_are_not_finite():

@@ -1,9 +1,12 @@
 """The benchmark scripts run and their JSON holds what docs/performance.md reads from it."""
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
@@ -53,6 +56,23 @@ def test_the_assembly_benchmark_times_both_implementations_and_compares_them():
     assert abs(new["nonzeros"] - old["nonzeros"]) < 0.01 * old["nonzeros"]
     assert set(new["speedup"]) == set(stages) and new["peak_rss_ratio"] > 0
     assert all(difference <= 1e-13 for difference in new["relative_difference"].values()), new
+
+
+def test_the_setup_benchmark_times_the_phases_of_the_build_and_the_peaks():
+    done = subprocess.run([sys.executable, str(BENCHMARKS / "setup_phases.py"), "--quick", "--steps", "1"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    [record] = json.loads(done.stdout)
+    assert record["status"] == "complete" and record["cores"] == os.cpu_count() and record["processor"]
+    assert (record["dofs"], record["tetrahedra"], record["steps"]) == (1188, 1500, 1)  # h = 0.3: n = 5
+    phases = record["phases_s"]
+    assert set(phases) == {"mesh_tetrahedra", "mesh_wrap", "space", "stiffness", "loads", "contact_surface"}
+    assert all(seconds > 0 for seconds in phases.values())
+    assert phases["mesh_tetrahedra"] + phases["mesh_wrap"] <= record["mesh_s"]
+    assert record["mesh_s"] + record["assembly_s"] == pytest.approx(record["build_s"])
+    assert record["rest_of_build_s"] > 0 and record["build_s"] < record["process_s"]
+    assert 0 < record["build_peak_rss_mb"] <= record["run_peak_rss_mb"] and record["sampled_peak_rss_mb"] > 0
+    assert record["method"] == "iterative" and record["krylov_iterations"] > 0
 
 
 def test_the_targets_benchmark_measures_each_target_against_its_limit():

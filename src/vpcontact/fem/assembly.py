@@ -5,27 +5,28 @@
 - element strains ε(u) (constant on each element) and the nodal force Bᵀz of a P0 stress z.
 
 Triangles in 2D, tetrahedra in 3D: the element comes from the mesh, everything else is the same.
-scikit-fem gives the basis (the dof numbering) and the quadrature of the loads; the bulk operators
-are the vectorized kernels of kernels.py (the same matrices as scikit-fem's forms, to rounding, in a
-fraction of the time and memory), and each load term is one sparse map, built once, from the density
+The displacement space (space.py) numbers the dofs as scikit-fem does; scikit-fem gives the quadrature
+of the loads; the bulk operators are the vectorized kernels of kernels.py (the same matrices as
+scikit-fem's forms, to rounding, in a fraction of the time and memory), and each load term is one sparse map, built once, from the density
 at its quadrature points to the nodal loads.
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Basis, ElementTetP1, ElementTriP1, ElementVector, FacetBasis, MeshTet1
+from skfem import Basis
 from skfem.assembly.basis import AbstractBasis
 
 from ..errors import CaseError, point, quoted
 from ..expressions.parse import Expression
 from ..laws.elasticity import Elasticity
 from ..mesh.mesh import Mesh
+from .facet_basis import facet_basis
 from .kernels import elastic_stiffness, geometry, strains, stress_work
+from .space import DisplacementSpace
 from ..mesh.cells import coordinates
 
 #: A load density: f(x, y, t) -> (fx, fy) in 2D, f(x, y, z, t) -> (fx, fy, fz) in 3D, each an array
@@ -33,19 +34,12 @@ from ..mesh.cells import coordinates
 Density = Callable[..., tuple]
 
 
-def _centroid_rule(dim: int) -> tuple[np.ndarray, np.ndarray]:
-    """The centroid rule of the reference simplex: exact for the bulk forms of P1 × P0 (their
-    integrands are constant per element); its weight is the simplex's volume 1/d!."""
-    return np.full((dim, 1), 1.0 / (dim + 1)), np.array([1.0 / math.factorial(dim)])
+def displacement_space(mesh: Mesh) -> DisplacementSpace:
+    """The P1 vector space of ``mesh`` (dofs of node i: ``space.nodal_dofs[:, i]``)."""
+    return DisplacementSpace.of(mesh.mesh)
 
 
-def displacement_basis(mesh: Mesh) -> Basis:
-    """The P1 vector basis (dofs of node i: ``basis.nodal_dofs[:, i]``) with the centroid rule."""
-    element = ElementTetP1() if isinstance(mesh.mesh, MeshTet1) else ElementTriP1()
-    return Basis(mesh.mesh, ElementVector(element), quadrature=_centroid_rule(mesh.dim))
-
-
-def stiffness(basis: Basis, elasticity: Elasticity) -> sp.csr_matrix:
+def stiffness(basis: DisplacementSpace, elasticity: Elasticity) -> sp.csr_matrix:
     """The elastic stiffness matrix A_ij = (ℰε(φ_j), ε(φ_i))_Q; the Lamé parameters are numbers (one
     material) or arrays with one value per element (ℰ(x) of (2.16), constant on each element)."""
     lam, mu = elasticity.lame
@@ -90,8 +84,9 @@ class _Term:
     """One load density and where it is applied: the quadrature points of its facets or elements, and
     the map from the density's values there to the nodal loads of one component."""
 
-    def __init__(self, name: str, basis: AbstractBasis, density: Density):
-        """``basis``: the scalar P1 basis of the facets or elements with the load's quadrature."""
+    def __init__(self, name: str, basis: AbstractBasis, nodes: np.ndarray | None, density: Density):
+        """``basis``: the scalar P1 basis of the facets or elements with the load's quadrature; ``nodes``: the
+        mesh's nodes that its nodes are (None: the same numbers)."""
         self.points = np.asarray(basis.global_coordinates())  # (d, cells, points of a cell)
         self.names = coordinates(self.points.shape[0])
         self.signature = f"f({', '.join(self.names)}, t)"
@@ -100,6 +95,8 @@ class _Term:
             raise CaseError(f"{name} = {type(density).__name__}: expected a function {self.signature} -> {self.returns}")
         self.name, self.density = name, density
         self.nodes, self.map = _load_map(basis)
+        if nodes is not None:
+            self.nodes = nodes[self.nodes]
 
     def values(self, t: float, step: int | None = None) -> np.ndarray:
         """The density's components at the quadrature points at time t (of time step ``step``, if
@@ -206,7 +203,7 @@ class LoadVector:
     grid, ``F(t)`` at time t; both raise :class:`NonFiniteLoad` where a value is not finite.
     """
 
-    def __init__(self, basis: Basis, mesh: Mesh, tractions: list[tuple[str, object, Density]],
+    def __init__(self, basis: DisplacementSpace, mesh: Mesh, tractions: list[tuple[str, object, Density]],
                  body_forces: list[tuple[str, Density]]):
         """``tractions``: (name, part, density); ``body_forces``: (name, density); a name is the key of
         the density in messages, e.g. ``boundary.traction[0].value``."""
@@ -216,9 +213,9 @@ class LoadVector:
         #: residual of an error estimate (:mod:`vpcontact.estimate.residual`)
         self.tractions = [(mesh.facets(part), f) for _, part, f in tractions]
         self.body_forces = [f for _, f in body_forces]
-        self._terms = [_Term(name, FacetBasis(mesh.mesh, scalar, facets=mesh.facets(part), intorder=4), f)
+        self._terms = [_Term(name, *facet_basis(mesh.mesh, mesh.facets(part), scalar, 4), f)
                        for name, part, f in tractions]
-        self._terms += [_Term(name, Basis(mesh.mesh, scalar, intorder=4), f) for name, f in body_forces]
+        self._terms += [_Term(name, Basis(mesh.mesh, scalar, intorder=4), None, f) for name, f in body_forces]
         self._everywhere = self.on(np.arange(self._ndofs))
 
     def __call__(self, t: float) -> np.ndarray:
@@ -267,11 +264,11 @@ class LoadOnDofs:
         return F
 
 
-def element_strain(basis: Basis, u: np.ndarray) -> np.ndarray:
+def element_strain(basis: DisplacementSpace, u: np.ndarray) -> np.ndarray:
     """ε(u) on each element, shape (d, d, nelements) (constant for P1)."""
     return strains(geometry(basis), u)
 
 
-def stress_force(basis: Basis, z: np.ndarray) -> np.ndarray:
+def stress_force(basis: DisplacementSpace, z: np.ndarray) -> np.ndarray:
     """The nodal force Bᵀz = ∫_Ω z : ε(v) dx of a P0 stress field z of shape (d, d, nelements)."""
     return stress_work(geometry(basis), z)

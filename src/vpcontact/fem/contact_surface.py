@@ -13,11 +13,11 @@ from typing import Callable
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import FacetBasis
 
 from ..errors import CaseError, point, quoted
 from ..mesh.mesh import Mesh
 from ..mesh.cells import coordinates as coordinates_names
+from .facet_basis import facet_basis
 
 
 @dataclass(frozen=True)
@@ -64,7 +64,7 @@ def contact_surface(mesh: Mesh, parts, nodal_dofs: np.ndarray, gap=None, directi
     parts = list(parts) if isinstance(parts, (list, tuple)) else [parts]
     gaps = list(gap) if isinstance(gap, (list, tuple)) else [gap] * len(parts)
     facets = _union_of_parts(mesh, parts)
-    geometry = FacetBasis(skmesh, skmesh.elem(), facets=facets, intorder=1)
+    geometry, _ = facet_basis(skmesh, facets, skmesh.elem(), 1)
     measure = geometry.dx.sum(axis=1)  # (nf,)
     outward = geometry.normals[:, :, 0]  # (d, nf): constant on a flat facet
     corners = skmesh.facets[:, facets]  # (d, nf)

@@ -21,6 +21,7 @@ from .checks import check_finite
 from .checks_2d import check_triangles
 from .checks_3d import check_tetrahedra
 from .checks_arrays import SKFEM_MESH
+from .facets import with_facet_tables
 from .mesh import Mesh, check_memory, with_parts
 
 
@@ -59,7 +60,7 @@ def mesh_from_cells(label: str, data, names: list[tuple[int, int, str]], file: s
     else:
         check_tetrahedra(label, points, t, used + first, position)
 
-    mesh = SKFEM_MESH[dim](np.ascontiguousarray(points), np.ascontiguousarray(t))
+    mesh = with_facet_tables(SKFEM_MESH[dim](np.ascontiguousarray(points), np.ascontiguousarray(t)))
     parts = physical_groups.parts(label, mesh, data, names, renumber, dim, internal)
     return Mesh(with_parts(mesh, parts), parts, {}, file, physical_groups.regions(label, names, dim, members, internal))
 

@@ -27,6 +27,7 @@ from ..errors import CaseError, shown
 from ..memory import available_memory
 from .cells import SIMPLICES
 from .checks_arrays import check_mesh
+from .facets import ELEMENT_FACETS, FACET_ELEMENTS, FACETS
 from .simplex import longest_edges
 
 NormalField = Callable[[np.ndarray], np.ndarray]
@@ -115,10 +116,11 @@ class Mesh:
 BYTES_PER_TRIANGLE = 4000
 #: The same per tetrahedron, for the method that needs least, the iterative one (no factor: the
 #: factorizations of the direct methods are checked before they are made, by PARDISO's analysis and
-#: the condensed method's guard). Measured (peak resident memory of the quarter ball's 11 steps,
-#: ``python benchmarks/scaling.py --dim 3 --method iterative``): 324k tetrahedra 1.73 GB, 954k
-#: tetrahedra 4.16 GB, i.e. 4.4–5.3 kB each.
-BYTES_PER_TETRAHEDRON = 5500
+#: the condensed method's guard). Measured (peak resident memory of the quarter ball's 10 steps, the whole
+#: process, ``python benchmarks/setup_phases.py --h H --steps 10``): 560k tetrahedra 1.67 GiB, 3.94M
+#: tetrahedra 10.9 GiB, i.e. 3.0–3.2 kB each (4.4–5.3 kB before the set-up kept no scikit-fem basis and
+#: mapping of the whole mesh).
+BYTES_PER_TETRAHEDRON = 3500
 
 
 def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
@@ -137,7 +139,7 @@ def check_memory(elements: float, what: str, fix: str, dim: int = 2) -> None:
 
 #: scikit-fem's tables of a mesh's facets (the facets, element to facets, facet to elements), attributes it
 #: builds on first use and that depend only on the elements.
-FACET_TABLES = ("_facets", "_t2f", "_f2t")
+FACET_TABLES = (FACETS, ELEMENT_FACETS, FACET_ELEMENTS)
 
 
 def with_parts(mesh, parts: dict[str, np.ndarray], built=None):

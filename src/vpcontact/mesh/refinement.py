@@ -25,6 +25,7 @@ import numpy as np
 from ..errors import CaseError, point
 from .ball import quiet_bisection
 from .checks_arrays import SKFEM_MESH
+from .facets import with_facet_tables
 from .locate import Locator, find_columns
 from .mesh import Mesh, with_parts
 from .simplex import determinants
@@ -41,7 +42,7 @@ def refine(mesh: Mesh, marked) -> Mesh:
         return mesh
     kind = SKFEM_MESH[mesh.dim]
     with quiet_bisection():
-        fine = kind(old.p, old.t).refined(marked)
+        fine = with_facet_tables(kind(old.p, old.t).refined(marked))
     locator = Locator(old.p, old.t)
     parent, _ = locator.locate(fine.p[:, fine.t].mean(axis=1).T)
     boundary = fine.boundary_facets().astype(np.int64)

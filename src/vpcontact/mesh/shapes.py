@@ -19,6 +19,7 @@ import skfem
 from ..errors import CaseError, shown
 from . import ball, disc
 from .checks_arrays import SKFEM_MESH
+from .facets import with_facet_tables
 from .mesh import ConstantNormal, Mesh, NormalField, Projection, RadialNormal, check_memory, onto_sphere, with_parts
 from .simplex import determinants
 
@@ -44,7 +45,7 @@ def _wrap(p: np.ndarray, t: np.ndarray, classify: Callable[[np.ndarray], dict[st
     `classify(centroids (d, k))` returns part name -> boolean mask over the k boundary
     facets; the masks must partition the boundary (checked).
     """
-    mesh = SKFEM_MESH[p.shape[0]](np.ascontiguousarray(p), np.ascontiguousarray(t))
+    mesh = with_facet_tables(SKFEM_MESH[p.shape[0]](np.ascontiguousarray(p), np.ascontiguousarray(t)))
     boundary = mesh.boundary_facets().astype(np.int64)
     masks = classify(mesh.p[:, mesh.facets[:, boundary]].mean(axis=1))
     if not np.array_equal(np.sum(list(masks.values()), axis=0), np.ones(boundary.size)):

@@ -14,13 +14,13 @@ from typing import Callable
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Basis
 
 from .. import mesh as meshes
 from ..errors import CaseError, brief
 from ..expressions.parse import parse_expression
-from ..fem.assembly import Density, LoadVector, displacement_basis, element_strain, stiffness
+from ..fem.assembly import Density, LoadVector, displacement_space, element_strain, stiffness
 from ..fem.contact_surface import ContactSurface, contact_surface, empty_surface
+from ..fem.space import DisplacementSpace
 from ..laws.compliance.positive_part import PositivePart
 from ..laws.contact import ContactLaw
 from ..laws.stiffness.constant import ConstantStiffness
@@ -50,7 +50,7 @@ class Problem:
     options: ProblemOptions
     objects: dict  # the keyword arguments of build_problem that replace parts of the options
     mesh: meshes.Mesh
-    basis: Basis
+    basis: DisplacementSpace
     materials: Materials  # the material of each element, ℰ per element and the case's 𝒢
     A: sp.csr_matrix  # the elastic stiffness on all dofs
     free: np.ndarray  # dofs not held by Dirichlet conditions
@@ -196,7 +196,7 @@ def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tra
     check_dimension(options, dim)
     materials = body_materials(options.materials, mesh)
     with np.errstate(all="ignore"):  # a stiffness that is not finite is reported below
-        basis = displacement_basis(mesh)
+        basis = displacement_space(mesh)
         A = stiffness(basis, materials.elasticity)
     if not np.all(np.isfinite(A.data)):
         moduli = ", ".join(f"{entry.key}.E = {brief(entry.E)}" for entry in options.materials)

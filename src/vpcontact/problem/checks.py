@@ -8,7 +8,6 @@ from typing import Callable
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Basis
 
 from ..errors import CaseError, brief, point, quoted
 from ..expressions.parse import parse_expression
@@ -16,6 +15,7 @@ from ..fem.assembly import stress_force
 from ..fem.rigid_modes import RigidModes
 from ..mesh.cells import coordinates
 from ..fem.contact_surface import ContactSurface
+from ..fem.space import DisplacementSpace
 from ..laws.python_laws import check_returned, tried
 from ..mesh.mesh import Mesh
 from .free_motions import free_motions_in_words
@@ -74,7 +74,8 @@ def check_dimension(options: ProblemOptions, dim: int) -> None:
                             f"are {', '.join(names)}")
 
 
-def check_contact_can_move(constraints: DirichletConditions, mesh: Mesh, basis: Basis, surface: ContactSurface):
+def check_contact_can_move(constraints: DirichletConditions, mesh: Mesh, basis: DisplacementSpace,
+                           surface: ContactSurface):
     """Refuse a contact part on which the Dirichlet conditions leave no node free to move along its
     normal: its contact force would be 0 (or fixed) whatever the load. (A few clamped nodes, such as
     the corners the contact part shares with a clamped part, are fine.)"""
@@ -98,7 +99,7 @@ def check_contact_can_move(constraints: DirichletConditions, mesh: Mesh, basis: 
                     f"from boundary.dirichlet or fix only components along the contact surface")
 
 
-def check_rigid_motions(mesh: Mesh, basis: Basis, free: np.ndarray, surface: ContactSurface):
+def check_rigid_motions(mesh: Mesh, basis: DisplacementSpace, free: np.ndarray, surface: ContactSurface):
     """Refuse a body, or a separate part of the mesh, whose rigid motions are held neither by
     Dirichlet conditions nor by contact: the motions of each connected part (the d translations and
     the rotations about its centroid scaled by its size, :mod:`vpcontact.fem.rigid_modes`) must stay
@@ -138,7 +139,7 @@ def _point(x: np.ndarray, digits: int = 6) -> str:
     return point(np.round(x, 12), digits)
 
 
-def check_first_history(basis: Basis, initial: InitialState, written, strain0: np.ndarray, z0: np.ndarray,
+def check_first_history(basis: DisplacementSpace, initial: InitialState, written, strain0: np.ndarray, z0: np.ndarray,
                         G: Callable | None, law_name: str, k: float) -> None:
     """Refuse initial data whose first step cannot be finite: 𝒢(σ_0, ε(u_0)) (of the shape of σ, finite),
     the history z_1 = σ_0 − ℰε(u_0) + k 𝒢(σ_0, ε(u_0)) of (2.28) and its nodal forces Bᵀz_1 in the

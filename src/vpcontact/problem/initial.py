@@ -27,11 +27,11 @@ import zlib
 from dataclasses import dataclass
 
 import numpy as np
-from skfem import Basis
 
 from ..errors import CaseError, brief, point, quoted
 from ..expressions.parse import values_at
 from ..fem.contact_surface import ContactSurface
+from ..fem.space import DisplacementSpace
 from ..inputs import check_regular_file
 from ..laws.contact import ContactLaw
 from ..mesh.mesh import Mesh
@@ -59,7 +59,7 @@ class InitialState:
         return (f"InitialState(displacement{self.displacement.shape}, stress{self.stress.shape}, xi{self.xi.shape}, "
                 f"start={self.start!r})")
 
-    def dofs(self, basis: Basis) -> np.ndarray:
+    def dofs(self, basis: DisplacementSpace) -> np.ndarray:
         """u_0 as a vector of the basis' dofs."""
         u = np.zeros(basis.N)
         u[basis.nodal_dofs] = self.displacement.T
@@ -81,8 +81,8 @@ class RunState:
     time: float
 
 
-def initial_state(options: ProblemOptions, mesh: Mesh, basis: Basis, surface: ContactSurface, law: ContactLaw,
-                  constraints: DirichletConditions, *, displacement=None, stress=None, xi=None) -> InitialState:
+def initial_state(options: ProblemOptions, mesh: Mesh, basis: DisplacementSpace, surface: ContactSurface,
+                  law: ContactLaw, constraints: DirichletConditions, *, displacement=None, stress=None, xi=None) -> InitialState:
     """The checked initial state of ``options`` (see the module's docstring) held by ``constraints``;
     ``displacement``, ``stress``, ``xi``: arrays of the API that replace the case's."""
     d, nodes, elements = mesh.dim, mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
@@ -239,8 +239,8 @@ def _check_dirichlet(state: InitialState, constraints: DirichletConditions, mesh
             u[entry.nodes, c] = expected
 
 
-def _check_admissible(state: InitialState, options: ProblemOptions, mesh: Mesh, basis: Basis, surface: ContactSurface,
-                      law: ContactLaw) -> None:
+def _check_admissible(state: InitialState, options: ProblemOptions, mesh: Mesh, basis: DisplacementSpace,
+                      surface: ContactSurface, law: ContactLaw) -> None:
     """u_0·ν − g0 ≤ g at every contact node (to the complementarity tolerance of the solver)."""
     if surface.size == 0 or not state.moves:
         return

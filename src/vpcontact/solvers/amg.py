@@ -114,6 +114,7 @@ class AMGConjugateGradient:
         """Record the matrix (and rebuild the hierarchy on it if the last solve found it stale); find
         its unknowns reduced to their diagonal entry."""
         if self.stale:
+            self._A = None  # the earlier Newton matrix is not kept while the hierarchy is built
             self.analyse(A)
         self._A = sp.csr_matrix(A)
         diagonal = self._A.diagonal()

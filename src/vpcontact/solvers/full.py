@@ -45,9 +45,7 @@ class FullNewton(SemismoothNewton):
         self._expected = f"; expected: {duration(expected_seconds)}" if expected_seconds is not None else ""
         started = time.perf_counter()
         self.A, self.N, self.gap0, self.Z = A, N.tocsr(), gap0, rigid
-        # |A| and |N| for the rounding level of the residual; |A| shares A's index arrays
-        self._A_abs = sp.csr_matrix((np.abs(A.data), A.indices, A.indptr), shape=A.shape)
-        self._N_abs = abs(self.N)
+        self._N_abs = abs(self.N)  # for the rounding level of the residual (|A|'s products: absolute_product)
         self.frame = NormalFrame(self.N)
         self.rotated = self.frame.rotate(A)  # Q A Q
         framed = time.perf_counter()
@@ -94,7 +92,8 @@ class FullNewton(SemismoothNewton):
         R_u = self.A @ (u - self.Z @ (self.Z.T @ u)) + contact - step.b
         scale = max(step.b_norm, norm(contact))
         scale = scale if scale > 0 else 1.0
-        magnitudes = self._A_abs @ np.abs(u) + self._N_abs.T @ (np.abs(state.force) + np.abs(lam)) + np.abs(step.b)
+        magnitudes = (absolute_product(self.A, np.abs(u)) + self._N_abs.T @ (np.abs(state.force) + np.abs(lam))
+                      + np.abs(step.b))
         return Evaluation(d, lam, state, np.concatenate([R_u, state.C]), np.linalg.norm(R_u) / scale,
                           self.complementarity(state), ROUNDOFF * np.linalg.norm(magnitudes) / scale,
                           np.linalg.norm(self.Z.T @ R_u) / scale)
@@ -145,6 +144,23 @@ class FullNewton(SemismoothNewton):
     def rigid_coordinates(self, step: StepData, solution: StepSolution) -> np.ndarray:
         """Zᵀu: the coordinates of the solution's displacement on the rigid motions held only by contact."""
         return self.Z.T @ solution.u
+
+
+#: Rows of |A| made at once by absolute_product.
+ABSOLUTE_ROWS = 2**16
+
+
+def absolute_product(A: sp.csr_matrix, x: np.ndarray) -> np.ndarray:
+    """|A| x, with |A| the entrywise absolute value of A, made ABSOLUTE_ROWS rows at a time: never held whole (it
+    would be two thirds of A's memory for the whole run), the same numbers as the product with |A| held."""
+    y = np.empty(A.shape[0])
+    for start in range(0, A.shape[0], ABSOLUTE_ROWS):
+        stop = min(start + ABSOLUTE_ROWS, A.shape[0])
+        first, last = A.indptr[start], A.indptr[stop]
+        rows = sp.csr_matrix((np.abs(A.data[first:last]), A.indices[first:last], A.indptr[start:stop + 1] - first),
+                             shape=(stop - start, A.shape[1]))
+        y[start:stop] = rows @ x
+    return y
 
 
 #: The inexact Newton method's forcing: the linear residual is at most this fraction of the nonlinear
