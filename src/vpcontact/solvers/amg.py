@@ -127,8 +127,8 @@ class AMGConjugateGradient:
         z = self._cycle.matvec(embedded)[self.free]
         return np.where(self._decoupled, self._decoupled_inverse * r, z)
 
-    def solve(self, b: np.ndarray, rtol: float = 1e-10) -> np.ndarray:
-        """A x = b by preconditioned CG from x = 0, to ‖A x − b‖ ≤ rtol ‖b‖."""
+    def solve(self, b: np.ndarray, rtol: float = 1e-10, start: np.ndarray | None = None) -> np.ndarray:
+        """A x = b by preconditioned CG from ``start`` (None: x = 0), to ‖A x − b‖ ≤ rtol ‖b‖."""
         n = b.size
         count = [0]
 
@@ -136,7 +136,8 @@ class AMGConjugateGradient:
             count[0] += 1
 
         preconditioner = spla.LinearOperator((n, n), matvec=self._precondition, dtype=float)
-        x, info = spla.cg(self._A, b, rtol=rtol, atol=0.0, M=preconditioner, maxiter=MAX_ITERATIONS, callback=counted)
+        x, info = spla.cg(self._A, b, x0=start, rtol=rtol, atol=0.0, M=preconditioner, maxiter=MAX_ITERATIONS,
+                          callback=counted)
         self.iterations += count[0]
         self.most_iterations = max(self.most_iterations, count[0])
         self.stale = count[0] > REBUILD_AFTER

@@ -6,6 +6,7 @@ the full-system methods.
                                   symbolic factorization, or an AMG hierarchy
     solver.factor(A)              the work that depends on A's values (A has the analysed pattern)
     x = solver.solve(b, rtol)     A x = b; iterative backends stop at ‖A x − b‖ ≤ rtol ‖b‖
+    x = solver.solve(b, rtol, start)   the iterative backends: CG from ``start`` instead of x = 0
     solver.iterations             Krylov iterations of all solves so far (0 for a direct backend)
     solver.factorizations         numeric factorizations so far (0 for the iterative backend)
 

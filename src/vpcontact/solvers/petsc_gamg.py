@@ -233,12 +233,16 @@ class GAMGConjugateGradient:
         self._gamg.apply(self._masked, z)
         z.array[self._decoupled] = self._decoupled_inverse * residual[self._decoupled]
 
-    def solve(self, b: np.ndarray, rtol: float = 1e-10) -> np.ndarray:
-        """A x = b by preconditioned CG from x = 0, to ‖A x − b‖ ≤ rtol ‖b‖."""
+    def solve(self, b: np.ndarray, rtol: float = 1e-10, start: np.ndarray | None = None) -> np.ndarray:
+        """A x = b by preconditioned CG from ``start`` (None: x = 0), to ‖A x − b‖ ≤ rtol ‖b‖."""
         if not np.any(b):
             return np.zeros_like(b)
         self._b.array[:] = 0.0
         self._b.array[self.free] = b
+        self._x.array[:] = 0.0  # the Dirichlet rows' solution, and the start where none is given
+        if start is not None:
+            self._x.array[self.free] = start
+        self._ksp.setInitialGuessNonzero(start is not None)
         self._ksp.setTolerances(rtol=rtol, atol=0.0, divtol=np.inf, max_it=MAX_ITERATIONS)
         self._ksp.solve(self._b, self._x)
         count = self._ksp.getIterationNumber()
