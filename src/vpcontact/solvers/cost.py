@@ -51,8 +51,9 @@ DENSE_SPEED = 1.8
 #: Passes over A (products with A) that one CG iteration preconditioned by pyamg's V-cycle costs, with the
 #: Newton iteration's own work per CG iteration.
 CG_PASSES = 25.0
-#: CG iterations per Newton iteration (7.4–8.8 on the quarter ball from 71k to 2M dofs).
-CG_PER_NEWTON = 8.0
+#: CG iterations per Newton iteration, CG started along the last correction (:mod:`.full`): 5.5–6.1 on the quarter
+#: ball at 24k, 71k and 300k dofs and on the punch at 30k (7.4–8.8 from zero, 71k to 2M dofs).
+CG_PER_NEWTON = 6.0
 #: Products with A that the multigrid set-up costs.
 AMG_SETUP_PASSES = 700.0
 
@@ -86,9 +87,10 @@ STEP_OVERHEAD_S = 1.5e-3
 #: Bytes per stored entry of the stiffness matrix that the iterative method holds at its peak: the
 #: stiffness, its absolute value, the rotated matrix and the Newton matrix (CSR: 12 bytes an entry
 #: each), the multigrid hierarchy in nodal blocks and its construction's temporaries. Measured peak
-#: resident memory over nnz(A) on the quarter ball: 114–116 bytes per entry beyond the problem's own
-#: memory at 0.5M–2M dofs (docs/performance.md).
-ITERATIVE_BYTES_PER_ENTRY = 120
+#: resident memory over nnz(A) on the quarter ball: about 95 bytes per entry beyond the problem's own memory at
+#: 300k and 2M dofs, since |A| is made a block of rows at a time and the earlier Newton matrix is released
+#: before a hierarchy is built again (114–116 before; docs/performance.md, "Set-up that keeps up").
+ITERATIVE_BYTES_PER_ENTRY = 100
 
 
 def iterative_memory(A: sp.spmatrix) -> int:
