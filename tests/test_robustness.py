@@ -270,8 +270,8 @@ def test_a_cut_step_is_the_same_scheme_on_a_finer_grid(monkeypatch):
     for case in (coarse, fine):
         case["output"] = {"field_steps": "final"}
     uniform = vpcontact.solve(fine)
-    make_solver = vpcontact.timeloop.loop.make_solver
-    monkeypatch.setattr(vpcontact.timeloop.loop, "make_solver",
+    make_solver = vpcontact.timeloop.method.make_solver
+    monkeypatch.setattr(vpcontact.timeloop.method, "make_solver",
                         lambda *args, **kw: RefusesWholeSteps(make_solver(*args, **kw), 2.0 / 20))
     cut = vpcontact.solve(coarse)
     assert cut.status == "complete" and cut.steps == 20 and cut.step_cuts == 20 and len(cut.rows) == 40

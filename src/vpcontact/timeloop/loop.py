@@ -27,9 +27,8 @@ solver's kept state, the counters of work and the result so far it is the loop's
 (``TimeLoop.snapshot``, :class:`~vpcontact.timeloop.snapshot.LoopSnapshot`), all a checkpoint needs:
 ``TimeLoop.restore`` continues from one as if the loop had never stopped.
 
-With ``solver.method = "auto"`` the methods are weighed again after each step from the work the running one has
-counted (:mod:`vpcontact.solvers.switch`); a switch (at most one a run) hands the loop's state, unchanged, to the new
-step solver (``TimeLoop._switch_to``), and a checkpoint records it.
+The step solver is the run's :class:`~vpcontact.timeloop.method.RunMethod`'s: under ``solver.method = "auto"`` it
+may switch once after a step, the loop's state unchanged (:mod:`vpcontact.solvers.switch`).
 
 With ``output.error_estimate`` the fields are computed at every level and the estimator of every level
 (:data:`~vpcontact.estimate.estimators.EVERY_LEVEL`, the residual one) adds η(t) and its terms to the level's history
@@ -39,7 +38,7 @@ row and η_K to its fields.
 from __future__ import annotations
 
 import time as clock
-from dataclasses import asdict, replace
+from dataclasses import asdict
 from typing import Callable
 
 import numpy as np
@@ -55,14 +54,13 @@ from ..estimate.estimators import ESTIMATORS, EVERY_LEVEL
 from ..results.output_options import OutputOptions
 from ..results.result import Fields, Result
 from ..fem.rigid_modes import RigidModes
-from ..solvers import DofLayout, SolverWork, StepData, StepSolution, make_solver
+from ..solvers import DofLayout, SolverWork, StepData, StepSolution
 from ..solvers.errors import NotConvergedError, SingularMatrixError
-from ..errors import CaseError
-from ..solvers.switch import MethodWeighing, Switch
 from .checks import LawShapeError, failure_message, history_failure, invalid_law, pulled_off, viscoplastic_rate
+from .method import RunMethod
 from .plan import free_operators, plan_run
 from .reactions import Reactions
-from .resting import FreeMotions, room
+from .resting import FreeMotions
 from .snapshot import LoopSnapshot
 from .state import Attempt, LoopState, Trend
 
@@ -96,19 +94,7 @@ class TimeLoop:
         rigid = modes.free_basis(free)
         self.motions = FreeMotions(rigid, surface.operator[:, free] @ rigid, surface.weights, options.tolerance)
 
-        def solver_of(method: str, reason: str):
-            return make_solver(method, A, N, surface.weights, surface.gap0, r=plan.augmentation, reason=reason,
-                               rigid=rigid, tolerance=options.tolerance, max_iterations=options.max_iterations,
-                               length_scale=problem.mesh.diameter, factorization=options.factorization,
-                               multigrid=options.multigrid, layout=layout, progress=progress,
-                               expected_seconds=plan.predicted[method]["setup_s"])
-
-        self._solver_of = solver_of
-        self.solver = solver_of(plan.method, plan.method_reason)
-        #: "auto" weighs the methods again after each step (:mod:`vpcontact.solvers.switch`) until it switches once
-        self.weighing = (MethodWeighing(A, N, mesh.dim(), plan.history, len(problem.times), plan.factor,
-                                        plan.multigrid) if options.method == "auto" else None)
-        self.switch: Switch | None = None
+        self.method = RunMethod(problem, plan, A, N, layout, rigid, progress)
         self.max_cuts = options.max_step_cuts
         constraints = problem.constraints
         #: A_fh, the coupling of the free and the held dofs: b = F_f − Bᵀz − A_fh u_D(t) (prescribed displacements)
@@ -129,8 +115,6 @@ class TimeLoop:
         self._created = started
         self.setup_time = clock.perf_counter() - started
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
-        self.earlier_work = SolverWork()  # the work of earlier sessions (resumed) and of a method switched from
-        self._switch_seconds: float | None = None  # the set-up of the method switched to, in this session
         self.state = LoopState.initial(problem, rigid)
         # (u, ε, σ, z) of the last level when its Fields were not built (a viscoplastic body
         # computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
@@ -173,7 +157,8 @@ class TimeLoop:
         now = clock.perf_counter()
         for name, count in asdict(self.work()).items():
             setattr(result, name, count)
-        switching = {"method_switch": self._switch_seconds} if self._switch_seconds is not None else {}
+        seconds = self.method.switch_seconds
+        switching = {"method_switch": seconds} if seconds is not None else {}
         result.finish({**problem.timings, **self.solver.timings, **switching, "time_loop": now - started,
                        "total": problem.timings["build"] + self.setup_time + now - started,
                        **({"earlier_sessions": self.earlier_time} if result.resumed_at else {})})
@@ -190,7 +175,7 @@ class TimeLoop:
 
     def work(self) -> SolverWork:
         """The step solver's work in the run so far, earlier sessions included (summary.json reports it)."""
-        return self.earlier_work + self.solver.work()
+        return self.method.work()
 
     def elapsed(self) -> float:
         """Wall time of the run so far, earlier sessions included (seconds)."""
@@ -205,7 +190,7 @@ class TimeLoop:
         arrays = {**self.state.arrays(self.rigid_position()), **result.arrays(), "solver_method": np.array(solver.name),
                   **{f"solver_{key}": value for key, value in solver.kept().items()}}
         meta = {"field_steps": sorted(result.fields), "step_cuts": result.step_cuts,
-                "method_switch": None if self.switch is None else self.switch.as_dict(),
+                "method_switch": None if self.method.switch is None else self.method.switch.as_dict(),
                 "resumed_at": list(result.resumed_at), "elapsed_s": self.elapsed(), **asdict(self.work())}
         return LoopSnapshot(arrays, meta, result.field_arrays())
 
@@ -222,50 +207,27 @@ class TimeLoop:
             self.solver.restore({key[7:]: value for key, value in arrays.items()
                                  if key.startswith("solver_") and key != "solver_method"})
         self.earlier_time = float(meta["elapsed_s"])
-        self.earlier_work = SolverWork.from_counts(meta)
+        self.method.restore(meta)
         self._newton = sum(row["newton_iterations"] for row in self.result.rows)
-        if meta.get("method_switch") is not None:
-            self.switch = Switch.from_dict(meta["method_switch"])
-            self.result.method_switch = self.switch.as_dict()
+        if self.method.switch is not None:
+            self.result.method_switch = self.method.switch.as_dict()
         if self.motions.held_by_contact_only:
             self.motions.recall(self.result.contact)
 
-    def _weigh(self, n: int) -> None:
-        """After step n of a run of ``solver.method = "auto"``: switch method if the work done so far says another
-        one will finish clearly sooner (:mod:`vpcontact.solvers.switch`; at most once a run)."""
-        if self.weighing is None or self.switch is not None:
-            return
-        switch = self.weighing.consider(self.solver.name, n, self.work(), self._newton)
-        if switch is not None:
-            self._switch_to(switch)
+    @property
+    def solver(self):
+        """The step solver running (:class:`~vpcontact.timeloop.method.RunMethod`: the plan's, or the one switched to)."""
+        return self.method.solver
 
-    def _switch_to(self, switch: Switch) -> None:
-        """Continue with the method ``switch`` names: the last level's solution is completed with its displacement
-        (the condensed method's solution has none: one solve with its factor) so that every method can start from
-        it; the old solver's work joins the earlier work, and the old solver is released once the new one is set
-        up. ξ, z and the result so far are the loop's, not the solver's: the history goes on unchanged. A method that
-        cannot be set up after all (CaseError: a factor that does not fit) leaves the old one running, and the
-        methods are not weighed again."""
-        started = clock.perf_counter()
-        self.progress.note(f"switching to the {switch.after} method: {switch.reason}")
-        try:  # made while the old one still exists: the switch was weighed with its memory in use
-            solver = self._solver_of(switch.after, f"solver.method = \"auto\", switched: {switch.reason}")
-        except CaseError as error:
-            self.progress.note(f"the {switch.after} method cannot be set up ({error}): the {switch.before} method "
-                               f"goes on")
-            self.weighing = None
+    def _weigh(self, n: int) -> None:
+        """After step n: under ``solver.method = "auto"``, the switch of method the work done calls for
+        (:class:`~vpcontact.timeloop.method.RunMethod`), and what depends on the step solver made again."""
+        if not self.method.weigh(n, self._newton, self.state):
             return
-        state = self.state
-        if state.previous is not None and state.previous.u is None:
-            state.previous = replace(state.previous, u=self.solver.displacement(state.step_problem, state.previous))
-        self.earlier_work = self.earlier_work + self.solver.work()
-        self.solver = solver
         if self.reactions.M is not None:
             self._functionals = self.solver.functionals(self.reactions.M)
-        self.switch = switch
         self.result.method, self.result.method_reason = self.solver.name, self.solver.reason
-        self.result.method_switch = switch.as_dict()
-        self._switch_seconds = clock.perf_counter() - started
+        self.result.method_switch = self.method.switch.as_dict()
 
     def _advance(self, n: int, t: float, h: float, cuts: int) -> str | None:
         """Reach time t of step n from the current level by one step of length h, or by two halves if
@@ -405,17 +367,9 @@ class TimeLoop:
         message instead when no such place exists (a node that no free motion moves, beyond its room)."""
         if self.motions.pressed(attempt.solution, compliance):
             return attempt, None
-        before = self.rigid_position()
         now = self.solver.rigid_coordinates(attempt.step, attempt.solution)
-        allowance = self.motions.tolerance * self.problem.mesh.diameter  # the complementarity Newton allows
-        placed = self.motions.place(attempt.solution, before, now, room(attempt.step), allowance)
-        if placed is None:
-            return attempt, (f"step {n} (t = {self.problem.times[n - 1]:g}) failed: at t = {attempt.t:.10g} no "
-                             f"contact node carries a force, the Dirichlet conditions leave a rigid motion of the body "
-                             f"free, and no such motion takes every contact node off the layer: hold that motion with "
-                             f"boundary.dirichlet entries")
-        solution, place = placed
-        return replace(attempt, solution=solution, rigid=place), None
+        return self.motions.rest(attempt, self.rigid_position(), now, self.problem.mesh.diameter,
+                                 f"step {n} (t = {self.problem.times[n - 1]:g})")
 
     def rigid_position(self) -> np.ndarray:
         """Zᵀu at the last level: the coordinates of the body's displacement on the rigid motions held only by

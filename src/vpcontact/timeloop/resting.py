@@ -154,6 +154,18 @@ class FreeMotions:
         rigid = np.divide(solution.lam, w, out=np.zeros_like(w), where=w > 0)
         return bool(np.max(compliance + rigid, initial=0.0) > self.tolerance * self.largest_pressure)
 
+    def rest(self, attempt, before: np.ndarray, now: np.ndarray, length: float, step: str):
+        """(The attempt of a level that nothing presses placed by :meth:`place` (its ``rigid`` the new position),
+        within the complementarity Newton allows, ``tolerance`` × ``length``, the body's size; None), or (the attempt,
+        the failure's message) when no place exists; ``step`` names the step ("step n (t = t_n)")."""
+        placed = self.place(attempt.solution, before, now, room(attempt.step), self.tolerance * length)
+        if placed is None:
+            return attempt, (f"{step} failed: at t = {attempt.t:.10g} no contact node carries a force, the Dirichlet "
+                             f"conditions leave a rigid motion of the body free, and no such motion takes every "
+                             f"contact node off the layer: hold that motion with boundary.dirichlet entries")
+        solution, place = placed
+        return replace(attempt, solution=solution, rigid=place), None
+
     def place(self, solution: StepSolution, before: np.ndarray, now: np.ndarray, room: np.ndarray,
               allowance: float) -> tuple[StepSolution, np.ndarray] | None:
         """A level that nothing presses on the foundation, placed where its body changes least from the last
