@@ -126,3 +126,14 @@ def resumed_after(case, step: int, folder):
     second = TimeLoop(build_problem(case), output_options(case.output))
     assert checkpoint.restore(second, folder) == step
     return second
+
+
+def require_gmsh() -> None:
+    """Skip the calling test where gmsh's Python module is missing or its library does not load (a machine
+    without its system libraries): the scripts that mesh with gmsh cannot run there."""
+    gmsh = pytest.importorskip("gmsh")
+    try:
+        gmsh.initialize(interruptible=False)
+        gmsh.finalize()
+    except OSError:
+        pytest.skip("gmsh's library does not load here")

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import require_gmsh
 
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
@@ -123,14 +124,7 @@ def test_the_ladder_runs_each_method_and_auto_picks_the_one_its_cost_model_predi
     """benchmarks/ladder.py --quick: the gmsh punch (skipped without gmsh's library) at 7k dofs, condensed and
     iterative each in a fresh process, and auto run for real (``--auto-runs``); every run records its plan's
     prediction, and auto runs the method its own prediction puts first (3 steps: too few to weigh a switch)."""
-    import pytest
-
-    gmsh = pytest.importorskip("gmsh")
-    try:
-        gmsh.initialize(interruptible=False)
-        gmsh.finalize()
-    except OSError:
-        pytest.skip("gmsh's library does not load here")
+    require_gmsh()
     done = subprocess.run([sys.executable, str(BENCHMARKS / "ladder.py"), "--quick", "--auto-runs"],
                           capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr

@@ -14,6 +14,7 @@ import vpcontact
 from vpcontact.solvers.full import IterativeNewton
 
 from test_linear_solvers import QUARTER_BALL, quarter_ball_system
+from conftest import require_gmsh
 
 
 def test_amg_cg_starts_from_the_start_it_is_given():
@@ -55,14 +56,7 @@ def test_the_iterative_method_presses_the_punch_again_after_it_lifted_off():
     returns to the layer the Newton iterates cycled with systems solved to 1e-2 and the run failed after four step
     cuts; solving exactly once an iteration did not reduce the residual, it completes with no cut (31 Newton and
     162 CG iterations when measured)."""
-    import pytest
-
-    gmsh = pytest.importorskip("gmsh")
-    try:
-        gmsh.initialize(interruptible=False)
-        gmsh.finalize()
-    except OSError:
-        pytest.skip("gmsh's library does not load here")
+    require_gmsh()
     benchmark = Path(__file__).resolve().parents[1] / "benchmarks" / "punch.py"
     done = subprocess.run([sys.executable, str(benchmark), "--size", "7k", "--steps", "20", "--cycles", "1",
                            "--method", "iterative"], capture_output=True, text=True, timeout=600)

@@ -80,18 +80,20 @@ def remove(out: Path) -> None:
 
 def saved_step(out: Path) -> int | None:
     """The step the checkpoint in ``out`` continues after; None when there is none (or it is damaged)."""
-    try:
-        with np.load(folder(out) / STATE, allow_pickle=False) as data:
-            return int(data["step"])
-    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):
-        return None
+    return _saved(out, "step", int)
 
 
 def saved_method(out: Path) -> str | None:
     """The step method of the run the checkpoint in ``out`` saved; None when there is none (or it is damaged)."""
+    return _saved(out, "solver_method", str)
+
+
+def _saved(out: Path, name: str, kind):
+    """The array ``name`` of the checkpoint's state in ``out`` as ``kind``; None when there is none (or it is
+    damaged)."""
     try:
         with np.load(folder(out) / STATE, allow_pickle=False) as data:
-            return str(data["solver_method"])
+            return kind(data[name])
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile):
         return None
 
