@@ -31,6 +31,7 @@ LAYERS = (
     ("results",),
     ("problem",),
     ("solvers",),
+    ("parallel",),
     ("fem",),
     ("laws",),
     ("mesh",),

@@ -1,6 +1,7 @@
 """The command line:
 
     vpcontact run CASE.toml [--set key=value ...] --out DIR [--resume | --overwrite]
+    mpiexec -n N vpcontact run ...     (one solve on N MPI ranks: docs/mpi.md)
     vpcontact check CASE.toml [--set key=value ...] [--json]
     vpcontact study STUDY.toml --out DIR [--workers N | --scheduler tcp://HOST:PORT]
 
@@ -88,6 +89,41 @@ def _refuse(error) -> int:
 
 
 def _run(args) -> int:
+    from .parallel.ranks import ALONE, launched
+
+    return _run_case(args, ALONE) if launched()[1] == 1 else _run_on_ranks(args)
+
+
+def _run_on_ranks(args) -> int:
+    """``vpcontact run`` on the MPI ranks of ``mpiexec -n N``: every rank runs the case, rank 0 alone writes and
+    speaks (the others' output is discarded); a launch without mpi4py or petsc4py is refused in one line. A rank that
+    fails (an error of its own, not the case's) stops every rank, MPI_Abort with EXIT_FAILED, after one line naming
+    it, and a write that failed on rank 0 (EXIT_OUTPUT) stops the others, which would wait for it."""
+    import os
+
+    from .parallel.ranks import launched, world
+
+    rank, size = launched()
+    try:
+        ranks = world()
+    except CaseError as error:
+        return _refuse(error) if rank == 0 else EXIT_BAD_INPUT
+    stderr = sys.stderr
+    if not ranks.root:
+        sys.stdout = sys.stderr = open(os.devnull, "w")
+    try:
+        status = _run_case(args, ranks)
+    except BaseException as error:  # noqa: B036 (any failure of one rank ends all of them, never a hang)
+        print(f"vpcontact: rank {rank} of {size} failed ({type(error).__name__}: {one_line(str(error))}): every rank "
+              f"is stopped", file=stderr, flush=True)
+        ranks.comm.Abort(EXIT_FAILED)
+    if status == EXIT_OUTPUT:
+        ranks.comm.Abort(EXIT_OUTPUT)
+    return status
+
+
+def _run_case(args, ranks) -> int:
+    """``vpcontact run`` on the ``ranks`` of this process (:mod:`vpcontact.parallel.ranks`)."""
     from .case.load import load_case
     from .progress import SILENT, Log
     from .drivers.rundir import run
@@ -95,8 +131,8 @@ def _run(args) -> int:
 
     try:
         case = load_case(args.case, args.overrides)
-        with (Log() if case.output.progress and not args.quiet else SILENT) as progress:  # lines on stderr
-            outcome = run(case, args.out, resume=args.resume, overwrite=args.overwrite, progress=progress)
+        with (Log() if case.output.progress and not args.quiet and ranks.root else SILENT) as progress:  # stderr
+            outcome = run(case, args.out, resume=args.resume, overwrite=args.overwrite, progress=progress, ranks=ranks)
     except CaseError as error:
         return _refuse(error)
     except OSError as error:  # the run directory was replaced, or a write failed: the run stopped

@@ -58,6 +58,7 @@ from ..io.run import check_room, remove_outputs, remove_temporaries, write_resol
 from ..io.summary import json_safe, read_summary
 from ..io.versions import versions
 from ..mesh.gmsh import write_mesh
+from ..parallel.ranks import ALONE, Ranks
 from ..problem.build import Problem, build_problem
 from ..progress import Progress, reporting
 from ..results.result import Result
@@ -85,13 +86,75 @@ class Outcome:
 
 
 def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = False,
-        progress: bool | Progress = False) -> Outcome:
+        progress: bool | Progress = False, ranks: Ranks = ALONE) -> Outcome:
     """Solve ``case`` into the run directory ``out`` (see the module's docstring). Bad input, an
     unusable ``out`` or a checkpoint of another case raise CaseError before anything is written; a
     run directory removed or replaced during the run raises DirectoryReplaced (an OSError) and a
     write that fails raises RunStopped (an OSError), and nothing more is written. ``progress``: True for the
-    set-up phases, the steps and the outputs reported on stderr (:mod:`vpcontact.progress`), or a reporter."""
+    set-up phases, the steps and the outputs reported on stderr (:mod:`vpcontact.progress`), or a reporter.
+
+    On several MPI ranks (``ranks``, :mod:`vpcontact.parallel`) every rank runs this with the same arguments: rank 0
+    checks and holds the directory and writes into it, the others solve with it (the checkpoint they resume
+    from is read by every rank: ``out`` must be on a file system they all see), and they stop together."""
     out = Path(out)
+    if ranks.size > 1 and case.adapt is not None:
+        raise CaseError(f"an adaptive run ([adapt]) runs in one process, not on {ranks.size} MPI ranks")
+    used, done = ranks.decided(lambda: _checked_directory(case, out, resume, overwrite))
+    if done is not None:
+        return done
+    options = translate(case)
+    held = _NotHeld()
+
+    def acquire():
+        nonlocal held
+        held = directory.acquire(out)  # before any computation: an unusable directory is refused at once
+
+    ranks.decided(acquire)
+    started = False
+    try:
+        with StopOnSignals() as stopper, reporting(progress) as progress:
+            problem = build_problem(options.problem, progress=progress)
+            if case.adapt is not None:
+                from ..adaptivity.cycles import check_start  # an adaptive run only (as _adapt_locked)
+
+                check_start(problem, options.adapt)
+                started = True  # from here on the directory is written to: nothing above wrote to it
+                adaptation = _adapt_locked(problem, case, options, held, clear=overwrite and used, stopper=stopper,
+                                           progress=progress)
+                return Outcome(adaptation.last.result, adaptation.status, adaptation.message, stopper.signal)
+            resuming = resume and ranks.first(checkpoint.exists(out))
+            # a resumed run keeps the method of the run it continues ("auto" would weigh this session's speed)
+            loop = TimeLoop(problem, options.output, progress,
+                            resumed_method=ranks.first(checkpoint.saved_method(out)) if resuming else None, ranks=ranks)
+            if resuming:
+                with progress.phase("checkpoint", f"restoring {checkpoint.folder(out)}") as phase:
+                    checkpoint.restore(loop, out)
+                    phase.done(f"{loop.state.step:,} of {len(problem.times):,} steps done")
+                if ranks.root:
+                    _warn_versions(out)
+            elif resume and used:
+                ranks.decided(lambda: _check_same_case(case, out))
+            started = True  # from here on the directory is written to: nothing above wrote to it
+
+            def stop() -> str | None:
+                return ranks.agreed(stopper.reason())
+
+            if ranks.root:
+                result = _run_locked(loop, case, held, clear=overwrite and used, stop=stop, progress=progress)
+            else:
+                result = loop.run(stop=stop)
+    except OSError as error:
+        if not started or isinstance(error, directory.DirectoryReplaced):
+            raise
+        raise _stopped(error, case, out) from None
+    finally:
+        held.release(undo=not started)
+    return Outcome(result, result.status, result.message, ranks.first(stopper.signal))
+
+
+def _checked_directory(case: Case, out: Path, resume: bool, overwrite: bool) -> tuple[bool, Outcome | None]:
+    """Whether ``out`` holds files already, and the outcome of a resumed run that had nothing left to do (None:
+    run); CaseError for arguments or a directory that cannot be used (see :func:`run`)."""
     if resume and overwrite:
         raise CaseError("--resume and --overwrite exclude each other")
     if resume and case.adapt is not None:
@@ -106,49 +169,26 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
     if used and not (resume or overwrite):
         raise CaseError(f"--out '{out}' is not empty (use --overwrite to replace the outputs of a run in it, or "
                         f"--resume to continue the run in it)")
-    if resume and used:
-        done = _finished(case, out)
-        if done is not None:
-            return done
-    options = translate(case)
-    held = directory.acquire(out)  # before any computation: an unusable directory is refused at once
-    started = False
-    try:
-        with StopOnSignals() as stopper, reporting(progress) as progress:
-            problem = build_problem(options.problem, progress=progress)
-            if case.adapt is not None:
-                from ..adaptivity.cycles import check_start  # an adaptive run only (as _adapt_locked)
+    return used, _finished(case, out) if resume and used else None
 
-                check_start(problem, options.adapt)
-                started = True  # from here on the directory is written to: nothing above wrote to it
-                adaptation = _adapt_locked(problem, case, options, held, clear=overwrite and used, stopper=stopper,
-                                           progress=progress)
-                return Outcome(adaptation.last.result, adaptation.status, adaptation.message, stopper.signal)
-            resuming = resume and checkpoint.exists(out)
-            # a resumed run keeps the method of the run it continues ("auto" would weigh this session's speed)
-            loop = TimeLoop(problem, options.output, progress,
-                            resumed_method=checkpoint.saved_method(out) if resuming else None)
-            if resuming:
-                with progress.phase("checkpoint", f"restoring {checkpoint.folder(out)}") as phase:
-                    checkpoint.restore(loop, out)
-                    phase.done(f"{loop.state.step:,} of {len(problem.times):,} steps done")
-                now, stored = versions(), checkpoint.saved_versions(out)
-                changed = [f"{name} {stored.get(name)} -> {version}" for name, version in now.items()
-                           if stored.get(name) != version]
-                if changed:
-                    print(f"vpcontact: warning: resuming with other versions ({', '.join(changed)}): the numbers "
-                          f"may differ in the last digits from an uninterrupted run", file=sys.stderr)
-            elif resume and used:
-                _check_same_case(case, out)
-            started = True  # from here on the directory is written to: nothing above wrote to it
-            result = _run_locked(loop, case, held, clear=overwrite and used, stopper=stopper, progress=progress)
-    except OSError as error:
-        if not started or isinstance(error, directory.DirectoryReplaced):
-            raise
-        raise _stopped(error, case, out) from None
-    finally:
-        held.release(undo=not started)
-    return Outcome(result, result.status, result.message, stopper.signal)
+
+class _NotHeld:
+    """The run directory as the MPI ranks other than rank 0 see it: held and written by rank 0 alone."""
+
+    def check(self) -> None:
+        """Nothing to check here."""
+
+    def release(self, undo: bool = False) -> None:
+        """Nothing to release here."""
+
+
+def _warn_versions(out: Path) -> None:
+    """A warning on stderr when the checkpoint in ``out`` was written with other versions than this process's."""
+    now, stored = versions(), checkpoint.saved_versions(out)
+    changed = [f"{name} {stored.get(name)} -> {version}" for name, version in now.items() if stored.get(name) != version]
+    if changed:
+        print(f"vpcontact: warning: resuming with other versions ({', '.join(changed)}): the numbers may differ in the "
+              f"last digits from an uninterrupted run", file=sys.stderr)
 
 
 def _stopped(error: OSError, case: Case, out: Path) -> RunStopped:
@@ -171,7 +211,7 @@ def _stopped(error: OSError, case: Case, out: Path) -> RunStopped:
     return stopped
 
 
-def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool, stopper,
+def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool, stop,
                 progress: Progress) -> Result:
     """The run proper, in a directory this process holds: prepare it, loop with checkpoints, write.
     Every step and every write first checks that the directory is still the one locked."""
@@ -191,7 +231,7 @@ def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool
             write_outputs(loop.result, out, history_only=True)
             cadence.saved(loop.state.step)
 
-    result = loop.run(after_step=after_step, stop=stopper.reason)
+    result = loop.run(after_step=after_step, stop=stop)
     if result.status == "interrupted":
         if cadence.last_step != loop.state.step or not checkpoint.exists(out):
             checkpoint.save(loop, out)

@@ -22,6 +22,7 @@ import numpy as np
 
 from .base import SolverWork, StepData, StepSolution, default_augmentation
 from .condensed import CondensedNewton
+from .distributed import DistributedNewton
 from .full import FullNewton, IterativeNewton
 from ..errors import CaseError
 from ..progress import SILENT, Progress
@@ -46,21 +47,28 @@ class DofLayout:
 
 def make_solver(method: str, A, N, weights, gap0, *, r: float, reason: str, rigid, tolerance: float,
                 max_iterations: int, length_scale: float, factorization: str = "auto", multigrid: str = "auto",
-                layout: DofLayout, progress: Progress = SILENT, expected_seconds: float | None = None):
+                layout: DofLayout, progress: Progress = SILENT, expected_seconds: float | None = None,
+                partition=None):
     """The step solver ``method`` ("full", "iterative" or "condensed": the method of a run's plan, whose
     memory the plan has checked, :mod:`vpcontact.timeloop.plan`; ``reason``: why it runs) for stiffness A and
     contact operator N (both on the free dofs), with the Alart–Curnier augmentation r; ``rigid``: an orthonormal
     basis of the rigid motions held only by contact, (free dofs, k); ``layout``: the dofs' nodal layout;
     ``progress`` (:mod:`vpcontact.progress`) hears of the method and of the set-up phases, each with
     ``expected_seconds``, the time its set-up is expected to take (:mod:`vpcontact.solvers.cost`). The iterative
-    method's multigrid is ``multigrid`` (:func:`.linear.chosen_multigrid`), named in ``solver.reason``."""
+    method's multigrid is ``multigrid`` (:func:`.linear.chosen_multigrid`), named in ``solver.reason``. With a
+    ``partition`` of the nodes among MPI ranks (:class:`vpcontact.parallel.partition.NodePartition`) the iterative
+    method's solve is shared among them (:mod:`.distributed`)."""
     if method == IterativeNewton.name:
-        reason = f"{reason}; {multigrid_reason(multigrid)}"
+        reason = f"{reason}; {multigrid_reason('petsc' if partition is not None else multigrid)}"
     progress.note(f"method: {method} ({reason})")
     common = (A, N, weights, gap0, r, tolerance, max_iterations, length_scale, rigid)
     if method == CondensedNewton.name:
         solver = _built(lambda: CondensedNewton(*common, factorization=factorization, progress=progress,
                                                 expected_seconds=expected_seconds), factorization, A)
+    elif method == IterativeNewton.name and partition is not None:
+        solver = DistributedNewton(*common, partition=partition, free=layout.free, dim=layout.dim,
+                                   near_nullspace=layout.rigid_motions, progress=progress,
+                                   expected_seconds=expected_seconds)
     elif method == IterativeNewton.name:
         solver = IterativeNewton(*common, near_nullspace=layout.rigid_motions, free=layout.free, dim=layout.dim,
                                  nodes=layout.nodes, multigrid=multigrid, progress=progress,

@@ -14,25 +14,7 @@ from functools import cached_property
 import numpy as np
 
 from ..laws.contact import ContactLaw
-
-
-#: The norms whose sums of squares lose no digit to overflow or to subnormal numbers.
-SQUARES_SAFE = (1e-140, 1e140)
-
-
-def norm(x: np.ndarray) -> float:
-    """‖x‖₂, accurate for every finite x: the sum of squares overflows from entries of about 1e154 on and
-    underflows below 1e-154, and a norm of inf or 0 would make residuals relative to it 0 or a nonzero
-    vector look null (false convergences), so the norm is then taken of x over its largest entry. inf or
-    NaN only for an x that is not finite."""
-    with np.errstate(over="ignore", under="ignore"):
-        value = float(np.linalg.norm(x))
-    if SQUARES_SAFE[0] < value < SQUARES_SAFE[1]:
-        return value
-    largest = float(np.max(np.abs(x), initial=0.0))
-    if largest == 0.0 or not np.isfinite(largest):
-        return largest
-    return largest * float(np.linalg.norm(x / largest))
+from ..parallel.dofs import norm  # noqa: F401  (the step solvers' norm, here with the rest they share)
 
 
 @dataclass(frozen=True)

@@ -31,10 +31,12 @@ def chosen_method(method: str, costs: dict[str, MethodCost]) -> tuple[str, str]:
                   (f"; {' and '.join(unfit)} would not fit in the memory available" if unfit else ""))
 
 
-def check_iterative_memory(A: sp.spmatrix) -> None:
-    """Refuse, before building anything, an iterative method that would not fit in memory."""
-    needed, available = iterative_memory(A), available_memory()
+def check_iterative_memory(A: sp.spmatrix, ranks: int = 1) -> None:
+    """Refuse, before building anything, an iterative method that would not fit in memory (its algebra shared
+    among ``ranks`` MPI ranks: each rank's share against the memory available here)."""
+    needed, available = iterative_memory(A) // ranks, available_memory()
     if needed > available:
-        raise CaseError(f"solver.method = \"iterative\" needs about {needed / 2**30:.1f} GiB for {A.shape[0]} dofs "
-                        f"({A.nnz} stiffness entries), more than the {available / 2**30:.1f} GiB available; use a "
-                        f"coarser mesh")
+        shared = f" on each of {ranks} ranks" if ranks > 1 else ""
+        raise CaseError(f"solver.method = \"iterative\" needs about {needed / 2**30:.1f} GiB{shared} for "
+                        f"{A.shape[0]} dofs ({A.nnz} stiffness entries), more than the {available / 2**30:.1f} GiB "
+                        f"available; use a coarser mesh{' or more ranks' if ranks > 1 else ''}")

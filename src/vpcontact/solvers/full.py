@@ -28,7 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..progress import SILENT, Progress, duration, size
-from .base import ContactState, SolverWork, StepData, StepSolution, norm
+from .base import ContactState, SolverWork, StepData, StepSolution
 from .cost import iterative_memory
 from .linear import direct_solver, multigrid_solver
 from .newton import ROUNDOFF, Evaluation, SemismoothNewton
@@ -51,11 +51,15 @@ class FullNewton(SemismoothNewton):
         self.A, self.N, self.gap0, self.Z = A, N.tocsr(), gap0, rigid
         self._N_abs = abs(self.N)  # for the rounding level of the residual (|A|'s products: absolute_product)
         self.frame = NormalFrame(self.N)
-        self.rotated = self.frame.rotate(A)  # Q A Q
+        self.rotated = self._rotated(A)  # Q A Q
         framed = time.perf_counter()
         self.linear, self._analysed = self._linear_solver(factorization)
         self.setup_timings = {"normal_frame": framed - started, "linear_setup": time.perf_counter() - framed}
         self.solves = 0  # Newton systems solved, one per Newton iteration
+
+    def _rotated(self, A: sp.csr_matrix) -> sp.csr_matrix:
+        """Q A Q (:meth:`.normal_frame.NormalFrame.rotate`)."""
+        return self.frame.rotate(A)
 
     def _linear_solver(self, factorization: str) -> tuple:
         """The linear solver, and whether it has been analysed: a direct one is, here, on the pattern
@@ -93,14 +97,15 @@ class FullNewton(SemismoothNewton):
         d = self.N @ u - self.gap0
         state = ContactState.evaluate(step, self.weights, d, lam, self.r)
         contact = self.N.T @ (state.force + lam)
-        R_u = self.A @ (u - self.Z @ (self.Z.T @ u)) + contact - step.b
-        scale = max(step.b_norm, norm(contact))
+        dofs = self.dofs
+        R_u = self.A @ dofs.ghosted(u - self.Z @ dofs.sum(self.Z.T @ u)) + contact - step.b
+        scale = max(step.b_norm, dofs.safe_norm(contact))
         scale = scale if scale > 0 else 1.0
-        magnitudes = (absolute_product(self.A, np.abs(u)) + self._N_abs.T @ (np.abs(state.force) + np.abs(lam))
-                      + np.abs(step.b))
-        return Evaluation(d, lam, state, np.concatenate([R_u, state.C]), np.linalg.norm(R_u) / scale,
-                          self.complementarity(state), ROUNDOFF * np.linalg.norm(magnitudes) / scale,
-                          np.linalg.norm(self.Z.T @ R_u) / scale)
+        magnitudes = (absolute_product(self.A, dofs.ghosted(np.abs(u)))
+                      + self._N_abs.T @ (np.abs(state.force) + np.abs(lam)) + np.abs(step.b))
+        return Evaluation(d, lam, state, np.concatenate([R_u, state.C]), dofs.norm(R_u) / scale,
+                          self.complementarity(state), ROUNDOFF * dofs.norm(magnitudes) / scale,
+                          np.linalg.norm(dofs.sum(self.Z.T @ R_u)) / scale)
 
     def direction(self, step: StepData, x: tuple, ev: Evaluation) -> tuple:
         """The Newton step from the SPD system of :mod:`.normal_frame`: the active nodes' normal dofs
@@ -113,9 +118,9 @@ class FullNewton(SemismoothNewton):
         rhs = frame.Q @ (-ev.merit_vector[: u.size] + self.N[~active].T @ lam[~active])
         held = np.zeros(u.size)
         held[frame.normal_dof[active]] = (step.law.limit(active) - ev.d[active]) / frame.scale[active]
-        K = frame.constrained(diagonal, fixed)
+        K = frame.constrained(diagonal, self.dofs.ghosted(fixed))
         self._system = (diagonal, fixed)  # what K is made of (the iterative method keeps it, see IterativeNewton)
-        held_force = self.rotated @ held + diagonal * held
+        held_force = self.rotated @ self.dofs.ghosted(held) + diagonal * held
         system_rhs = np.where(fixed, K.diagonal() * held, rhs - held_force)
         if not self._analysed:
             self.linear.analyse(K)
@@ -126,7 +131,8 @@ class FullNewton(SemismoothNewton):
         rotated_step[fixed] = held[fixed]
         dlam = -lam.copy()
         rows = frame.normal_dof[active]
-        dlam[active] = (rhs - self.rotated @ rotated_step - diagonal * rotated_step)[rows] / frame.scale[active]
+        dlam[active] = ((rhs - self.rotated @ self.dofs.ghosted(rotated_step) - diagonal * rotated_step)[rows]
+                        / frame.scale[active])
         return frame.Q @ rotated_step, dlam
 
     def _linear_tolerance(self, ev: Evaluation, rhs: np.ndarray) -> float:
@@ -233,10 +239,10 @@ class IterativeNewton(FullNewton):
         if self._tightened or v is None:
             return None
         v = np.where(fixed, 0.0, v)
-        energy = float(v @ (K @ v))
+        energy = float(self.dofs.sum(float(v @ (K @ self.dofs.ghosted(v)))))
         if not energy > 0.0:
             return None
-        return np.where(fixed, held, (float(v @ rhs) / energy) * v)
+        return np.where(fixed, held, (float(self.dofs.sum(float(v @ rhs))) / energy) * v)
 
     def kept(self) -> dict[str, np.ndarray]:
         """What the iteration carries from step to step: the Newton matrix the AMG hierarchy was built on
@@ -257,8 +263,8 @@ class IterativeNewton(FullNewton):
         self._correction = arrays.get("correction")
         if "hierarchy_diagonal" not in arrays:
             return
-        self._hierarchy_system = (arrays["hierarchy_diagonal"], arrays["hierarchy_fixed"].astype(bool))
-        self.linear.analyse(self.frame.constrained(*self._hierarchy_system))
+        diagonal, fixed = self._hierarchy_system = (arrays["hierarchy_diagonal"], arrays["hierarchy_fixed"].astype(bool))
+        self.linear.analyse(self.frame.constrained(diagonal, self.dofs.ghosted(fixed)))
         self.linear.stale = bool(arrays["hierarchy_stale"])
         self._analysed = True
 
@@ -284,10 +290,10 @@ class IterativeNewton(FullNewton):
         residuals = self._step_residuals
         self._tightened = self._tightened or (bool(residuals) and not ev.residual < residuals[-1])
         residuals.append(ev.residual)
-        rhs_norm = np.linalg.norm(rhs)
+        rhs_norm = self.dofs.norm(rhs)
         if rhs_norm == 0.0 or ev.residual == 0.0:
             return 1e-12
-        scale = np.linalg.norm(ev.merit_vector[: rhs.size]) / ev.residual
+        scale = self.dofs.norm(ev.merit_vector[: rhs.size]) / ev.residual
         forcing = 0.0 if self._tightened else FORCING * ev.residual ** 2
         target = scale * max(0.1 * self.tolerance, forcing)
         return float(np.clip(target / rhs_norm, 1e-14, FORCING))

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
+from ..parallel.dofs import ALL_DOFS, Dofs
 from ..progress import SILENT, Progress
 from .base import ContactState, SolverWork, StepData, StepSolution
 
@@ -62,10 +63,12 @@ class Evaluation:
 
 class SemismoothNewton:
     """The iteration; subclasses define ``initial``, ``evaluate``, ``direction`` and ``solution``, and report
-    their work in the time loop (``work``)."""
+    their work in the time loop (``work``). ``dofs`` are the unknowns it holds (:mod:`vpcontact.parallel.dofs`):
+    all of them, or one MPI rank's share, whose reductions make every rank take the same decisions."""
 
     _threads = ThreadpoolController()
     reason = ""  # why this method runs: the case's solver.method, or what "auto" weighed (set by make_solver)
+    dofs: Dofs = ALL_DOFS
 
     def __init__(self, weights: np.ndarray, r: float, tolerance: float, max_iterations: int, length_scale: float,
                  progress: Progress = SILENT):
@@ -98,7 +101,7 @@ class SemismoothNewton:
                 and ev.residual > STAGNATION * last_residual)
 
     def complementarity(self, state: ContactState) -> float:
-        return float(np.max(np.abs(state.C), initial=0.0)) / self.r
+        return self.dofs.max(float(np.max(np.abs(state.C), initial=0.0))) / self.r
 
     def solve(self, step: StepData, previous: StepSolution | None) -> StepSolution:
         """Newton iterations from the previous step's solution (or zero) until the stopping test holds,
@@ -133,9 +136,9 @@ class SemismoothNewton:
         for _ in range(MAX_BACKTRACKS + 1):
             trial_x = tuple(a + alpha * b for a, b in zip(x, dx))
             trial = self.evaluate(step, trial_x)
-            if alpha == 1.0 and not np.array_equal(trial.state.active, ev.state.active):
+            if alpha == 1.0 and not self.dofs.same(trial.state.active, ev.state.active):
                 return trial_x, trial
-            if trial.merit <= (1.0 - 2.0 * ARMIJO * alpha) * ev.merit:
+            if self.dofs.sum(trial.merit) <= (1.0 - 2.0 * ARMIJO * alpha) * self.dofs.sum(ev.merit):
                 return trial_x, trial
             alpha *= 0.5
         trial_x = tuple(a + b for a, b in zip(x, dx))  # no decrease along the direction: the whole step

@@ -74,13 +74,16 @@ class NormalFrame:
         return sp.csr_matrix((self.scale[rows], (rows, self.normal_dof[rows])),
                              shape=(self.scale.size, self.Q.shape[0]))
 
-    def rotate(self, A: sp.spmatrix) -> sp.csr_matrix:
-        """Q A Q, whose pattern (with every diagonal entry stored) :meth:`constrained` keeps."""
-        rotated = sp.csr_matrix(self.Q @ A @ self.Q)
-        rotated = rotated + sp.diags(np.zeros(A.shape[0]), format="csr")  # the diagonal stored, even a zero
+    def rotate(self, A: sp.spmatrix, columns: sp.spmatrix | None = None) -> sp.csr_matrix:
+        """Q A Q, whose pattern (with every diagonal entry stored) :meth:`constrained` keeps. ``columns``: the Q
+        of A's columns where A is one MPI rank's rows, its columns its own dofs first and then its ghosts (the
+        frames of the ghosts' contact nodes too; :mod:`vpcontact.parallel.dofs`); None: A is square, Q both."""
+        rotated = sp.csr_matrix(self.Q @ A @ (self.Q if columns is None else columns))
+        rows = A.shape[0]
+        rotated = rotated + sp.diags(np.zeros(rows), shape=A.shape, format="csr")  # the diagonal stored, even a zero
         rotated.sort_indices()
         self._pattern = rotated
-        rows = np.repeat(np.arange(A.shape[0], dtype=rotated.indices.dtype), np.diff(rotated.indptr))
+        rows = np.repeat(np.arange(rows, dtype=rotated.indices.dtype), np.diff(rotated.indptr))
         self._diagonal_position = np.flatnonzero(rotated.indices == rows)  # one per row
         return rotated
 
@@ -93,12 +96,13 @@ class NormalFrame:
 
     def constrained(self, diagonal: np.ndarray, fixed: np.ndarray) -> sp.csr_matrix:
         """Q A Q + diag(``diagonal``) with the rows and columns of the ``fixed`` dofs (a boolean
-        mask) reduced to their diagonal entry: the same stored pattern for every mask."""
+        mask over the columns, which begin with the rows' dofs) reduced to their diagonal entry: the same stored
+        pattern for every mask."""
         pattern, on_diagonal = self._pattern, self._diagonal_position
         data = pattern.data.copy()
         data[on_diagonal] += diagonal
         kept = data[on_diagonal]
-        data[np.repeat(fixed, np.diff(pattern.indptr)) | fixed[pattern.indices]] = 0.0
+        data[np.repeat(fixed[: pattern.shape[0]], np.diff(pattern.indptr)) | fixed[pattern.indices]] = 0.0
         data[on_diagonal] = kept
         return sp.csr_matrix((data, pattern.indices, pattern.indptr), shape=pattern.shape)
 

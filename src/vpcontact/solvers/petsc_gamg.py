@@ -10,7 +10,8 @@ REBUILD_AFTER iterations has it built again on the next matrix.
 
 PETSc holds the Newton matrix as one matrix for the whole run: the Newton matrices share one sparsity
 pattern (the fixed dofs of :mod:`.normal_frame` keep their rows and columns as explicit zeros), so the pattern
-is given once (PETSc's COO preallocation) and each Newton matrix only replaces the values. The hierarchy is
+is given once (PETSc's CSR preallocation, in every PETSc since 3.18 at least) and each Newton matrix only replaces
+the values, row by row. The hierarchy is
 built on a copy of the matrix as it was then (same pattern, its values replaced at each rebuild), like
 pyamg's: the preconditioner depends only on the matrix it was built on, so a resumed run
 (``IterativeNewton.restore``) rebuilds the uninterrupted run's. GAMG on the Newton matrix itself
@@ -35,13 +36,14 @@ arguments are not PETSc's.
 
 from __future__ import annotations
 
-import os
-import sys
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
+from ..parallel.petsc import petsc
+from ..parallel.ranks import ALONE, Ranks
 from ..progress import SILENT, Progress
 from .amg import MAX_ITERATIONS, REBUILD_AFTER, decoupled_rows  # the limits both multigrids keep
 from .errors import NotConvergedError
@@ -67,50 +69,44 @@ def available() -> bool:
     return True
 
 
-def petsc():
-    """petsc4py's PETSc module, initialized the first time (a module the caller imported before is taken as it is):
+@dataclass(frozen=True)
+class NodalBlocks:
+    """Where a process's rows of the system sit in PETSc's nodal layout (dof d · node + component, rows
+    ``offset`` .. ``offset + size`` − 1 of ``total`` on this process): ``free``, the system's rows among them
+    (positions from ``offset``); ``columns``, the PETSc index of each column of the process's rows; ``ranks``, the
+    processes sharing the matrix (:mod:`vpcontact.parallel`)."""
 
-    - without the process's command line and without PETSc's signal handlers: the run's own (a SIGTERM stops it
-      after the step, :mod:`vpcontact.drivers.signals`) stay in place;
-    - its library bound to the BLAS and LAPACK it was built with, whatever the process loaded before
-      (``RTLD_DEEPBIND``; without it, as on macOS, a library is bound to its own dependencies anyway). MKL, which
-      PARDISO loads, gives its BLAS to the whole process under the common names: PETSc's vector operations called
-      MKL's in a session that had used PARDISO first and the reference BLAS in one that had not, and the same run
-      differed in the last bits with what its process had done before (a run resumed in such a session was not
-      the uninterrupted one);
-    - as an MPI process of its own (Open MPI's isolated singleton; the backend needs no other process): Open MPI 4
-      otherwise starts a daemon at initialization, in a session of its own, that holds the run's standard output
-      and error, so that a signal to the run's process group does not reach it and whoever reads the run's
-      output to its end waits for the daemon too."""
-    if "petsc4py.PETSc" not in sys.modules:
-        import petsc4py
+    free: np.ndarray
+    columns: np.ndarray
+    size: int
+    offset: int
+    total: int
+    ranks: Ranks = ALONE
 
-        os.environ.setdefault("OMPI_MCA_ess_singleton_isolated", "1")
-        flags = sys.getdlopenflags()
-        sys.setdlopenflags(flags | getattr(os, "RTLD_DEEPBIND", 0))
-        try:
-            petsc4py.init(["vpcontact", "-no_signal_handler"])
-        finally:
-            sys.setdlopenflags(flags)
-    from petsc4py import PETSc
-
-    return PETSc
+    @classmethod
+    def whole(cls, free: np.ndarray, dim: int, nodes: int) -> "NodalBlocks":
+        """The whole system in one process: rows and columns are the free dofs."""
+        free = np.asarray(free)
+        return cls(free, free, dim * nodes, 0, dim * nodes)
 
 
 class GAMGConjugateGradient:
     """PETSc's CG preconditioned by GAMG in nodal blocks.
 
     ``free`` are the system's dofs among the d · nodes of the nodal layout (dof d · node + component),
-    ``near_nullspace`` (free dofs, k) the rigid-body motions in the system's coordinates."""
+    ``near_nullspace`` (free dofs, k) the rigid-body motions in the system's coordinates; ``blocks``: one MPI
+    rank's share of the system (:class:`NodalBlocks`; None: all of it, in one process, ``free`` and ``nodes``
+    the whole mesh's), ``free`` and ``near_nullspace`` then its rows'."""
 
     name = "gamg-cg"
     label = "PETSc's GAMG"
 
     def __init__(self, free: np.ndarray, dim: int, nodes: int, near_nullspace: np.ndarray,
-                 progress: Progress = SILENT, expected: str = ""):
+                 progress: Progress = SILENT, expected: str = "", blocks: NodalBlocks | None = None):
         """``progress`` hears of each hierarchy built (its start line ends with ``expected``: what is expected
         of it, in words)."""
-        self.free, self.dim, self.size = np.asarray(free), dim, dim * nodes
+        self.blocks = NodalBlocks.whole(free, dim, nodes) if blocks is None else blocks
+        self.free, self.dim, self.size = self.blocks.free, dim, self.blocks.size
         self.near_nullspace = near_nullspace
         self.progress, self._expected = progress, expected
         self.iterations = 0  # CG iterations of all solves
@@ -129,8 +125,10 @@ class GAMGConjugateGradient:
     def analyse(self, A: sp.spmatrix) -> None:
         """GAMG's hierarchy of A (free dofs), in nodal blocks; A's pattern is the one of every later matrix."""
         again = " again (the last solve failed or needed too many iterations)" if self.setups else ""
+        dofs = int(self.blocks.ranks.sum(A.shape[0]))
+        shared = f" on {self.blocks.ranks.size} ranks" if self.blocks.ranks.size > 1 else ""
         with self.progress.phase("multigrid", f"PETSc GAMG's smoothed-aggregation hierarchy of the Newton matrix"
-                                 f"{again}, {A.shape[0]:,} dofs in {self.dim} x {self.dim} blocks"
+                                 f"{again}, {dofs:,} dofs in {self.dim} x {self.dim} blocks{shared}"
                                  f"{self._expected}") as phase:
             self._analyse(A)
             phase.done(f"{self.levels} levels, operator complexity {self.operator_complexity:.2f}")
@@ -152,14 +150,15 @@ class GAMGConjugateGradient:
         options = PETSc.Options(OPTIONS_PREFIX)
         for key, value in GAMG_OPTIONS.items():
             options[key] = value
-        gamg = PETSc.PC().create(comm=PETSc.COMM_SELF)
+        gamg = PETSc.PC().create(comm=self._comm)
         gamg.setOptionsPrefix(OPTIONS_PREFIX)
         gamg.setOperators(self._copy)
         gamg.setFromOptions()
         gamg.setUp()
         self._gamg = gamg
         self.levels = gamg.getMGLevels()
-        entries = [gamg.getMGSmoother(level).getOperators()[0].getInfo()["nz_used"] for level in range(self.levels)]
+        entries = [gamg.getMGSmoother(level).getOperators()[0].getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_used"]
+                   for level in range(self.levels)]
         self.operator_complexity = float(sum(entries) / entries[-1])
         self.setups += 1
         self.stale = False
@@ -170,28 +169,33 @@ class GAMGConjugateGradient:
         near-null space, and the CG solver on the matrix with GAMG inside the preconditioner of
         :meth:`_precondition`."""
         A.sort_indices()
-        n = A.shape[0]
+        n, blocks = A.shape[0], self.blocks
+        ranks = blocks.ranks
+        self._comm = PETSc.COMM_SELF if ranks.comm is None else PETSc.Comm(ranks.comm)
         self._pattern = (A.indptr.copy(), A.indices.copy())
         dirichlet = np.setdiff1d(np.arange(self.size), self.free)
-        rows = np.concatenate([self.free[np.repeat(np.arange(n), np.diff(A.indptr))], dirichlet])
-        columns = np.concatenate([self.free[A.indices], dirichlet])
+        rows = np.concatenate([self.free[np.repeat(np.arange(n), np.diff(A.indptr))], dirichlet]) + blocks.offset
+        columns = np.concatenate([blocks.columns[A.indices], dirichlet + blocks.offset])
         self._dirichlet = dirichlet
-        self._dirichlet_value = float(np.mean(A.diagonal())) if n else 1.0
-        matrix = PETSc.Mat().create(comm=PETSc.COMM_SELF)
-        matrix.setSizes((self.size, self.size), bsize=self.dim)
+        counted = ranks.sum(np.array([A.diagonal().sum(), n]))
+        self._dirichlet_value = float(counted[0] / counted[1]) if counted[1] else 1.0
+        self._order = np.lexsort((columns, rows))  # the entries (A's, then the Dirichlet rows') in rows of PETSc's CSR
+        self._csr = (np.concatenate([[0], np.cumsum(np.bincount(rows - blocks.offset, minlength=self.size))]
+                                    ).astype(PETSc.IntType), columns[self._order].astype(PETSc.IntType))
+        matrix = PETSc.Mat().create(comm=self._comm)
+        matrix.setSizes(((self.size, blocks.total), (self.size, blocks.total)), bsize=self.dim)
         matrix.setType(PETSc.Mat.Type.AIJ)
-        matrix.setPreallocationCOO(rows.astype(PETSc.IntType), columns.astype(PETSc.IntType))
+        matrix.setPreallocationCSR(self._csr)
         self._matrix = matrix
         B = np.zeros((self.size, self.near_nullspace.shape[1]))
         B[self.free] = self.near_nullspace
-        basis, _ = np.linalg.qr(B)  # PETSc wants the near-null space orthonormal
         vectors = []
-        for column in basis.T:
-            vector = PETSc.Vec().createSeq(self.size, bsize=self.dim, comm=PETSc.COMM_SELF)
+        for column in orthonormal(B, ranks).T:  # PETSc wants the near-null space orthonormal
+            vector = matrix.createVecRight()
             vector.array[:] = column
             vectors.append(vector)
-        self._nullspace = PETSc.NullSpace().create(vectors=vectors, comm=PETSc.COMM_SELF)
-        ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
+        self._nullspace = PETSc.NullSpace().create(vectors=vectors, comm=self._comm)
+        ksp = PETSc.KSP().create(comm=self._comm)
         ksp.setType(PETSc.KSP.Type.CG)
         ksp.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
         ksp.setOperators(matrix)
@@ -209,7 +213,9 @@ class GAMGConjugateGradient:
         indptr, indices = self._pattern
         if not (np.array_equal(A.indptr, indptr) and np.array_equal(A.indices, indices)):
             raise ValueError("the matrix's pattern is not the analysed one: GAMG's matrix keeps one pattern")
-        self._matrix.setValuesCOO(np.concatenate([A.data, np.full(self._dirichlet.size, self._dirichlet_value)]))
+        values = np.concatenate([A.data, np.full(self._dirichlet.size, self._dirichlet_value)])[self._order]
+        self._matrix.setValuesCSR(*self._csr, values)
+        self._matrix.assemble()
         diagonal = A.diagonal()
         decoupled = decoupled_rows(A)
         self._decoupled = np.concatenate([self.free[decoupled], self._dirichlet])
@@ -235,7 +241,7 @@ class GAMGConjugateGradient:
 
     def solve(self, b: np.ndarray, rtol: float = 1e-10, start: np.ndarray | None = None) -> np.ndarray:
         """A x = b by preconditioned CG from ``start`` (None: x = 0), to ‖A x − b‖ ≤ rtol ‖b‖."""
-        if not np.any(b):
+        if not self.blocks.ranks.sum(float(np.any(b))):
             return np.zeros_like(b)
         self._b.array[:] = 0.0
         self._b.array[self.free] = b
@@ -249,15 +255,25 @@ class GAMGConjugateGradient:
         x = self._x.array[self.free].copy()
         self.iterations += count
         self.most_iterations = max(self.most_iterations, count)
-        converged = self._ksp.getConvergedReason() > 0 and np.all(np.isfinite(x))
+        converged = self._ksp.getConvergedReason() > 0 and self.blocks.ranks.all(np.all(np.isfinite(x)))
         self.stale = count > REBUILD_AFTER or not converged
         if not converged:
             residual = self._matrix.createVecRight()
             self._matrix.mult(self._x, residual)
-            reached = np.linalg.norm(residual.array - self._b.array) / np.linalg.norm(b)
+            residual.axpy(-1.0, self._b)
+            reached = residual.norm() / self._b.norm()
             raise NotConvergedError(f"GAMG-preconditioned CG reached a relative residual of {reached:.1e} (asked "
                                     f"{rtol:.0e}) in {count} iterations")
         return x
+
+
+def orthonormal(B: np.ndarray, ranks: Ranks) -> np.ndarray:
+    """An orthonormal basis of the columns of B (full column rank), whose rows are shared among ``ranks``: one
+    process's by QR, several ranks' from the Cholesky factor of the Gram matrix BᵀB summed over them."""
+    if ranks.comm is None:
+        return np.linalg.qr(B)[0]
+    factor = np.linalg.cholesky(ranks.sum(B.T @ B))
+    return np.linalg.solve(factor, B.T).T
 
 
 class _Decoupled:

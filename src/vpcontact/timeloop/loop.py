@@ -46,6 +46,7 @@ import numpy as np
 from ..fem.assembly import NonFiniteLoad, element_strain, stress_force
 from ..laws.contact import node_status
 from ..laws.elasticity import von_mises
+from ..parallel.ranks import ALONE, Ranks
 from ..estimate.indicators import Level
 from ..problem.build import Problem, checked_problem
 from ..problem.discretization import Discretization
@@ -72,29 +73,28 @@ class TimeLoop:
     (:mod:`vpcontact.timeloop.plan`, ``self.plan``) is made here: what cannot run is refused before its first
     step, and the step solver is the plan's.
 
-    ``run`` takes two hooks: ``after_step(loop)``, called after every completed time step (the
-    checkpoints of :mod:`vpcontact.drivers.rundir`), and ``stop()``, asked before every step (a signal
-    asked the run to stop: the status becomes "interrupted").
-
-    ``progress`` (:mod:`vpcontact.progress`; default: silent) hears of the solver's set-up phases here, of
-    the time steps in ``run``.
+    ``run`` takes two hooks: ``after_step(loop)``, called after every completed time step (the checkpoints of
+    :mod:`vpcontact.drivers.rundir`), and ``stop()``, asked before every step (a signal asked the run to stop: the
+    status becomes "interrupted"). ``progress`` (:mod:`vpcontact.progress`; default: silent) hears of the solver's
+    set-up phases here, of the time steps in ``run``. ``ranks``: the MPI ranks running this loop together, each on
+    the whole problem, the step solver's algebra shared (:mod:`vpcontact.parallel`); ``stop`` must agree on all.
     """
 
     def __init__(self, problem: Problem, output: OutputOptions | None = None, progress: Progress = SILENT,
-                 resumed_method: str | None = None):
+                 resumed_method: str | None = None, ranks: Ranks = ALONE):
         started = clock.perf_counter()
         self.problem, self.progress = checked_problem(problem), progress
         output = OutputOptions() if output is None else output
         free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
         A, N = free_operators(problem)
-        self.plan = plan = plan_run(problem, output, A, N, resumed_method)  # the refusals before the first step
+        self.plan = plan = plan_run(problem, output, A, N, resumed_method, ranks.size)  # the refusals, first
         modes = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs)
         layout = DofLayout(free, mesh.dim(), mesh.nvertices, modes.matrix[free].toarray())
         rigid = modes.free_basis(free)
         self.motions = FreeMotions(rigid, surface.operator[:, free] @ rigid, surface.weights, options.tolerance)
 
-        self.method = RunMethod(problem, plan, A, N, layout, rigid, progress)
+        self.method = RunMethod(problem, plan, A, N, layout, rigid, progress, ranks)
         self.max_cuts = options.max_step_cuts
         constraints = problem.constraints
         #: A_fh, the coupling of the free and the held dofs: b = F_f − Bᵀz − A_fh u_D(t) (prescribed displacements)
@@ -110,7 +110,7 @@ class TimeLoop:
         estimator = ESTIMATORS[EVERY_LEVEL] if output.error_estimate else None
         self.result = Result.start(discretization, problem.basis.N, self.solver, output,
                                    () if estimator is None else estimator.terms)
-        self.result.predicted = plan.predicted
+        self.result.predicted, self.result.ranks = plan.predicted, ranks.size
         self.estimator = None if estimator is None else estimator.prepare(problem)
         self._created = started
         self.setup_time = clock.perf_counter() - started

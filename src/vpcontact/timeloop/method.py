@@ -15,6 +15,8 @@ import time as clock
 from dataclasses import replace
 
 from ..errors import CaseError
+from ..parallel.partition import NodePartition
+from ..parallel.ranks import ALONE, Ranks
 from ..progress import SILENT, Progress
 from ..solvers import SolverWork, make_solver
 from ..solvers.switch import MethodWeighing, Switch
@@ -27,20 +29,24 @@ class RunMethod:
     run) and of the method switched from; ``switch``: the switch made (None: none), ``switch_seconds`` what it took
     in this session."""
 
-    def __init__(self, problem, plan, A, N, layout, rigid, progress: Progress = SILENT):
+    def __init__(self, problem, plan, A, N, layout, rigid, progress: Progress = SILENT, ranks: Ranks = ALONE):
+        """``ranks``: the MPI ranks that share the solve (:mod:`vpcontact.parallel`; the nodes are partitioned among
+        them), where the method is never switched."""
         options, surface = problem.solver, problem.surface
+        mesh = problem.mesh.mesh
+        partition = None if ranks.size == 1 else NodePartition.of(mesh.t, mesh.nvertices, ranks)
 
         def solver_of(method: str, reason: str):
             return make_solver(method, A, N, surface.weights, surface.gap0, r=plan.augmentation, reason=reason,
                                rigid=rigid, tolerance=options.tolerance, max_iterations=options.max_iterations,
                                length_scale=problem.mesh.diameter, factorization=options.factorization,
                                multigrid=options.multigrid, layout=layout, progress=progress,
-                               expected_seconds=plan.predicted[method]["setup_s"])
+                               expected_seconds=plan.predicted[method]["setup_s"], partition=partition)
 
         self._solver_of, self.progress = solver_of, progress
         self.solver = solver_of(plan.method, plan.method_reason)
         self.weighing = (MethodWeighing(A, N, problem.mesh.dim, plan.history, len(problem.times), plan.factor,
-                                        plan.multigrid) if options.method == "auto" else None)
+                                        plan.multigrid) if options.method == "auto" and partition is None else None)
         self.switch: Switch | None = None
         self.switch_seconds: float | None = None
         self.earlier_work = SolverWork()

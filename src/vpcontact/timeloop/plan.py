@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..errors import CaseError
 from ..memory import available_memory
 from ..problem.build import Problem
 from ..problem.discretization import held_parts
@@ -95,13 +96,14 @@ def free_operators(problem: Problem) -> tuple[sp.csr_matrix, sp.csr_matrix]:
 
 
 def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
-             resumed_method: str | None = None) -> RunPlan:
+             resumed_method: str | None = None, ranks: int = 1) -> RunPlan:
     """The plan of a run of ``problem`` with the output options ``output`` (``output.field_steps`` and
     ``output.error_estimate``), whose stiffness and contact operator on the free dofs are A and N
     (:func:`free_operators`); CaseError for a run that cannot be made (see the module's docstring). A run resumed
     from a checkpoint made by ``resumed_method`` keeps it for ``solver.method = "auto"`` (the prediction weighs
     this machine's speed now: another session could choose another method, and the resumed run would then not
-    be the uninterrupted one bit for bit)."""
+    be the uninterrupted one bit for bit). On ``ranks`` MPI ranks (more than one) the method is the iterative one
+    with PETSc's GAMG, the one that shares a solve among ranks (:func:`ranks_method`)."""
     mesh, surface, times = problem.mesh, problem.surface, problem.times
     nodes, elements = mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
     history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
@@ -109,11 +111,11 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
     check_memory(len(times), output, nodes, elements, surface.size, history, mesh.dim, held)
     r = augmentation_parameter(A, N, problem.solver.augmentation)
     field_steps = len(field_step_numbers(output.field_steps, len(times)))
-    multigrid = chosen_multigrid(problem.solver.multigrid)
-    deciding, costs, factor = predicted_costs(problem.solver.method, A, N, mesh.dim, len(times), history, field_steps,
-                                              multigrid)
-    method, reason = chosen_method(problem.solver.method, deciding)
-    if problem.solver.method == "auto" and resumed_method in costs and resumed_method != method:
+    multigrid = chosen_multigrid(problem.solver.multigrid) if ranks == 1 else "petsc"
+    asked = problem.solver.method if ranks == 1 else "iterative"
+    deciding, costs, factor = predicted_costs(asked, A, N, mesh.dim, len(times), history, field_steps, multigrid)
+    method, reason = chosen_method(problem.solver.method, deciding) if ranks == 1 else ranks_method(problem, ranks)
+    if ranks == 1 and problem.solver.method == "auto" and resumed_method in costs and resumed_method != method:
         method, reason = resumed_method, (f"solver.method = \"auto\": the {resumed_method} method of the run resumed "
                                           f"(this session predicts the {method} method fastest)")
     solver_memory = None
@@ -121,8 +123,8 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
         check_condensed_memory(N, A.shape[0])
         solver_memory = condensed_memory(N, A.shape[0])
     elif method == "iterative":
-        check_iterative_memory(A)
-        solver_memory = iterative_memory(A)
+        check_iterative_memory(A, ranks)
+        solver_memory = iterative_memory(A) // ranks
     outputs = memory_needed(len(times), field_steps, nodes, elements, surface.size, history, mesh.dim,
                             estimate=output.error_estimate, held_parts=held)
     build = problem.timings.get("build", 0.0)
@@ -137,6 +139,20 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
                       "total": build + cost.total_s},
         predicted={name: cost.as_dict() for name, cost in costs.items()}, factor=factor, history=history,
         multigrid=multigrid)
+
+
+def ranks_method(problem: Problem, ranks: int) -> tuple[str, str]:
+    """The method of a run on ``ranks`` MPI ranks, and why: the iterative method with PETSc's GAMG, the one whose
+    solve the ranks share; CaseError for another method or multigrid asked for."""
+    options = problem.solver
+    if options.method not in ("auto", "iterative"):
+        raise CaseError(f"solver.method = \"{options.method}\" runs in one process: on {ranks} MPI ranks use "
+                        f"\"iterative\" or \"auto\" (the iterative method shares its solve among the ranks)")
+    if options.multigrid == "pyamg":
+        raise CaseError(f"solver.multigrid = \"pyamg\" runs in one process: on {ranks} MPI ranks use \"petsc\" or "
+                        f"\"auto\" (PETSc's GAMG shares the multigrid among the ranks)")
+    return "iterative", (f"solver.method = \"{options.method}\" on {ranks} MPI ranks: the iterative method, its "
+                         f"solve shared among them")
 
 
 def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, history: bool,
