@@ -119,6 +119,7 @@ def test_the_iterative_method_is_predicted_at_the_speed_of_the_multigrid_that_wo
 
     problem = vpcontact.build_problem(vpcontact.load_case(ball_case(h=0.3)))
     A, N = free_operators(problem)
+    monkeypatch.setattr(petsc_gamg, "available", lambda: False)
     assert plan_run(problem, OutputOptions(), A, N).multigrid == "pyamg"
     monkeypatch.setattr(petsc_gamg, "available", lambda: True)
     assert plan_run(problem, OutputOptions(), A, N).multigrid == "petsc"

@@ -3,7 +3,7 @@
     vpcontact run CASE.toml [--set key=value ...] --out DIR [--resume | --overwrite]
     mpiexec -n N vpcontact run ...     (one solve on N MPI ranks: docs/mpi.md)
     vpcontact check CASE.toml [--set key=value ...] [--json]
-    vpcontact study STUDY.toml --out DIR [--workers N | --scheduler tcp://HOST:PORT]
+    vpcontact study STUDY.toml --out DIR [--workers N | --scheduler tcp://HOST:PORT] [--ranks N]
 
 Only what a command uses is imported when it runs (``--help`` imports no numerics).
 
@@ -62,6 +62,8 @@ def _parser() -> argparse.ArgumentParser:
     where = study.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=None, help="local worker processes (default: cores)")
     where.add_argument("--scheduler", default=None, metavar="ADDRESS", help="a Dask scheduler, e.g. tcp://host:8786")
+    study.add_argument("--ranks", type=int, default=1, metavar="N",
+                       help="solve each run on N MPI ranks (mpiexec -n N; docs/mpi.md)")
     study.add_argument("--quiet", action="store_true", help="no progress lines or bar")
     reproduce = commands.add_parser("reproduce", help="regenerate every result of Sect. 4 of the paper, with a report")
     reproduce.add_argument("--out", type=Path, required=True, help="output directory (report.md, report.html, ...)")
@@ -187,6 +189,8 @@ def _describe(error: OSError) -> str:
 
 
 def _study(args) -> int:
+    import os
+
     from .progress import SILENT, Log
     from .drivers.signals import EXIT_SIGNAL, StopOnSignals
     from .drivers.studies.file import load_study
@@ -196,7 +200,11 @@ def _study(args) -> int:
     try:
         if args.workers is not None and args.workers < 1:
             raise CaseError(f"--workers {args.workers}: must be at least 1")
-        study = load_study(args.study, args.out)
+        if args.ranks < 1:
+            raise CaseError(f"--ranks {args.ranks}: must be at least 1")
+        study = load_study(args.study, args.out, args.ranks)
+        if args.ranks > 1 and args.workers is None and args.scheduler is None:  # the cores shared by the ranks
+            args.workers = max(1, (os.cpu_count() or 1) // args.ranks)
         if args.scheduler is not None:
             client = connect(args.scheduler)
         with StopOnSignals() as stopper, (Log(hold=0.0, watch=False) if not args.quiet else SILENT) as progress:

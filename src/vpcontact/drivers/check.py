@@ -5,7 +5,8 @@ the same CaseError: the case is built into its problem (mesh, materials, assembl
 time, contact surface, initial state: :func:`~vpcontact.problem.build.build_problem`), an adaptive run's first
 mesh is checked against ``adapt.max_dofs``, and the run's plan is made (:mod:`vpcontact.timeloop.plan`: the memory
 of the outputs, the augmentation r, the method ``solver.method = "auto"`` chooses and its memory, the time
-estimate), the one the time loop of ``vpcontact run`` makes and runs by. What it skips: the step solver's setup,
+estimate), the one the time loop of ``vpcontact run`` makes and runs by, and the MPI ranks the case wants for the
+memory of machines like this one (:mod:`vpcontact.solvers.ranks_wanted`). What it skips: the step solver's setup,
 i.e. the factorization of the stiffness (PARDISO's own estimate of its factor's memory comes from the analysis
 that precedes it), the condensed operator and the multigrid hierarchy — the costly part of a run's setup, which the
 cost model (:mod:`vpcontact.solvers.cost`) predicts instead, for every method. Nothing is written.
@@ -13,6 +14,7 @@ cost model (:mod:`vpcontact.solvers.cost`) predicts instead, for every method. N
 
 from __future__ import annotations
 
+import os
 from dataclasses import asdict, dataclass, make_dataclass
 
 import numpy as np
@@ -24,6 +26,8 @@ from ..mesh.quality import mean_ratio, smallest_angles
 from ..mesh.simplex import longest_edges
 from ..problem.build import build_problem
 from ..progress import duration, size
+from ..solvers.cost import iterative_memory
+from ..solvers.ranks_wanted import ranks_wanted
 from ..timeloop.plan import RunPlan, free_operators, plan_run
 
 #: A boundary part: its name and its numbers of facets and nodes.
@@ -61,6 +65,8 @@ class CaseCheck(RunPlan):
     regions: list[Region]
     materials: list[Material]
     contact_nodes_by_part: dict[str, int]
+    ranks_wanted: int | None  # the MPI ranks whose memory holds the run, one a machine like this one (None: none)
+    ranks_reason: str
 
     def as_dict(self) -> dict:
         """Plain JSON values (``vpcontact check --json``)."""
@@ -100,6 +106,7 @@ class CaseCheck(RunPlan):
                      ", ".join(f"{part} {size(nbytes)}" for part, nbytes in outputs.items()) + "), solver " +
                      (f"{size(solver)}" if solver is not None else "not estimated") +
                      f"; peak about {size(self.memory_peak_bytes)} of {size(self.memory_available_bytes)} available")
+        lines.append(f"ranks: {self.ranks_reason}")
         t = self.time_seconds
         lines.append(f"time: about {duration(t['total'])} (build {duration(t['build'])}, measured; solver setup "
                      f"{duration(t['solver setup'])} and time loop {duration(t['time loop'])}, predicted)")
@@ -115,7 +122,12 @@ def check_case(case: Case) -> CaseCheck:
         from ..adaptivity.cycles import check_start
 
         check_start(problem, options.adapt)
-    plan = plan_run(problem, options.output, *free_operators(problem))
+    A, N = free_operators(problem)
+    plan = plan_run(problem, options.output, A, N)
+    shared = iterative_memory(A)
+    wanted = ranks_wanted(plan.predicted["iterative"]["memory_bytes"] - shared + sum(
+        nbytes for part, nbytes in plan.memory_bytes.items() if part != "solver" and nbytes), shared,
+        plan.memory_available_bytes, os.cpu_count() or 1)
     mesh, surface = problem.mesh, problem.surface
     points, cells = mesh.mesh.p, mesh.mesh.t
     quality = mean_ratio(points, cells)
@@ -127,7 +139,8 @@ def check_case(case: Case) -> CaseCheck:
         h_min=float(sizes.min()), h_max=float(sizes.max()),
         parts=[Part(name, mesh.facets(name).size, mesh.nodes(name).size) for name in mesh.part_names],
         regions=_regions(case, mesh, problem.materials.owner), materials=_materials(case, problem.materials.owner),
-        contact_nodes_by_part=dict(zip(surface.parts, map(int, counts))))
+        contact_nodes_by_part=dict(zip(surface.parts, map(int, counts))), ranks_wanted=wanted.ranks,
+        ranks_reason=wanted.reason)
 
 
 def _materials(case: Case, owner: np.ndarray) -> list[Material]:

@@ -185,7 +185,8 @@ class _NotHeld:
 def _warn_versions(out: Path) -> None:
     """A warning on stderr when the checkpoint in ``out`` was written with other versions than this process's."""
     now, stored = versions(), checkpoint.saved_versions(out)
-    changed = [f"{name} {stored.get(name)} -> {version}" for name, version in now.items() if stored.get(name) != version]
+    changed = [f"{name} {stored.get(name)} -> {version}" for name, version in now.items()
+               if stored.get(name) != version]
     if changed:
         print(f"vpcontact: warning: resuming with other versions ({', '.join(changed)}): the numbers may differ in the "
               f"last digits from an uninterrupted run", file=sys.stderr)

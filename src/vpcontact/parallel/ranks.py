@@ -94,6 +94,10 @@ class Ranks:
         whole[positions] = values
         return whole
 
+    def each(self, value) -> list:
+        """Every rank's ``value`` (any picklable object), in the order of the ranks, on every rank."""
+        return [value] if self.comm is None else self.comm.allgather(value)
+
     def first(self, value):
         """Rank 0's ``value`` (any picklable object), on every rank."""
         return value if self.comm is None else self.comm.bcast(value, root=0)

@@ -104,6 +104,8 @@ class Result:
     predicted: dict = field(default_factory=dict)  # each method's predicted cost (RunPlan.predicted)
     method_switch: dict | None = None  # the change of method during the run, if "auto" made one (switch.Switch)
     ranks: int = 1  # the MPI ranks that solved it (mpiexec -n N)
+    ranks_detail: dict | None = None  # on several ranks, each one's share of the solve (RunMethod.ranks)
+    peak_memory_bytes: list | None = None  # each rank's peak resident memory, at the end of the time loop
     linear_solves: int = 0  # solves with a factored matrix in the time loop
     krylov_iterations: int = 0  # GMRES iterations on Newton systems in the time loop
     newton_factorizations: int = 0  # LU factorizations of condensed Newton matrices in the time loop
@@ -304,7 +306,8 @@ class Result:
             "nodes": self.nodes, "contact_nodes": self.contact_nodes, "steps": self.steps,
             "newton_iterations": int(sum(r["newton_iterations"] for r in self.rows)),
             "solver_method": self.method, "solver_reason": self.method_reason, "predicted_costs": self.predicted,
-            "method_switch": self.method_switch, "ranks": self.ranks,
+            "method_switch": self.method_switch, "ranks": self.ranks, "ranks_detail": self.ranks_detail,
+            "peak_memory_bytes": self.peak_memory_bytes,
             "linear_solves": self.linear_solves,
             "krylov_iterations": self.krylov_iterations, "newton_factorizations": self.newton_factorizations,
             "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s,

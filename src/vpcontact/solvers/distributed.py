@@ -124,8 +124,12 @@ class DistributedNewton:
         self.partition_time = time.perf_counter() - started
         self.rank = RankNewton(local_A, N[self.contact][:, dofs.owned], weights[self.contact], gap0[self.contact], r,
                                tolerance, max_iterations, length_scale, rigid[dofs.owned], dofs=dofs,
-                               ghost_frame=ghost_frame, blocks=blocks, dim=dim, near_nullspace=near_nullspace[dofs.owned],
-                               progress=progress, expected_seconds=expected_seconds)
+                               ghost_frame=ghost_frame, blocks=blocks, dim=dim,
+                               near_nullspace=near_nullspace[dofs.owned], progress=progress,
+                               expected_seconds=expected_seconds)
+        #: each rank's share: its free dofs, its ghosts (the values it receives at each exchange), its contact nodes
+        self.shares = {"free_dofs": ranks.each(int(dofs.owned.size)), "ghost_dofs": ranks.each(int(dofs.ghosts.size)),
+                       "contact_nodes": ranks.each(int(self.contact.size))}
         self._correction = None  # the rank solver's, whole (kept)
         self._hierarchy = None  # the Newton matrix of the hierarchy, whole: (diagonal, fixed)
         self._setups = 0

@@ -263,7 +263,8 @@ class IterativeNewton(FullNewton):
         self._correction = arrays.get("correction")
         if "hierarchy_diagonal" not in arrays:
             return
-        diagonal, fixed = self._hierarchy_system = (arrays["hierarchy_diagonal"], arrays["hierarchy_fixed"].astype(bool))
+        diagonal, fixed = arrays["hierarchy_diagonal"], arrays["hierarchy_fixed"].astype(bool)
+        self._hierarchy_system = (diagonal, fixed)
         self.linear.analyse(self.frame.constrained(diagonal, self.dofs.ghosted(fixed)))
         self.linear.stale = bool(arrays["hierarchy_stale"])
         self._analysed = True

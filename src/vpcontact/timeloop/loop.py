@@ -157,7 +157,7 @@ class TimeLoop:
         now = clock.perf_counter()
         for name, count in asdict(self.work()).items():
             setattr(result, name, count)
-        seconds = self.method.switch_seconds
+        seconds, (result.ranks_detail, result.peak_memory_bytes) = self.method.switch_seconds, self.method.ranks()
         switching = {"method_switch": seconds} if seconds is not None else {}
         result.finish({**problem.timings, **self.solver.timings, **switching, "time_loop": now - started,
                        "total": problem.timings["build"] + self.setup_time + now - started,

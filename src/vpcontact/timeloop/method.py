@@ -11,6 +11,7 @@ again.
 
 from __future__ import annotations
 
+import resource
 import time as clock
 from dataclasses import replace
 
@@ -43,13 +44,20 @@ class RunMethod:
                                multigrid=options.multigrid, layout=layout, progress=progress,
                                expected_seconds=plan.predicted[method]["setup_s"], partition=partition)
 
-        self._solver_of, self.progress = solver_of, progress
+        self._solver_of, self.progress, self._ranks = solver_of, progress, ranks
         self.solver = solver_of(plan.method, plan.method_reason)
         self.weighing = (MethodWeighing(A, N, problem.mesh.dim, plan.history, len(problem.times), plan.factor,
                                         plan.multigrid) if options.method == "auto" and partition is None else None)
         self.switch: Switch | None = None
         self.switch_seconds: float | None = None
         self.earlier_work = SolverWork()
+
+    def ranks(self) -> tuple[dict | None, list[int]]:
+        """Each MPI rank's share of the solve (:attr:`~vpcontact.solvers.distributed.DistributedNewton.shares`; None
+        in one process) and each one's peak resident memory so far, in bytes: a collective call, every rank makes
+        it."""
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # Linux gives kilobytes
+        return (self.solver.shares if self._ranks.size > 1 else None), self._ranks.each(peak)
 
     def work(self) -> SolverWork:
         """The step solvers' work in the run so far, earlier sessions included."""

@@ -27,7 +27,8 @@ through a ``concurrent.futures`` executor: a local process pool, or the executor
 ``distributed.Client`` (a shared file system is assumed). The numbers do not depend on the executor.
 
 :mod:`.file` reads a study file into its runs (the grid, the ids), :mod:`.running` runs them (locally or on
-Dask), :mod:`.table` writes study.csv with the difference norms.
+Dask), :mod:`.members` launches a run on several MPI ranks (``--ranks``), :mod:`.table` writes study.csv with the
+difference norms.
 """
 
 from .file import RunSpec, Study, load_study

@@ -29,6 +29,7 @@ class RunSpec:
     overrides: dict
     out: Path
     base: Path
+    ranks: int = 1  # MPI ranks that solve it (mpiexec -n ranks: :mod:`.members`)
 
 
 @dataclass
@@ -42,8 +43,9 @@ class Study:
     times: list[float] = field(default_factory=list)
 
 
-def load_study(path: str | os.PathLike, out: str | os.PathLike) -> Study:
-    """Read a study file and validate every run's case (one-line CaseError naming the run)."""
+def load_study(path: str | os.PathLike, out: str | os.PathLike, ranks: int = 1) -> Study:
+    """Read a study file and validate every run's case (one-line CaseError naming the run); each run is to be solved
+    on ``ranks`` MPI ranks."""
     path = Path(path)
     check_regular_file(path, "study file", MAX_TOML_BYTES)
     try:
@@ -88,7 +90,7 @@ def load_study(path: str | os.PathLike, out: str | os.PathLike) -> Study:
     runs = []
     for run_id, overrides in zip(ids, override_sets):
         overrides = _with_field_times(base, overrides, times, run_id)
-        runs.append(RunSpec(run_id, overrides, Path(out) / "runs" / run_id, base))
+        runs.append(RunSpec(run_id, overrides, Path(out) / "runs" / run_id, base, ranks))
     return Study(path, base, runs, reference, times)
 
 

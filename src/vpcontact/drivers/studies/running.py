@@ -24,7 +24,12 @@ from .table import write_study_table
 
 
 def execute_run(spec: RunSpec) -> dict:
-    """Solve one run and write its directory; returns its summary (status "error" on an exception)."""
+    """Solve one run and write its directory; returns its summary (status "error" on an exception). A run on several
+    MPI ranks is launched by :func:`.members.execute_on_ranks`."""
+    if spec.ranks > 1:
+        from .members import execute_on_ranks
+
+        return execute_on_ranks(spec)
     from ...case.translate import translate
     from ...io.run import write_run
     from ...problem.build import build_problem
