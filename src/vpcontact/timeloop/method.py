@@ -46,6 +46,8 @@ class RunMethod:
 
         self._solver_of, self.progress, self._ranks = solver_of, progress, ranks
         self.solver = solver_of(plan.method, plan.method_reason)
+        if partition is not None:  # never switched: the whole A, which the ranks' solver no longer needs, is released
+            self._solver_of = None
         self.weighing = (MethodWeighing(A, N, problem.mesh.dim, plan.history, len(problem.times), plan.factor,
                                         plan.multigrid) if options.method == "auto" and partition is None else None)
         self.switch: Switch | None = None
