@@ -102,10 +102,11 @@ FIGURES = ("2d",)
 EARLIEST = {"long": 52}
 
 #: summary.json's values that belong to the sessions of a run, not to its numbers: the wall times, the
-#: steps it was resumed at and the methods' costs predicted at the machine's speed of the session (in
-#: predicted_costs and solver_reason; the method chosen, solver_method, is compared: a resumed run keeps it);
-#: every other value is the uninterrupted run's, the counts of solves and iterations included.
-SESSION_KEYS = ("wall_time_s", "timings_s", "resumed_at_steps", "solver_reason", "predicted_costs")
+#: steps it was resumed at, the methods' costs predicted at the machine's speed of the session (in
+#: predicted_costs and solver_reason; the method chosen, solver_method, is compared: a resumed run keeps it) and
+#: the session's peak memory; every other value is the uninterrupted run's, the counts of solves and iterations
+#: included.
+SESSION_KEYS = ("wall_time_s", "timings_s", "resumed_at_steps", "solver_reason", "predicted_costs", "peak_memory_bytes")
 #: ... but for linear_solves, which depends on the field steps (the condensed method recovers u where
 #: it is written): compared when the run writes the reference's fields.
 WRITTEN_FIELDS_KEYS = ("linear_solves",)

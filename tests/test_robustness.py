@@ -26,7 +26,7 @@ from conftest import half_disc_case
 #: times, what a resume changes (a resumed run factors its matrices again), and the costs predicted at the
 #: machine's speed in each session (predicted_costs, and solver_reason for a resumed run)
 NOT_NUMBERS = {"wall_time_s", "timings_s", "linear_solves", "krylov_iterations", "newton_factorizations",
-               "resumed_at_steps", "solver_reason", "predicted_costs"}
+               "resumed_at_steps", "solver_reason", "predicted_costs", "peak_memory_bytes"}
 SOLVER_REPORTS = {"residual", "complementarity"}  # below the tolerance, not results
 
 

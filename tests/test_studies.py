@@ -19,7 +19,7 @@ import vpcontact
 from vpcontact.drivers.studies import load_study, run_study
 from conftest import assert_refused, half_disc_case, rectangle_case, run_cli, snapshot_tree
 
-NOT_COMPARED = {"wall_time_s"}
+NOT_COMPARED = {"wall_time_s", "peak_memory_bytes"}
 
 
 def write_study(tmp_path, runs_extra="", steps=11, h=0.2):
