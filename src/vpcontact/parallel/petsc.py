@@ -14,7 +14,9 @@ def petsc():
       after the step, :mod:`vpcontact.drivers.signals`) stay in place;
     - its library bound to the BLAS and LAPACK it was built with, whatever the process loaded before
       (``RTLD_DEEPBIND``, where it is safe: :func:`deep_binding_is_safe`; without it, as on macOS, a library is
-      bound to its own dependencies anyway). MKL, which
+      bound to its own dependencies anyway). Where it is not, PETSc's symbols are bound when it is loaded
+      (``RTLD_NOW``), and PARDISO initializes PETSc before it loads MKL (:func:`before_mkl`), so that PETSc is bound
+      to its own BLAS there too. MKL, which
       PARDISO loads, gives its BLAS to the whole process under the common names: PETSc's vector operations called
       MKL's in a session that had used PARDISO first and the reference BLAS in one that had not, and the same run
       differed in the last bits with what its process had done before (a run resumed in such a session was not
@@ -36,7 +38,8 @@ def petsc():
         set_here = [] if launched else [name for name in alone if name not in os.environ]
         os.environ.update({name: alone[name] for name in set_here})
         flags = sys.getdlopenflags()
-        sys.setdlopenflags(flags | (getattr(os, "RTLD_DEEPBIND", 0) if deep_binding_is_safe() else 0))
+        deep = getattr(os, "RTLD_DEEPBIND", 0) if deep_binding_is_safe() else 0
+        sys.setdlopenflags(flags | os.RTLD_NOW | deep)
         try:
             petsc4py.init(["vpcontact", "-no_signal_handler"])
         finally:
@@ -61,3 +64,18 @@ def deep_binding_is_safe() -> bool:
             return any("libpython" in line for line in maps)
     except OSError:
         return False
+
+
+def before_mkl() -> None:
+    """Called before MKL is loaded (PARDISO): where PETSc cannot be bound deeply (:func:`deep_binding_is_safe`) and
+    petsc4py is installed, PETSc is initialized first, its BLAS bound before MKL's layers put theirs under the
+    common names in the whole process; else nothing. Without it, a run of the iterative method in a process that
+    had used PARDISO took MKL's BLAS in PETSc's vector operations, another process the reference BLAS, and a
+    resumed run differed from the uninterrupted one in the last bits."""
+    if deep_binding_is_safe() or "petsc4py.PETSc" in sys.modules:
+        return
+    try:
+        import petsc4py  # noqa: F401
+    except ImportError:
+        return
+    petsc()

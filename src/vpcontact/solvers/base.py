@@ -51,6 +51,23 @@ class StepSolution:
     advice: str = ""  # what the user may try then
 
 
+class DisplacementSolution:
+    """What the time loop asks of a step solver whose StepSolution holds u at the free dofs (``self.Z``: the rigid
+    motions held only by contact, on the free dofs)."""
+
+    def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
+        """u at the free dofs (the iterate itself)."""
+        return solution.u
+
+    def functionals(self, M):
+        """(step, solution) ↦ M u for a few rows M over the free dofs (the reactions of the Dirichlet parts)."""
+        return lambda step, solution: M @ solution.u
+
+    def rigid_coordinates(self, step: StepData, solution: StepSolution) -> np.ndarray:
+        """Zᵀu: the coordinates of the solution's displacement on the rigid motions held only by contact."""
+        return self.Z.T @ solution.u
+
+
 @dataclass(frozen=True)
 class ContactState:
     """The contact law evaluated at (d, λ): nodal forces, tangents, active set and C."""

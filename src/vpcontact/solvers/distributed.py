@@ -29,7 +29,7 @@ import scipy.sparse as sp
 from ..parallel.dofs import RankDofs
 from ..parallel.partition import NodePartition
 from ..progress import SILENT, Progress, size
-from .base import SolverWork, StepData, StepSolution
+from .base import DisplacementSolution, SolverWork, StepData, StepSolution
 from .cost import iterative_memory
 from .full import IterativeNewton
 from .normal_frame import NormalFrame
@@ -92,7 +92,7 @@ class RankNewton(IterativeNewton):
                                      blocks=self._blocks), False
 
 
-class DistributedNewton:
+class DistributedNewton(DisplacementSolution):
     """The iterative method on all the ranks of ``partition`` (see the module's docstring), with the interface of a
     step solver (:mod:`vpcontact.solvers`) over the whole problem: ``A`` and ``N`` on the free dofs ``free`` of
     a ``dim``-dimensional mesh, ``rigid`` the rigid motions held only by contact and ``near_nullspace`` all the rigid
@@ -167,15 +167,6 @@ class DistributedNewton:
             diagonal, fixed = self.rank._hierarchy_system
             self._hierarchy = (self.dofs.gather(diagonal, n), self.dofs.gather(fixed, n))
         return whole
-
-    def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
-        return solution.u
-
-    def functionals(self, M: sp.csr_matrix):
-        return lambda step, solution: M @ solution.u
-
-    def rigid_coordinates(self, step: StepData, solution: StepSolution) -> np.ndarray:
-        return self.Z.T @ solution.u
 
     def kept(self) -> dict[str, np.ndarray]:
         """IterativeNewton's kept state, whole and in one process's order (a run resumes on any number of ranks)."""

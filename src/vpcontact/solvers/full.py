@@ -28,14 +28,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..progress import SILENT, Progress, duration, size
-from .base import ContactState, SolverWork, StepData, StepSolution
+from .base import ContactState, DisplacementSolution, SolverWork, StepData, StepSolution
 from .cost import iterative_memory
 from .linear import direct_solver, multigrid_solver
 from .newton import ROUNDOFF, Evaluation, SemismoothNewton
 from .normal_frame import NormalFrame
 
 
-class FullNewton(SemismoothNewton):
+class FullNewton(DisplacementSolution, SemismoothNewton):
     """Semi-smooth Newton on (u, λ) with the whole stiffness matrix."""
 
     name = "full"
@@ -147,18 +147,6 @@ class FullNewton(SemismoothNewton):
     def solution(self, step, x, ev: Evaluation, iterations, converged, message="", advice="") -> StepSolution:
         return StepSolution(x[0], x[1], ev.d, ev.state.active, iterations, ev.residual, ev.complementarity,
                             converged, message, advice)
-
-    def displacement(self, step: StepData, solution: StepSolution) -> np.ndarray:
-        """u at the free dofs (the iterate itself)."""
-        return solution.u
-
-    def functionals(self, M: sp.csr_matrix):
-        """(step, solution) ↦ M u for a few rows M over the free dofs (the reactions of the Dirichlet parts)."""
-        return lambda step, solution: M @ solution.u
-
-    def rigid_coordinates(self, step: StepData, solution: StepSolution) -> np.ndarray:
-        """Zᵀu: the coordinates of the solution's displacement on the rigid motions held only by contact."""
-        return self.Z.T @ solution.u
 
 
 #: Rows of |A| made at once by absolute_product.
