@@ -15,6 +15,7 @@ import scipy.sparse as sp
 
 pytest.importorskip("petsc4py")
 
+from vpcontact.parallel.petsc import deep_binding_is_safe
 from conftest import block_3d_case, half_disc_case
 from test_3d import ball_case, states
 from test_linear_solvers import quarter_ball_system
@@ -176,6 +177,8 @@ print(hashlib.sha256(np.stack([fields.displacement for fields in result.fields.v
 
 @pytest.mark.skipif("pardiso" not in installed_backends() or not Path("/proc/self/maps").exists(),
                     reason="needs MKL's PARDISO (and /proc to see it loaded)")
+@pytest.mark.skipif(not deep_binding_is_safe(), reason="a python executable with libpython linked in: PETSc cannot be "
+                    "bound to its own BLAS there (vpcontact.parallel.petsc.deep_binding_is_safe)")
 def test_a_run_has_the_same_bits_whatever_its_process_did_before():
     """The same run of the iterative method in a fresh process and in one that used PARDISO first (MKL, which puts its
     BLAS under the common names in the whole process): the same displacements, bit for bit (PETSc's vector

@@ -76,10 +76,20 @@ def estimated_3d() -> dict:
 
 def iterative_3d() -> dict:
     """The 3D block by the iterative method (AMG-preconditioned CG: the hierarchy is built on a Newton
-    matrix of some step, which a resumed run must build on the same matrix)."""
+    matrix of some step, which a resumed run must build on the same matrix). With pyamg's multigrid where PETSc
+    cannot be bound to its own BLAS (a python executable with libpython linked in): there PETSc takes MKL's BLAS in
+    a process that used PARDISO before, as the reference run's test process did, and the resumed run, in a fresh
+    process, the reference BLAS (vpcontact.parallel.petsc.deep_binding_is_safe)."""
     case = elastic_3d()
-    case["solver"] = {"method": "iterative"}
+    case["solver"] = {"method": "iterative", **({} if petsc_is_bound_deeply() else {"multigrid": "pyamg"})}
     return case
+
+
+def petsc_is_bound_deeply() -> bool:
+    """Whether PETSc, if installed, is bound to its own BLAS whatever the process loaded before."""
+    from vpcontact.parallel.petsc import deep_binding_is_safe
+
+    return deep_binding_is_safe()
 
 
 def displaced_3d() -> dict:

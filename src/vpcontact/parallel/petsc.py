@@ -15,8 +15,7 @@ def petsc():
     - its library bound to the BLAS and LAPACK it was built with, whatever the process loaded before
       (``RTLD_DEEPBIND``, where it is safe: :func:`deep_binding_is_safe`; without it, as on macOS, a library is
       bound to its own dependencies anyway). Where it is not, PETSc's symbols are bound when it is loaded
-      (``RTLD_NOW``), and PARDISO initializes PETSc before it loads MKL (:func:`before_mkl`), so that PETSc is bound
-      to its own BLAS there too. MKL, which
+      (``RTLD_NOW``) to the BLAS loaded by then: its own, unless MKL (PARDISO) was loaded before. MKL, which
       PARDISO loads, gives its BLAS to the whole process under the common names: PETSc's vector operations called
       MKL's in a session that had used PARDISO first and the reference BLAS in one that had not, and the same run
       differed in the last bits with what its process had done before (a run resumed in such a session was not
@@ -65,17 +64,3 @@ def deep_binding_is_safe() -> bool:
     except OSError:
         return False
 
-
-def before_mkl() -> None:
-    """Called before MKL is loaded (PARDISO): where PETSc cannot be bound deeply (:func:`deep_binding_is_safe`) and
-    petsc4py is installed, PETSc is initialized first, its BLAS bound before MKL's layers put theirs under the
-    common names in the whole process; else nothing. Without it, a run of the iterative method in a process that
-    had used PARDISO took MKL's BLAS in PETSc's vector operations, another process the reference BLAS, and a
-    resumed run differed from the uninterrupted one in the last bits."""
-    if deep_binding_is_safe() or "petsc4py.PETSc" in sys.modules:
-        return
-    try:
-        import petsc4py  # noqa: F401
-    except ImportError:
-        return
-    petsc()

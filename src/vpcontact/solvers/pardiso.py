@@ -32,7 +32,6 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from ..parallel.petsc import before_mkl
 from .errors import SingularMatrixError, SolverError, SolverMemoryError
 from ..memory import available_memory
 
@@ -61,7 +60,6 @@ def library() -> ctypes.CDLL:
         path = next((c for c in candidates if c), None)
         if path is None:
             raise OSError("libmkl_rt not found (pip install mkl)")
-        before_mkl()
         lib = ctypes.CDLL(path)
         lib.pardiso.restype = None
         lib.MKL_Set_Num_Threads_Local.restype = ctypes.c_int
