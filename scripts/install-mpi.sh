@@ -14,7 +14,8 @@ variables=$(dpkg -L "$(dpkg-query -W -f '${Depends}' libpetsc-real-dev | sed 's/
 PETSC_DIR=${variables%/lib/petsc/conf/petscvariables}
 version=$(sed -n 's/^#define PETSC_VERSION_\(MAJOR\|MINOR\|SUBMINOR\) *\([0-9]*\)/\2/p' \
     "$PETSC_DIR/include/petscversion.h" | paste -sd.)
-echo "PETSc $version in $PETSC_DIR: building petsc4py $version against it (about a minute)"
-# petsc4py's build needs setuptools' bdist_wheel, and fails to link with setuptools 80 and later.
+echo "PETSc $version in $PETSC_DIR: building petsc4py $version against it (under a minute)"
+# petsc4py's build needs setuptools' bdist_wheel, and fails to link with setuptools 80 and later. Its C is only the
+# wrapper (PETSc itself is the distribution's optimized build): unoptimized, it builds in 41 s instead of 89 s (-O1).
 pip install -q "setuptools>=69.5,<70" "wheel>=0.43" cython numpy
-PETSC_DIR=$PETSC_DIR PETSC_ARCH="" CFLAGS="-O1 -g0" pip install -q --no-build-isolation "petsc4py==$version"
+PETSC_DIR=$PETSC_DIR PETSC_ARCH="" CFLAGS="-O0 -g0" pip install -q --no-build-isolation "petsc4py==$version"
