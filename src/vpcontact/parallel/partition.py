@@ -62,7 +62,3 @@ class NodePartition:
         numbered[order] = np.arange(nodes)
         counts = np.bincount(owner, minlength=ranks.size)
         return cls(ranks, owner, numbered, int(counts[: ranks.rank].sum()), int(counts[ranks.rank]))
-
-    def nodes_of_rank(self) -> np.ndarray:
-        """This rank's nodes (mesh numbers), in PETSc's order."""
-        return np.flatnonzero(self.owner == self.ranks.rank)

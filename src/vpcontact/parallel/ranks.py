@@ -65,10 +65,8 @@ class Ranks:
         """The largest of a number over the ranks (NaN if it is NaN on any rank)."""
         if self.comm is None:
             return value
-        from mpi4py import MPI
-
-        values = self.comm.allgather(float(value))
-        return float("nan") if np.any(np.isnan(values)) else float(self.comm.allreduce(float(value), op=MPI.MAX))
+        values = self.comm.allgather(float(value))  # one collective; MPI's MAX leaves NaN undefined
+        return float("nan") if np.any(np.isnan(values)) else float(max(values))
 
     def all(self, flag: bool) -> bool:
         """Whether ``flag`` holds on every rank."""
