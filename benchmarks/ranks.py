@@ -9,6 +9,7 @@ the projection of docs/mpi.md from them (per-rank costs and message volumes for 
     python benchmarks/ranks.py --h 0.042 --steps 100 --ranks 1 2      # the 300k-dof rung, 100 steps
     python benchmarks/ranks.py --h 0.0218 --steps 10 --ranks 1 2      # the 2M-dof rung, 10 steps
     python benchmarks/ranks.py --quick                                # 9k dofs, 3 steps (the tests)
+    python benchmarks/ranks.py --h 0.042 --steps 10 --viscoplastic    # a Perzyna body: each rank's element history
 
 prints one JSON document. Needs mpiexec, mpi4py, petsc4py and pymetis (README: scripts/install-mpi.sh).
 """
@@ -30,13 +31,19 @@ from pathlib import Path
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "quarter_ball.toml"
 
 
-def launch(ranks: int, h: float, steps: int) -> dict:
-    """One run of the quarter ball on ``ranks`` ranks (1: a process alone): its record."""
+#: A Perzyna body (--viscoplastic): yield at a fifth of the elastic peak, relaxation time 5 steps of the default grid.
+PERZYNA = ["--set", 'material.viscoplastic.law="perzyna"', "--set", "material.viscoplastic.eta=0.5",
+           "--set", "material.viscoplastic.yield_stress=1.0"]
+
+
+def launch(ranks: int, h: float, steps: int, viscoplastic: bool = False) -> dict:
+    """One run of the quarter ball (``viscoplastic``: of a Perzyna body) on ``ranks`` ranks (1: a process alone):
+    its record."""
     with tempfile.TemporaryDirectory() as folder:
         command = [sys.executable, "-m", "vpcontact", "run", str(EXAMPLE), "--quiet", "--out", folder,
                    "--set", f"mesh.h={h}", "--set", f"time.steps={steps}", "--set", 'solver.method="iterative"',
                    "--set", 'solver.multigrid="petsc"', "--set", 'output.field_steps="none"',
-                   "--set", "output.figures=false"]
+                   "--set", "output.figures=false", *(PERZYNA if viscoplastic else [])]
         if ranks > 1:
             command = [shutil.which("mpiexec"), "-n", str(ranks), *command]
         environment = {**os.environ, "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
@@ -70,9 +77,11 @@ def main() -> None:
     parser.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
     parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--quick", action="store_true", help="h = 0.15, 3 steps, 1 and 2 ranks")
+    parser.add_argument("--viscoplastic", action="store_true", help="a Perzyna body (eta = 0.5, yield stress 1)")
     args = parser.parse_args()
     h, steps = (0.15, 3) if args.quick else (args.h, args.steps)
-    records = [median_record([launch(ranks, h, steps) for _ in range(args.repeats)]) for ranks in args.ranks]
+    records = [median_record([launch(ranks, h, steps, args.viscoplastic) for _ in range(args.repeats)])
+               for ranks in args.ranks]
     base = records[0]
     for record in records:
         if record["status"] == "complete" and base["status"] == "complete":
@@ -81,7 +90,8 @@ def main() -> None:
             record["largest_rank_memory_over_one_process"] = max(record["peak_memory_bytes"]) / max(
                 base["peak_memory_bytes"])
     print(json.dumps({"machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count(),
-                                  "load_average": os.getloadavg()}, "h": h, "steps": steps, "runs": records},
+                                  "load_average": os.getloadavg()}, "h": h, "steps": steps,
+                      "viscoplastic": args.viscoplastic, "runs": records},
                      indent=2))
 
 

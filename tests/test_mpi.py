@@ -21,11 +21,15 @@ import signal
 import subprocess
 import sys
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+import tomli_w
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
 for module in ("mpi4py", "petsc4py", "pymetis"):
     pytest.importorskip(module)
@@ -43,6 +47,24 @@ VISCOPLASTIC = [str(EXAMPLES / "viscoplastic_ball.toml"), "--set", "mesh.h=0.05"
                 "--set", "solver.tolerance=1e-11"]
 QUARTER_BALL = [str(EXAMPLES / "quarter_ball.toml"), "--set", "mesh.h=0.2", "--set", "solver.tolerance=1e-11",
                 "--set", 'output.field_steps="final"']
+
+
+def coated_viscoplastic(folder: Path) -> list[str]:
+    """The arguments of the gallery's coated half disc (examples/coated_ball.toml) made viscoplastic by region: a
+    relaxing core, a Perzyna coating whose modulus varies in space, the layer's stiffness varying along the arc;
+    the load ramped to t = 0.5 and held (the body creeps), fields at a middle step and the last."""
+    case = tomllib.loads((EXAMPLES / "coated_ball.toml").read_text())
+    core, coating = case["material"]
+    core["viscoplastic"] = {"law": "relaxation", "mu": 2.0, "E_inf": 600.0, "nu_inf": 0.3}
+    coating.update(E="100*(1 + 0.5*y)", viscoplastic={"law": "perzyna", "eta": 0.5, "yield_stress": 0.5})
+    case["mesh"]["h"] = 0.05
+    case["boundary"]["traction"][0]["value"] = ["0", "-17.977*min(t, 0.5)"]
+    case["time"] = {"T": 1.0, "steps": 10}
+    case["output"] = {"field_steps": [5, 10]}
+    case["solver"] = {"tolerance": 1e-11}
+    path = folder / "coated.toml"
+    path.write_text(tomli_w.dumps(case))
+    return [str(path)]
 
 
 def environment() -> dict:
@@ -69,7 +91,9 @@ def run(ranks: int, arguments: list[str], out: Path) -> subprocess.CompletedProc
 
 def assert_same_numbers(one: Path, two: Path, tolerance: float = 1e-8) -> None:
     """Every numeric column of history.csv and contact.csv equal to ``tolerance`` times the column's largest value
-    (the solver's own counters and the residuals aside)."""
+    (the solver's own counters and the residuals aside), and every array of the body's fields as VTK reads them
+    (the displacement at the nodes; σ, von Mises and z on the elements) equal to ``tolerance`` times its largest
+    value."""
     for name in ("history.csv", "contact.csv"):
         a, b = pd.read_csv(one / name, comment="#"), pd.read_csv(two / name, comment="#")
         assert list(a.columns) == list(b.columns) and len(a) == len(b)
@@ -81,12 +105,35 @@ def assert_same_numbers(one: Path, two: Path, tolerance: float = 1e-8) -> None:
             assert difference <= tolerance, f"{name}: {column} differs by {difference:.1e}"
         for column in a.select_dtypes(exclude="number").columns:
             assert (a[column] == b[column]).all(), f"{name}: {column}"
+    files = sorted(path.name for path in (one / "fields").glob("body_*.vtu"))
+    assert files == sorted(path.name for path in (two / "fields").glob("body_*.vtu"))
+    for name in files:
+        a, b = body_arrays(one / "fields" / name), body_arrays(two / "fields" / name)
+        assert a.keys() == b.keys() and {"displacement", "stress"} <= a.keys()
+        for key in a:
+            difference = float(np.abs(a[key] - b[key]).max()) / max(float(np.abs(a[key]).max()), 1e-300)
+            assert difference <= tolerance, f"{name}: {key} differs by {difference:.1e}"
 
 
-@pytest.mark.parametrize("arguments", [VISCOPLASTIC + ["--set", "contact.stiffness.beta=1"],
-                                       VISCOPLASTIC + ["--set", "contact.stiffness.beta=-1"], QUARTER_BALL],
-                         ids=["2d-hardening", "2d-softening-to-the-base", "3d-quarter-ball"])
+def body_arrays(path: Path) -> dict[str, np.ndarray]:
+    """The point and cell arrays of a body's VTU file, as VTK's reader (ParaView's) gives them."""
+    reader = vtkXMLUnstructuredGridReader()
+    reader.SetFileName(str(path))
+    reader.Update()
+    grid = reader.GetOutput()
+    arrays = {}
+    for data in (grid.GetPointData(), grid.GetCellData()):
+        for i in range(data.GetNumberOfArrays()):
+            arrays[data.GetArrayName(i)] = vtk_to_numpy(data.GetArray(i))
+    return arrays
+
+
+@pytest.mark.parametrize("arguments", [coated_viscoplastic, VISCOPLASTIC + ["--set", "contact.stiffness.beta=-1"],
+                                       QUARTER_BALL],
+                         ids=["2d-hardening-coated-by-region", "2d-softening-to-the-base", "3d-quarter-ball"])
 def test_two_ranks_give_the_numbers_of_one_process(arguments, tmp_path):
+    """... and each rank keeps the history z of its own elements: every element's once, whole in the fields."""
+    arguments = arguments(tmp_path) if callable(arguments) else arguments
     one = run(0, [*arguments, "--set", 'solver.method="iterative"'], tmp_path / "one")
     two = run(2, arguments, tmp_path / "two")
     assert one.returncode == 0, one.stderr
@@ -95,6 +142,8 @@ def test_two_ranks_give_the_numbers_of_one_process(arguments, tmp_path):
     summary = json.loads((tmp_path / "two" / "summary.json").read_text())
     assert summary["ranks"] == 2 and summary["solver_method"] == "iterative"
     assert "on 2 MPI ranks" in summary["solver_reason"]
+    elements = summary["ranks_detail"]["elements"]
+    assert len(elements) == 2 and min(elements) > 0 and sum(elements) == summary["elements"]
     assert json.loads((tmp_path / "one" / "summary.json").read_text())["ranks"] == 1
     assert two.stdout.count("complete:") == 1  # rank 0 alone speaks
     if "contact.stiffness.beta=-1" in arguments:  # the softening layer is crushed: the active set is tested

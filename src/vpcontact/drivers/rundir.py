@@ -140,9 +140,10 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
                 return ranks.agreed(stopper.reason())
 
             if ranks.root:
-                result = _run_locked(loop, case, held, clear=overwrite and used, stop=stop, progress=progress)
+                result = _run_locked(loop, case, held, clear=overwrite and used, stop=stop, progress=progress,
+                                     ranks=ranks)
             else:
-                result = loop.run(stop=stop)
+                result = _follow(loop, stop, ranks)
     except OSError as error:
         if not started or isinstance(error, directory.DirectoryReplaced):
             raise
@@ -213,9 +214,10 @@ def _stopped(error: OSError, case: Case, out: Path) -> RunStopped:
 
 
 def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool, stop,
-                progress: Progress) -> Result:
+                progress: Progress, ranks: Ranks) -> Result:
     """The run proper, in a directory this process holds: prepare it, loop with checkpoints, write.
-    Every step and every write first checks that the directory is still the one locked."""
+    Every step and every write first checks that the directory is still the one locked. On several MPI ranks this
+    is rank 0's part: it tells the others when it checkpoints (:func:`_follow`)."""
     out = held.path
     if clear:
         remove_outputs(out)
@@ -227,20 +229,34 @@ def _run_locked(loop: TimeLoop, case: Case, held: directory.Held, *, clear: bool
 
     def after_step(loop: TimeLoop) -> None:
         held.check()
-        if cadence.due(loop.state.step):
+        if ranks.first(cadence.due(loop.state.step)):
             checkpoint.save(loop, out)
             write_outputs(loop.result, out, history_only=True)
             cadence.saved(loop.state.step)
 
     result = loop.run(after_step=after_step, stop=stop)
     if result.status == "interrupted":
-        if cadence.last_step != loop.state.step or not checkpoint.exists(out):
+        if ranks.first(cadence.last_step != loop.state.step or not checkpoint.exists(out)):
             checkpoint.save(loop, out)
         result.message += f"; continue with --resume (checkpoint in {checkpoint.folder(out)})"
     with progress.phase("outputs", f"writing into {out}"):
         write_outputs(result, out)
     if result.status != "interrupted":
         checkpoint.remove(out)
+    return result
+
+
+def _follow(loop: TimeLoop, stop, ranks: Ranks) -> Result:
+    """The run on an MPI rank other than 0 (:func:`_run_locked` is rank 0's): the steps, and this rank's part of
+    the loop's snapshot (its elements' history) whenever rank 0 checkpoints."""
+
+    def after_step(loop: TimeLoop) -> None:
+        if ranks.first(None):
+            loop.snapshot()
+
+    result = loop.run(after_step=after_step, stop=stop)
+    if result.status == "interrupted" and ranks.first(None):
+        loop.snapshot()
     return result
 
 

@@ -47,6 +47,11 @@ class SimplexGeometry:
     def dim(self) -> int:
         return self.gradients.shape[1]
 
+    def of(self, elements: np.ndarray) -> "SimplexGeometry":
+        """The geometry of the elements ``elements`` (indices, in the order given) alone, on the same dofs."""
+        return SimplexGeometry(self.gradients[..., elements], self.volumes[elements], self.cells[:, elements],
+                               self.dofs[..., elements], self.ndofs)
+
 
 _GEOMETRIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 

@@ -9,7 +9,7 @@ place the dimension enters: in 3D there is none (``hypothesis=None``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -33,6 +33,12 @@ class Elasticity:
             return E * nu / (1.0 - nu**2), mu
         return E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)), mu
 
+    def on(self, elements: np.ndarray) -> "Elasticity":
+        """ℰ on the elements ``elements`` alone (indices): the same E, ν where they are numbers, else theirs."""
+        if np.ndim(self.E) == 0 and np.ndim(self.nu) == 0:
+            return self
+        return replace(self, E=_at(self.E, elements), nu=_at(self.nu, elements))
+
     def stress(self, strain: np.ndarray) -> np.ndarray:
         """ℰε = λ tr(ε) I + 2μ ε for strains of shape (d, d, ...)."""
         lam, mu = self.lame
@@ -50,6 +56,11 @@ class Elasticity:
         if self.hypothesis == "plane_stress":
             return np.zeros_like(strain[0, 0])
         return self.lame[0] * (strain[0, 0] + strain[1, 1])
+
+
+def _at(value, elements: np.ndarray):
+    """A coefficient's values at ``elements``: a number itself, an array over the elements taken there."""
+    return value if np.ndim(value) == 0 else np.asarray(value)[elements]
 
 
 def von_mises(sigma: np.ndarray, sigma33: np.ndarray | None = None) -> np.ndarray:

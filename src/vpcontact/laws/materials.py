@@ -37,6 +37,11 @@ class RegionalViscoplastic:
             rate[..., elements] = law(sigma[..., elements], strain[..., elements])
         return rate
 
+    def on(self, elements: np.ndarray) -> "RegionalViscoplastic":
+        """𝒢 over the elements ``elements`` alone (sorted indices; the arrays it is given have their entries)."""
+        return RegionalViscoplastic(tuple((np.searchsorted(elements, mine[np.isin(mine, elements)]), law)
+                                          for mine, law in self.laws))
+
 
 @dataclass(frozen=True, eq=False)
 class AtCentroids:
@@ -48,6 +53,10 @@ class AtCentroids:
 
     def __call__(self, sigma: np.ndarray, strain: np.ndarray) -> np.ndarray:
         return self.law(sigma, strain, self.centroids)
+
+    def on(self, elements: np.ndarray) -> "AtCentroids":
+        """𝒢 over the elements ``elements`` alone (indices): x bound to their centroids."""
+        return AtCentroids(self.law, self.centroids[:, elements])
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,8 @@
 """The MPI ranks of a run: ``mpiexec -n N vpcontact run CASE --out DIR`` starts N processes that solve one problem.
 
 Every rank reads the case and builds the problem; the step solver's vectors, matrices and multigrid are shared
-among the ranks (:mod:`vpcontact.solvers.distributed`), and rank 0 alone writes the run directory and reports
+among the ranks (:mod:`vpcontact.solvers.distributed`), each element's viscoplastic history is kept by one rank
+(:mod:`.elements`), and rank 0 alone writes the run directory and reports
 progress. :func:`launched` tells from the launcher's environment how many ranks were started, before MPI is
 initialized, so that a launch on several ranks without mpi4py and petsc4py is refused in one line
 (:func:`world`), not run N times over.
@@ -77,18 +78,18 @@ class Ranks:
         return bool(self.comm.allreduce(bool(flag), op=MPI.LAND))
 
     def gather(self, pieces: np.ndarray, order: np.ndarray, total: int) -> np.ndarray:
-        """The array of ``total`` entries of which every rank holds ``pieces`` at the positions ``order`` (the
-        ranks' positions together cover 0..total − 1 once), on every rank."""
+        """The array of ``total`` rows (entries, or rows of any trailing shape) of which every rank holds ``pieces``
+        at the rows ``order`` (the ranks' rows together cover 0..total − 1 once), on every rank."""
+        whole = np.empty((total, *pieces.shape[1:]), dtype=pieces.dtype)
         if self.comm is None:
-            whole = np.empty(total, dtype=pieces.dtype)
             whole[order] = pieces
             return whole
-        counts = np.array(self.comm.allgather(pieces.size))
-        values = np.empty(counts.sum(), dtype=pieces.dtype)
-        self.comm.Allgatherv(np.ascontiguousarray(pieces), (values, counts))
+        row = int(np.prod(pieces.shape[1:], dtype=np.int64))
+        counts = np.array(self.comm.allgather(pieces.shape[0]))
+        values = np.empty((counts.sum(), *pieces.shape[1:]), dtype=pieces.dtype)
+        self.comm.Allgatherv(np.ascontiguousarray(pieces), (values, counts * row))
         positions = np.empty(counts.sum(), dtype=np.int64)
         self.comm.Allgatherv(np.ascontiguousarray(order, dtype=np.int64), (positions, counts))
-        whole = np.empty(total, dtype=pieces.dtype)
         whole[positions] = values
         return whole
 

@@ -28,12 +28,13 @@ def viscoplastic_rate(G, sigma: np.ndarray, strain: np.ndarray) -> np.ndarray:
     return rate
 
 
-def history_failure(problem, state, n: int) -> str | None:
+def history_failure(problem, state, n: int, share) -> str | None:
     """The failure of step n when the history it starts from (``state``, the LoopState), z_n = z_{n−1} + k 𝒢
-    (explicit), is not finite (no step cut can help: the sub-steps' z lie between z_{n−1} and z_n); None when
-    it is."""
+    (explicit), is not finite on the elements of any rank (``share``, an
+    :class:`~vpcontact.parallel.elements.ElementShare`; no step cut can help: the sub-steps' z lie between z_{n−1}
+    and z_n); None when it is."""
     with np.errstate(all="ignore"):  # a history that is not finite is reported
-        finite = state.rate is None or np.all(np.isfinite(state.z_after(problem.k)))
+        finite = state.rate is None or share.all_finite(state.z_after(problem.k))
     if finite:
         return None
     return (f"step {n} (t = {problem.times[n - 1]:g}) failed: the viscoplastic history is not finite at its "
@@ -84,10 +85,11 @@ def law_violation(problem, d: np.ndarray, xi: np.ndarray) -> str | None:
             f"layer cannot pull): check {key} at this {argument}")
 
 
-def failure_message(problem, state, n: int, attempt, cuts: int) -> str:
+def failure_message(problem, state, n: int, attempt, cuts: int, share) -> str:
     """One line for step n of ``problem`` that failed at ``attempt`` (a (sub-)step from ``state``, the
-    LoopState) after ``cuts`` step cuts: the step, its time, where the cuts ended, the residuals, the contact
-    counts and what to try."""
+    LoopState, z on the elements of ``share``, an :class:`~vpcontact.parallel.elements.ElementShare`) after
+    ``cuts`` step cuts: the step, its time, where the cuts ended, the residuals, the contact counts and what to
+    try."""
     t_n = problem.times[n - 1]
     s = attempt.solution
     where = (f" after {cuts} step cut{'s' if cuts != 1 else ''} (sub-step of length {attempt.h:g} ending at "
@@ -102,7 +104,8 @@ def failure_message(problem, state, n: int, attempt, cuts: int) -> str:
         wrong = law_violation(problem, s.d, state.xi + attempt.h * np.maximum(s.d, 0.0))
         advice = f"; at the last iterate {wrong}" if wrong is not None else advice
     if attempt.z is not None and not np.isfinite(s.residual) and state.rate is not None:
-        advice = (f"; the viscoplastic history reaches |z| = {np.abs(attempt.z).max():.3g}: is the explicit step "
+        largest = share.ranks.max(float(np.abs(attempt.z).max(initial=0.0)))  # over every rank's elements
+        advice = (f"; the viscoplastic history reaches |z| = {largest:.3g}: is the explicit step "
                   f"k = {problem.k:g} small against the law's relaxation time?")
     return (f"step {n} (t = {t_n:g}) failed{where}: {s.message}; residual {s.residual:.3e}, "
             f"complementarity {s.complementarity:.3e}{counts}{advice}")

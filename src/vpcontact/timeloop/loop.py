@@ -43,9 +43,9 @@ from typing import Callable
 
 import numpy as np
 
-from ..fem.assembly import NonFiniteLoad, element_strain, stress_force
+from ..fem.assembly import NonFiniteLoad
 from ..laws.contact import node_status
-from ..laws.elasticity import von_mises
+from ..parallel.elements import ElementShare
 from ..parallel.ranks import ALONE, Ranks
 from ..estimate.indicators import Level
 from ..problem.build import Problem, checked_problem
@@ -53,11 +53,12 @@ from ..problem.discretization import Discretization
 from ..progress import SILENT, Progress, StepReport, reporting
 from ..estimate.estimators import ESTIMATORS, EVERY_LEVEL
 from ..results.output_options import OutputOptions
-from ..results.result import Fields, Result
+from ..results.result import Result
 from ..fem.rigid_modes import RigidModes
 from ..solvers import DofLayout, SolverWork, StepData, StepSolution
 from ..solvers.errors import NotConvergedError, SingularMatrixError
 from .checks import LawShapeError, failure_message, history_failure, invalid_law, pulled_off, viscoplastic_rate
+from .level_fields import level_fields
 from .method import RunMethod
 from .plan import free_operators, plan_run
 from .reactions import Reactions
@@ -95,6 +96,7 @@ class TimeLoop:
         self.motions = FreeMotions(rigid, surface.operator[:, free] @ rigid, surface.weights, options.tolerance)
 
         self.method = RunMethod(problem, plan, A, N, layout, rigid, progress, ranks)
+        self.elements = ElementShare.of(problem, self.method.partition)  # the elements whose z this rank holds
         self.max_cuts = options.max_step_cuts
         constraints = problem.constraints
         #: A_fh, the coupling of the free and the held dofs: b = F_f − Bᵀz − A_fh u_D(t) (prescribed displacements)
@@ -115,7 +117,7 @@ class TimeLoop:
         self._created = started
         self.setup_time = clock.perf_counter() - started
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
-        self.state = LoopState.initial(problem, rigid)
+        self.state = LoopState.initial(problem, rigid, self.elements)
         # (u, ε, σ, z) of the last level when its Fields were not built (a viscoplastic body
         # computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
         self._level_without_fields: tuple | None = None
@@ -143,7 +145,7 @@ class TimeLoop:
                 steps.started(n, times[n - 1])
                 step_started, cuts = clock.perf_counter(), result.step_cuts
                 self._substep = 0
-                failure = history_failure(problem, self.state, n) or self._advance(n, times[n - 1], problem.k, 0)
+                failure = history_failure(problem, self.state, n, self.elements) or self._advance(n, times[n - 1], problem.k, 0)
                 if failure is not None:
                     result.fail(failure)
                     break
@@ -153,11 +155,13 @@ class TimeLoop:
                 if after_step is not None:
                     after_step(self)
         if self._level_without_fields is not None:  # the last level's fields, not kept at its step
-            result.final, self._level_without_fields = self._fields(*self._level_without_fields), None
+            result.final = level_fields(problem, self.elements, *self._level_without_fields)
+            self._level_without_fields = None
         now = clock.perf_counter()
         for name, count in asdict(self.work()).items():
             setattr(result, name, count)
-        seconds, (result.ranks_detail, result.peak_memory_bytes) = self.method.switch_seconds, self.method.ranks()
+        result.ranks_detail, result.peak_memory_bytes = self.method.ranks(self.elements.count)
+        seconds = self.method.switch_seconds
         switching = {"method_switch": seconds} if seconds is not None else {}
         result.finish({**problem.timings, **self.solver.timings, **switching, "time_loop": now - started,
                        "total": problem.timings["build"] + self.setup_time + now - started,
@@ -187,7 +191,7 @@ class TimeLoop:
         its state, its results so far, the step solver's kept state, its wall time and counters; what a
         checkpoint keeps."""
         result, solver = self.result, self.solver
-        arrays = {**self.state.arrays(self.rigid_position()), **result.arrays(), "solver_method": np.array(solver.name),
+        arrays = {**self.state.arrays(self.rigid_position(), self.elements), **result.arrays(), "solver_method": np.array(solver.name),
                   **{f"solver_{key}": value for key, value in solver.kept().items()}}
         meta = {"field_steps": sorted(result.fields), "step_cuts": result.step_cuts,
                 "method_switch": None if self.method.switch is None else self.method.switch.as_dict(),
@@ -200,7 +204,7 @@ class TimeLoop:
         step solver's kept state (a solver of another method rebuilds its own), and its wall time and counters
         as those of earlier sessions. KeyError for an array or value it lacks."""
         arrays, meta = snapshot.arrays, snapshot.meta
-        self.state = LoopState.from_arrays(arrays)
+        self.state = LoopState.from_arrays(arrays, self.elements)
         step = self.state.step
         self.result.resume(arrays, snapshot.fields, step, int(meta["step_cuts"]), [*meta["resumed_at"], step])
         if "solver_method" in arrays and str(arrays["solver_method"]) == self.solver.name:
@@ -245,7 +249,7 @@ class TimeLoop:
         if pulled is not None:
             return pulled
         if cuts == self.max_cuts:
-            return failure_message(self.problem, self.state, n, attempt, cuts)
+            return failure_message(self.problem, self.state, n, attempt, cuts, self.elements)
         self.result.step_cuts += 1
         failure = self._advance(n, t - 0.5 * h, 0.5 * h, cuts + 1)
         return failure if failure is not None else self._advance(n, t, 0.5 * h, cuts + 1)
@@ -263,7 +267,7 @@ class TimeLoop:
                 if held is not None:
                     b -= self._coupling @ held
                 if z is not None:
-                    history_force = stress_force(problem.basis, z)
+                    history_force = self.elements.force(z)
                     b -= history_force[problem.free]
                 b, support, resultant = self.motions.without_rounding_resultant(b, support)
                 step = StepData(b, problem.law, state.xi, h, support)
@@ -315,23 +319,27 @@ class TimeLoop:
             u[problem.free] = self.solver.displacement(attempt.step, solution)
             if attempt.held is not None:
                 u[problem.constraints.held] = attempt.held
-            strain = element_strain(problem.basis, u)
-            z = attempt.z
-            sigma = problem.elasticity.stress(strain) + (0.0 if z is None else z)  # σ = ℰε(u) + z
-            computed = (u.copy(), strain, sigma, z)
+            strain = self.elements.strain(u)  # ε, σ, z and 𝒢 on this rank's elements (all in one process)
+            sigma = self.elements.stress(strain, attempt.z)  # σ = ℰε(u) + z
+            computed = (u.copy(), strain, sigma, attempt.z)
             if wanted:
-                fields = self._fields(*computed)
+                fields = level_fields(problem, self.elements, *computed)
             if G is not None:
                 try:
-                    rate = viscoplastic_rate(G, sigma, strain)
+                    rate, shape_error = viscoplastic_rate(self.elements.viscoplastic, sigma, strain), None
                 except LawShapeError as error:
-                    return f"step {n} (t = {problem.times[n - 1]:g}) failed: at t = {attempt.t:.10g} {error}"
+                    shape_error = str(error)
+                shape_error = self.elements.ranks.agreed(shape_error)  # a rank that fails alone stops every one
+                if shape_error:
+                    return f"step {n} (t = {problem.times[n - 1]:g}) failed: at t = {attempt.t:.10g} {shape_error}"
         values = {"ξ": xi, "K": K, "the compliance pressure": compliance}
         if fields is not None:
             values.update({"the displacement": fields.displacement, "the stress": fields.von_mises})
         elif computed is not None:
-            values.update({"the displacement": computed[0], "the stress": sigma})
+            values.update({"the displacement": computed[0]})
         wrong = [name for name, value in values.items() if not np.all(np.isfinite(value))]
+        if fields is None and computed is not None and not self.elements.all_finite(sigma):
+            wrong.append("the stress")
         if wrong:
             cause = (f"the viscoplastic history blows up: is the explicit step k = {problem.k:g} small against the "
                      f"law's relaxation time?" if G is not None else
@@ -380,14 +388,6 @@ class TimeLoop:
             known = self.motions.basis.shape[1] > 0
             state.rigid = self.solver.rigid_coordinates(state.step_problem, state.previous) if known else np.zeros(0)
         return state.rigid
-
-    def _fields(self, u: np.ndarray, strain: np.ndarray, sigma: np.ndarray, z: np.ndarray | None) -> Fields:
-        """The Fields of a level from its displacement at every dof, ε, σ and z (elements last)."""
-        problem = self.problem
-        sigma33 = problem.elasticity.out_of_plane_stress(strain)
-        return Fields(displacement=u[problem.basis.nodal_dofs].T.copy(), stress=np.moveaxis(sigma, -1, 0),
-                      stress33=sigma33, von_mises=von_mises(sigma, sigma33),
-                      z=None if z is None else np.moveaxis(z, -1, 0).copy())
 
 
 def solve_problem(problem: Problem, *, output: OutputOptions | None = None,

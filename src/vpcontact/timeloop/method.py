@@ -35,7 +35,8 @@ class RunMethod:
         them), where the method is never switched."""
         options, surface = problem.solver, problem.surface
         mesh = problem.mesh.mesh
-        partition = None if ranks.size == 1 else NodePartition.of(mesh.t, mesh.nvertices, ranks)
+        #: the nodes shared among the ranks (None: one process)
+        self.partition = partition = None if ranks.size == 1 else NodePartition.of(mesh.t, mesh.nvertices, ranks)
 
         def solver_of(method: str, reason: str):
             return make_solver(method, A, N, surface.weights, surface.gap0, r=plan.augmentation, reason=reason,
@@ -54,12 +55,13 @@ class RunMethod:
         self.switch_seconds: float | None = None
         self.earlier_work = SolverWork()
 
-    def ranks(self) -> tuple[dict | None, list[int]]:
-        """Each MPI rank's share of the solve (:attr:`~vpcontact.solvers.distributed.DistributedNewton.shares`; None
-        in one process) and each one's peak resident memory so far, in bytes: a collective call, every rank makes
-        it."""
+    def ranks(self, elements: int) -> tuple[dict | None, list[int]]:
+        """Each MPI rank's share of the solve (:attr:`~vpcontact.solvers.distributed.DistributedNewton.shares`) with
+        its ``elements`` (those whose history it holds; None in one process), and each one's peak resident memory so
+        far, in bytes: a collective call, every rank makes it."""
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # Linux gives kilobytes
-        return (self.solver.shares if self._ranks.size > 1 else None), self._ranks.each(peak)
+        shares = {**self.solver.shares, "elements": self._ranks.each(elements)} if self._ranks.size > 1 else None
+        return shares, self._ranks.each(peak)
 
     def work(self) -> SolverWork:
         """The step solvers' work in the run so far, earlier sessions included."""

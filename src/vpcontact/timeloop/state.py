@@ -10,6 +10,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..parallel.elements import ElementShare
 from ..solvers import StepData, StepSolution
 from .checks import viscoplastic_rate
 
@@ -29,16 +30,16 @@ class LoopState:
     _z_after: tuple = field(default=(None, None), init=False, repr=False, compare=False)  # (h, z_after(h))
 
     @classmethod
-    def initial(cls, problem, rigid: np.ndarray) -> "LoopState":
-        """The level t_0 of ``problem``: ξ_0, z_0 = σ_0 − ℰε(u_0) and 𝒢(σ_0, ε(u_0)) (the j = 0 term of z), and
-        u_0 with its penetrations as the start of the first Newton iteration (none when u_0 = 0), and Zᵀu_0 on
-        the rigid motions ``rigid`` (Z) held only by contact."""
+    def initial(cls, problem, rigid: np.ndarray, share: ElementShare) -> "LoopState":
+        """The level t_0 of ``problem``: ξ_0, z_0 = σ_0 − ℰε(u_0) and 𝒢(σ_0, ε(u_0)) (the j = 0 term of z) on the
+        elements of ``share`` (this rank's), and u_0 with its penetrations as the start of the first Newton
+        iteration (none when u_0 = 0), and Zᵀu_0 on the rigid motions ``rigid`` (Z) held only by contact."""
         initial = problem.initial
         u0 = initial.dofs(problem.basis)
-        strain0, z0 = problem.initial_strain, problem.initial_history
-        G = problem.viscoplastic
-        history = G is not None or np.any(z0 != 0.0)  # z ≠ 0 possible: the right-hand side carries Bᵀz
-        rate = viscoplastic_rate(G, initial.stress, strain0) if G is not None else None  # the j = 0 term
+        strain0, z0 = share.mine(problem.initial_strain), share.mine(problem.initial_history)
+        G = share.viscoplastic
+        history = G is not None or np.any(problem.initial_history != 0.0)  # z ≠ 0 possible: b carries Bᵀz
+        rate = viscoplastic_rate(G, share.mine(initial.stress), strain0) if G is not None else None  # j = 0
         start = None
         if initial.moves:
             surface = problem.surface
@@ -67,17 +68,17 @@ class LoopState:
         u = previous.u if previous.u is None or trend.u is None else previous.u + h * trend.u
         return replace(previous, u=u, lam=np.maximum(previous.lam + h * trend.lam, 0.0), d=previous.d + h * trend.d)
 
-    def arrays(self, rigid: np.ndarray) -> dict[str, np.ndarray]:
+    def arrays(self, rigid: np.ndarray, share: ElementShare) -> dict[str, np.ndarray]:
         """The state as named arrays, ``rigid`` its Zᵀu: ``step``, ``xi``, ``rigid``, ``z`` and ``rate`` (where
-        there is a history), the last solution (``previous_u`` for a solver that returns u, ``previous_lam``,
+        there is a history, over all the elements: ``share`` holds this rank's), the last solution (``previous_u`` for a solver that returns u, ``previous_lam``,
         ``previous_d``, ``previous_active``, ``previous_report``: its iterations, residual and complementarity)
         and its trend (``trend_u``, ``trend_lam``, ``trend_d``). The step problem is not kept (see
         TimeLoop.rigid_position)."""
         arrays = {"step": np.array(self.step), "xi": self.xi, "rigid": rigid}
         if self.z is not None:
-            arrays["z"] = self.z
+            arrays["z"] = share.whole(self.z)
         if self.rate is not None:
-            arrays["rate"] = self.rate
+            arrays["rate"] = share.whole(self.rate)
         previous = self.previous
         if previous is not None:
             if previous.u is not None:
@@ -92,8 +93,8 @@ class LoopState:
         return arrays
 
     @classmethod
-    def from_arrays(cls, arrays: dict[str, np.ndarray]) -> "LoopState":
-        """The state of :meth:`arrays` (KeyError for one that is missing)."""
+    def from_arrays(cls, arrays: dict[str, np.ndarray], share: ElementShare) -> "LoopState":
+        """The state of :meth:`arrays`, z and 𝒢 at the elements of ``share`` (KeyError for one that is missing)."""
         previous = None
         if "previous_lam" in arrays:
             iterations, residual, complementarity = arrays["previous_report"]
@@ -101,8 +102,8 @@ class LoopState:
                                     arrays["previous_active"].astype(bool), int(iterations), float(residual),
                                     float(complementarity), True)
         trend = Trend(arrays.get("trend_u"), arrays["trend_lam"], arrays["trend_d"]) if "trend_lam" in arrays else None
-        return cls(int(arrays["step"]), arrays["xi"], arrays.get("z"), arrays.get("rate"), previous, trend,
-                   rigid=arrays["rigid"])
+        return cls(int(arrays["step"]), arrays["xi"], share.mine(arrays.get("z")), share.mine(arrays.get("rate")),
+                   previous, trend, rigid=arrays["rigid"])
 
 
 @dataclass
