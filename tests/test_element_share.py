@@ -7,7 +7,8 @@ each part is computed as its rank would, the sum over the ranks done here).
   bit for bit;
 - the history's nodal force Bᵀz of the two parts sums to the whole one (to rounding: the same terms, added in
   another order), and each part's does no work on a translation;
-- in one process the share is every element, and its force and strains are the whole ones bit for bit.
+- in one process the share is every element, and its force and strains are the whole ones bit for bit;
+- the bytes of element history ``vpcontact check`` counts are those the time loop holds.
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ from vpcontact.laws.materials import AtCentroids
 from vpcontact.parallel.elements import ElementShare
 from vpcontact.parallel.partition import NodePartition
 from vpcontact.parallel.ranks import Ranks
+from vpcontact.timeloop.loop import TimeLoop
+from vpcontact.timeloop.state import element_history_bytes
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -100,3 +103,23 @@ def test_one_process_holds_every_element_and_computes_the_whole_bit_for_bit():
     assert share.count == z.shape[-1] and share.mine(z) is z and share.whole(z) is z
     np.testing.assert_array_equal(share.strain(u), element_strain(problem.basis, u))
     np.testing.assert_array_equal(share.force(z), stress_force(problem.basis, z))
+
+
+def test_the_element_history_a_check_counts_is_what_the_loop_holds():
+    """element_history_bytes (vpcontact check's share of a viscoplastic body) against the element arrays the time
+    loop of the coated body holds after each step: z, 𝒢, z + h𝒢 and the level's ε and σ, plus one for 𝒢's
+    temporaries."""
+    problem = coated_problem()
+    loop = TimeLoop(problem)
+    held = []
+
+    def after_step(loop: TimeLoop) -> None:
+        state, level = loop.state, loop._level_without_fields  # (u, ε, σ, z); None at a field step (kept as fields)
+        if level is not None:
+            arrays = [state.z, state.rate, state.z_after(problem.k), *level[1:3]]
+            held.append(sum(array.nbytes for array in arrays))
+
+    assert loop.run(after_step=after_step).status == "complete"
+    estimate = element_history_bytes(problem.mesh.mesh.t.shape[1], problem.mesh.dim)
+    assert len(held) == len(problem.times) - len(loop.result.fields) > 0
+    assert max(held) <= estimate <= 1.25 * min(held)

@@ -28,6 +28,7 @@ from ..problem.build import build_problem
 from ..progress import duration, size
 from ..solvers.cost import iterative_memory
 from ..solvers.ranks_wanted import ranks_wanted
+from ..timeloop.state import element_history_bytes
 from ..timeloop.plan import RunPlan, free_operators, plan_run
 
 #: A boundary part: its name and its numbers of facets and nodes.
@@ -124,7 +125,8 @@ def check_case(case: Case) -> CaseCheck:
         check_start(problem, options.adapt)
     A, N = free_operators(problem)
     plan = plan_run(problem, options.output, A, N)
-    shared = iterative_memory(A)
+    elements = problem.mesh.mesh.t.shape[1]
+    shared = iterative_memory(A) + (element_history_bytes(elements, problem.mesh.dim) if plan.history else 0)
     wanted = ranks_wanted(plan.predicted["iterative"]["memory_bytes"] - shared + sum(
         nbytes for part, nbytes in plan.memory_bytes.items() if part != "solver" and nbytes), shared,
         plan.memory_available_bytes, os.cpu_count() or 1)

@@ -1,8 +1,9 @@
 """How many MPI ranks a case wants for the memory of the machines it runs on (``vpcontact check``).
 
 On N ranks (:mod:`.distributed`) every rank holds the whole problem (the mesh, the stiffness matrix as assembled,
-the time loop's state and outputs: ``replicated`` bytes) and 1/N of the iterative method's algebra (its rows of the
-Newton matrices, of the multigrid hierarchy and of CG's vectors: ``shared`` bytes in all). On M machines like this
+the loads and the time loop's results: ``replicated`` bytes) and 1/N of the iterative method's algebra (its rows of
+the Newton matrices, of the multigrid hierarchy and of CG's vectors) and of a viscoplastic body's element history
+(``shared`` bytes in all). On M machines like this
 one, one rank each, a rank needs replicated + shared / M; with r ranks on a machine, that machine needs
 r · replicated + shared / M. So more ranks on one machine make a solve faster (its cores share the work) but never
 let a larger one fit, and a case that does not fit in one process wants M = ⌈shared / (available − replicated)⌉
@@ -29,7 +30,8 @@ class RanksWanted:
 def ranks_wanted(replicated: int, shared: int, available: int, cores: int) -> RanksWanted:
     """The ranks a run wants for its memory: ``replicated`` bytes on every rank, ``shared`` among them, ``available``
     on each machine (this one's), ``cores`` a machine."""
-    per_rank = f"each rank holds the whole problem ({size(replicated)}) and its share of the solver's {size(shared)}"
+    per_rank = (f"each rank holds the whole problem ({size(replicated)}) and its share of the solver's and the "
+                f"element history's {size(shared)}")
     if replicated + shared <= available:
         here = min(cores, (available - shared) // max(replicated, 1))  # the ranks this machine's memory holds
         more = f"; mpiexec -n {here} shares the solve among this machine's cores" if here >= 2 else ""

@@ -118,8 +118,7 @@ class TimeLoop:
         self.setup_time = clock.perf_counter() - started
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
         self.state = LoopState.initial(problem, rigid, self.elements)
-        # (u, ε, σ, z) of the last level when its Fields were not built (a viscoplastic body
-        # computes them at every level, keeps them at the field steps): ``run`` makes them ``result.final``.
+        # (u, ε, σ, z) of the last level if its Fields were not built: ``run`` makes them ``result.final``
         self._level_without_fields: tuple | None = None
         self._u = np.zeros(problem.basis.N)
         self._newton = 0  # Newton iterations of the levels so far (earlier sessions included)
@@ -145,7 +144,8 @@ class TimeLoop:
                 steps.started(n, times[n - 1])
                 step_started, cuts = clock.perf_counter(), result.step_cuts
                 self._substep = 0
-                failure = history_failure(problem, self.state, n, self.elements) or self._advance(n, times[n - 1], problem.k, 0)
+                failure = history_failure(problem, self.state, n, self.elements)
+                failure = failure or self._advance(n, times[n - 1], problem.k, 0)
                 if failure is not None:
                     result.fail(failure)
                     break
@@ -162,7 +162,7 @@ class TimeLoop:
             setattr(result, name, count)
         result.ranks_detail, result.peak_memory_bytes = self.method.ranks(self.elements.count)
         seconds = self.method.switch_seconds
-        switching = {"method_switch": seconds} if seconds is not None else {}
+        switching = {} if seconds is None else {"method_switch": seconds}
         result.finish({**problem.timings, **self.solver.timings, **switching, "time_loop": now - started,
                        "total": problem.timings["build"] + self.setup_time + now - started,
                        **({"earlier_sessions": self.earlier_time} if result.resumed_at else {})})
@@ -187,12 +187,12 @@ class TimeLoop:
 
     # --- a snapshot -------------------------------------------------------------------------------
     def snapshot(self) -> LoopSnapshot:
-        """The loop at the end of its last completed step (:class:`~vpcontact.timeloop.snapshot.LoopSnapshot`):
-        its state, its results so far, the step solver's kept state, its wall time and counters; what a
-        checkpoint keeps."""
+        """The loop at the end of its last completed step (:class:`~.snapshot.LoopSnapshot`): its state, results so
+        far, the step solver's kept state, wall time and counters, what a checkpoint keeps (collective on MPI ranks)."""
         result, solver = self.result, self.solver
-        arrays = {**self.state.arrays(self.rigid_position(), self.elements), **result.arrays(), "solver_method": np.array(solver.name),
-                  **{f"solver_{key}": value for key, value in solver.kept().items()}}
+        kept = {f"solver_{key}": value for key, value in solver.kept().items()}
+        arrays = {**self.state.arrays(self.rigid_position(), self.elements), **result.arrays(), **kept,
+                  "solver_method": np.array(solver.name)}
         meta = {"field_steps": sorted(result.fields), "step_cuts": result.step_cuts,
                 "method_switch": None if self.method.switch is None else self.method.switch.as_dict(),
                 "resumed_at": list(result.resumed_at), "elapsed_s": self.elapsed(), **asdict(self.work())}

@@ -15,6 +15,13 @@ from ..solvers import StepData, StepSolution
 from .checks import viscoplastic_rate
 
 
+def element_history_bytes(elements: int, dim: int) -> int:
+    """Bytes of a viscoplastic body's element arrays the time loop holds from one level to the next, each of d × d
+    doubles an element: z, 𝒢 and z + h𝒢 (:class:`LoopState`), the last level's ε and σ, and one more for the law's
+    temporaries while 𝒢 is computed. On MPI ranks each rank holds its elements' (:mod:`vpcontact.parallel.elements`)."""
+    return 6 * 8 * dim * dim * elements
+
+
 @dataclass
 class LoopState:
     """What the time loop carries from the last converged time level to the next one."""
@@ -70,10 +77,10 @@ class LoopState:
 
     def arrays(self, rigid: np.ndarray, share: ElementShare) -> dict[str, np.ndarray]:
         """The state as named arrays, ``rigid`` its Zᵀu: ``step``, ``xi``, ``rigid``, ``z`` and ``rate`` (where
-        there is a history, over all the elements: ``share`` holds this rank's), the last solution (``previous_u`` for a solver that returns u, ``previous_lam``,
-        ``previous_d``, ``previous_active``, ``previous_report``: its iterations, residual and complementarity)
-        and its trend (``trend_u``, ``trend_lam``, ``trend_d``). The step problem is not kept (see
-        TimeLoop.rigid_position)."""
+        there is a history, over all the elements: ``share`` holds this rank's; a collective call on several ranks),
+        the last solution (``previous_u`` for a solver that returns u, ``previous_lam``, ``previous_d``,
+        ``previous_active``, ``previous_report``: its iterations, residual and complementarity) and its trend
+        (``trend_u``, ``trend_lam``, ``trend_d``). The step problem is not kept (see TimeLoop.rigid_position)."""
         arrays = {"step": np.array(self.step), "xi": self.xi, "rigid": rigid}
         if self.z is not None:
             arrays["z"] = share.whole(self.z)
