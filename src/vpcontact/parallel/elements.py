@@ -2,8 +2,8 @@
 first node (:mod:`.partition`), and its strain, stress, z and 𝒢 are computed and kept there alone.
 
 The time loop's element work goes through an :class:`ElementShare`: ε(u) and σ = ℰε(u) + z on the rank's elements,
-𝒢(σ, ε) of its materials there, and the history's force Bᵀz summed over the ranks (every rank's elements add to
-the dofs of their nodes, which that rank owns or holds as ghosts) into the whole vector every rank's step needs.
+𝒢(σ, ε) of its materials there, and the history's force Bᵀz: each rank's elements' part, summed over the ranks
+into the whole vector every rank's step takes (one reduction of n numbers a step, as the gathered solution).
 The whole arrays over all the elements are made only where a level's fields are kept or estimated and in a
 checkpoint (:meth:`ElementShare.whole`), and a checkpoint's arrays, which are whole, are taken back by each rank at
 its elements (:meth:`ElementShare.mine`): a run resumes on any number of ranks. In one process the share is all the
