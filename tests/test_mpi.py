@@ -31,6 +31,10 @@ import tomli_w
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
 
+from test_displacement_control import W, assert_the_history_is_the_closed_form, w
+from test_uniaxial_reference import DEPTH, HEIGHT, LAYERS, STEPS, WIDTH, E, G, NU, T, block, power_layer
+from uniaxial import under_displacement
+
 for module in ("mpi4py", "petsc4py", "pymetis"):
     pytest.importorskip(module)
 MPIEXEC = shutil.which("mpiexec")
@@ -144,10 +148,35 @@ def test_two_ranks_give_the_numbers_of_one_process(arguments, tmp_path):
     assert "on 2 MPI ranks" in summary["solver_reason"]
     elements = summary["ranks_detail"]["elements"]
     assert len(elements) == 2 and min(elements) > 0 and sum(elements) == summary["elements"]
+    entries = summary["ranks_detail"]["stiffness_entries"]  # each rank assembles its rows alone
+    assert len(entries) == 2 and max(entries) < 0.7 * sum(entries)
     assert json.loads((tmp_path / "one" / "summary.json").read_text())["ranks"] == 1
     assert two.stdout.count("complete:") == 1  # rank 0 alone speaks
     if "contact.stiffness.beta=-1" in arguments:  # the softening layer is crushed: the active set is tested
         assert pd.read_csv(tmp_path / "two" / "history.csv", comment="#")["nodes_at_limit"].iloc[-1] > 0
+
+
+def test_a_moved_block_on_two_ranks_is_the_closed_form(tmp_path):
+    """3D displacement control (tests/test_displacement_control.py) by mpiexec: the top pressed to the rigid limit,
+    lifted off and pressed again, the layer hardening with ξ. The prescribed displacement's coupling with the free
+    dofs and the reactions' rows of A come from both ranks' rows of the stiffness: history.csv, read by pandas, is
+    the closed form."""
+    layer = LAYERS[3, 1.0]
+    case = {"mesh": {"shape": "block", "width": WIDTH, "depth": DEPTH, "height": HEIGHT, "h": 0.125},
+            "material": {"E": E, "nu": NU},
+            "boundary": {"dirichlet": [*({"part": part, "components": [component]} for part, component in
+                                         (("left", "x"), ("right", "x"), ("front", "y"), ("back", "y"))),
+                                       {"part": "top", "components": ["z"], "value": [W]}]},
+            "contact": {"part": "bottom", "g": G, "rho": layer["rho"], "p": "power", "exponent": layer["exponent"],
+                        "stiffness": {"law": "power", "c_v": 100.0, "alpha": 20.0, "beta": 1.0}},
+            "time": {"T": T, "steps": STEPS}, "solver": {"tolerance": 1e-12}, "output": {"field_steps": "none"}}
+    (tmp_path / "block.toml").write_text(tomli_w.dumps(case))
+    two = run(2, [str(tmp_path / "block.toml")], tmp_path / "two")
+    assert two.returncode == 0, two.stderr
+    assert json.loads((tmp_path / "two" / "summary.json").read_text())["ranks"] == 2
+    reference = under_displacement(block(3), power_layer(1.0, layer["exponent"], layer["rho"]),
+                                   np.linspace(0.0, T, STEPS + 1), w)
+    assert_the_history_is_the_closed_form(pd.read_csv(tmp_path / "two" / "history.csv"), reference, 3)
 
 
 def stopped_by_sigterm(ranks: int, arguments: list[str], out: Path) -> subprocess.CompletedProcess:

@@ -1,5 +1,6 @@
-"""The MPI ranks a case wants for its memory (vpcontact.solvers.ranks_wanted): each rank holds the whole problem and
-its share of the solver, so M machines of A bytes hold a run when replicated + shared / M <= A."""
+"""The MPI ranks a case wants for its memory (vpcontact.solvers.ranks_wanted): each rank holds the rest of the problem
+whole and its share of the stiffness and of the solver, so M machines of A bytes hold a run when
+replicated + shared / M <= A."""
 
 import json
 import subprocess
@@ -29,7 +30,7 @@ def test_the_fewest_machines_whose_memory_holds_the_run(replicated, shared, avai
 
 def test_a_problem_larger_than_a_machine_fits_on_no_number_of_ranks():
     found = ranks_wanted(9 * GIB, 1 * GIB, 8 * GIB, cores=2)
-    assert found.ranks is None and "the problem alone exceeds" in found.reason
+    assert found.ranks is None and "what every rank holds whole exceeds" in found.reason
 
 
 def test_one_process_that_fits_is_told_how_many_ranks_this_machine_holds():

@@ -26,7 +26,7 @@ from ..mesh.quality import mean_ratio, smallest_angles
 from ..mesh.simplex import longest_edges
 from ..problem.build import build_problem
 from ..progress import duration, size
-from ..solvers.cost import iterative_memory
+from ..solvers.cost import iterative_memory, matrix_bytes
 from ..solvers.ranks_wanted import ranks_wanted
 from ..timeloop.state import element_history_bytes
 from ..timeloop.plan import RunPlan, free_operators, plan_run
@@ -126,7 +126,9 @@ def check_case(case: Case) -> CaseCheck:
     A, N = free_operators(problem)
     plan = plan_run(problem, options.output, A, N)
     elements = problem.mesh.mesh.t.shape[1]
-    shared = iterative_memory(A) + (element_history_bytes(elements, problem.mesh.dim) if plan.history else 0)
+    # on ranks, each holds its rows of the stiffness (as assembled, and on the free dofs) and of the solver's algebra
+    shared = (iterative_memory(A) + matrix_bytes(problem.A) + matrix_bytes(A) +
+              (element_history_bytes(elements, problem.mesh.dim) if plan.history else 0))
     wanted = ranks_wanted(plan.predicted["iterative"]["memory_bytes"] - shared + sum(
         nbytes for part, nbytes in plan.memory_bytes.items() if part != "solver" and nbytes), shared,
         plan.memory_available_bytes, os.cpu_count() or 1)

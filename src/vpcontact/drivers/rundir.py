@@ -113,7 +113,7 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
     started = False
     try:
         with StopOnSignals() as stopper, reporting(progress) as progress:
-            problem = build_problem(options.problem, progress=progress)
+            problem = build_problem(options.problem, progress=progress, ranks=ranks)
             if case.adapt is not None:
                 from ..adaptivity.cycles import check_start  # an adaptive run only (as _adapt_locked)
 
@@ -125,7 +125,7 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
             resuming = resume and ranks.first(checkpoint.exists(out))
             # a resumed run keeps the method of the run it continues ("auto" would weigh this session's speed)
             loop = TimeLoop(problem, options.output, progress,
-                            resumed_method=ranks.first(checkpoint.saved_method(out)) if resuming else None, ranks=ranks)
+                            resumed_method=ranks.first(checkpoint.saved_method(out)) if resuming else None)
             if resuming:
                 with progress.phase("checkpoint", f"restoring {checkpoint.folder(out)}") as phase:
                     checkpoint.restore(loop, out)

@@ -39,11 +39,28 @@ def displacement_space(mesh: Mesh) -> DisplacementSpace:
     return DisplacementSpace.of(mesh.mesh)
 
 
-def stiffness(basis: DisplacementSpace, elasticity: Elasticity) -> sp.csr_matrix:
+def stiffness(basis: DisplacementSpace, elasticity: Elasticity, nodes: np.ndarray | None = None) -> sp.csr_matrix:
     """The elastic stiffness matrix A_ij = (ℰε(φ_j), ε(φ_i))_Q; the Lamé parameters are numbers (one
-    material) or arrays with one value per element (ℰ(x) of (2.16), constant on each element)."""
-    lam, mu = elasticity.lame
-    return elastic_stiffness(geometry(basis), lam, mu, basis.mesh.p.shape[1], basis.nodal_dofs)
+    material) or arrays with one value per element (ℰ(x) of (2.16), constant on each element). ``nodes``: a mask
+    over the mesh's nodes whose rows alone are assembled, each whole, from the elements that touch them, the other
+    rows left empty (one MPI rank's rows); None: every row."""
+    g, count = geometry(basis), basis.mesh.p.shape[1]
+    if nodes is None:
+        lam, mu = elasticity.lame
+        return elastic_stiffness(g, lam, mu, count, basis.nodal_dofs)
+    touching = np.flatnonzero(nodes[g.cells].any(axis=0))
+    lam, mu = elasticity.on(touching).lame
+    rows = np.zeros(basis.N, dtype=bool)
+    rows[basis.nodal_dofs[:, nodes]] = True
+    return rows_of(elastic_stiffness(g.of(touching), lam, mu, count, basis.nodal_dofs), rows)
+
+
+def rows_of(matrix: sp.csr_matrix, rows: np.ndarray) -> sp.csr_matrix:
+    """``matrix`` with its rows outside the mask ``rows`` emptied (its shape kept)."""
+    lengths = np.where(rows, np.diff(matrix.indptr), 0)
+    kept = np.repeat(rows, np.diff(matrix.indptr))
+    return sp.csr_matrix((matrix.data[kept], matrix.indices[kept], np.concatenate([[0], np.cumsum(lengths)])),
+                         shape=matrix.shape)
 
 
 class ExpressionDensity:

@@ -1,7 +1,8 @@
 """The MPI ranks of a run: ``mpiexec -n N vpcontact run CASE --out DIR`` starts N processes that solve one problem.
 
-Every rank reads the case and builds the problem; the step solver's vectors, matrices and multigrid are shared
-among the ranks (:mod:`vpcontact.solvers.distributed`), each element's viscoplastic history is kept by one rank
+Every rank reads the case and builds the problem, assembling only its rows of the stiffness
+(:mod:`vpcontact.problem.build`); the step solver's vectors, matrices and multigrid are shared among the ranks
+(:mod:`vpcontact.solvers.distributed`), each element's viscoplastic history is kept by one rank
 (:mod:`.elements`), and rank 0 alone writes the run directory and reports
 progress. :func:`launched` tells from the launcher's environment how many ranks were started, before MPI is
 initialized, so that a launch on several ranks without mpi4py and petsc4py is refused in one line
@@ -14,6 +15,7 @@ import os
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import CaseError
 
@@ -92,6 +94,16 @@ class Ranks:
         self.comm.Allgatherv(np.ascontiguousarray(order, dtype=np.int64), (positions, counts))
         whole[positions] = values
         return whole
+
+    def sum_matrix(self, matrix: sp.spmatrix) -> sp.csr_matrix:
+        """The sum over the ranks of a sparse matrix (the same shape on every rank; a rank's rows of a matrix whose
+        other rows are empty, for the whole matrix), on every rank: one gather of every rank's entries."""
+        if self.comm is None:
+            return sp.csr_matrix(matrix)
+        entries = sp.coo_matrix(matrix)
+        pieces = self.comm.allgather((entries.row, entries.col, entries.data))
+        rows, columns, values = (np.concatenate(part) for part in zip(*pieces))
+        return sp.csr_matrix((values, (rows, columns)), shape=matrix.shape)
 
     def each(self, value) -> list:
         """Every rank's ``value`` (any picklable object), in the order of the ranks, on every rank."""

@@ -28,6 +28,8 @@ from ..laws.elasticity import Elasticity
 from ..laws.materials import Materials, body_materials
 from ..laws.python_laws import api_law, api_viscoplastic
 from ..mesh.cells import SIMPLICES, coordinates
+from ..parallel.partition import NodePartition
+from ..parallel.ranks import ALONE, Ranks
 from ..progress import SILENT, Progress
 from ..solvers.factorization import check_installed
 from ..solvers.linear import check_multigrid
@@ -52,7 +54,7 @@ class Problem:
     mesh: meshes.Mesh
     basis: DisplacementSpace
     materials: Materials  # the material of each element, ℰ per element and the case's 𝒢
-    A: sp.csr_matrix  # the elastic stiffness on all dofs
+    A: sp.csr_matrix  # the elastic stiffness on all dofs (on MPI ranks, this rank's rows: those of its nodes)
     free: np.ndarray  # dofs not held by Dirichlet conditions
     loads: LoadVector
     surface: ContactSurface  # no nodes when the case has no contact
@@ -65,6 +67,7 @@ class Problem:
     initial_history: np.ndarray | None = None  # z_0 = σ_0 − ℰε(u_0) of (2.28) per element (d, d, nelements)
     source: str | None = None  # the resolved case (TOML) it was built from, for case.resolved.toml and checkpoints
     constraints: DirichletConditions | None = None  # the held dofs and u_D(t) there (build_problem sets it)
+    partition: NodePartition | None = None  # the nodes shared among MPI ranks (None: one process)
     times: TimeGrid = field(init=False)  # t_1, …, t_steps
 
     def __post_init__(self):
@@ -75,6 +78,16 @@ class Problem:
     def elasticity(self) -> Elasticity:
         """ℰ of (2.1): E, ν numbers for one homogeneous material, arrays over the elements otherwise."""
         return self.materials.elasticity
+
+    @property
+    def ranks(self) -> Ranks:
+        """The MPI ranks the problem is shared among (ALONE: one process)."""
+        return ALONE if self.partition is None else self.partition.ranks
+
+    @property
+    def stiffness_entries(self) -> int:
+        """The entries of the whole stiffness A, every rank's rows together (a collective call on MPI ranks)."""
+        return int(self.ranks.sum(self.A.nnz))
 
     @property
     def k(self) -> float:
@@ -94,7 +107,7 @@ class Problem:
         if given:
             raise CaseError(f"{given[0]} is an array on the mesh the problem was built on: a problem with initial "
                             f"arrays cannot be built on another mesh; give the initial state by expressions instead")
-        return build_problem(self.options, mesh=mesh, progress=progress, **self.objects)
+        return build_problem(self.options, mesh=mesh, progress=progress, ranks=self.ranks, **self.objects)
 
     def __repr__(self) -> str:
         """One line: the sizes (not the operators)."""
@@ -119,7 +132,7 @@ def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p
                   stiffness_law: Callable | None = None, tractions: Mapping | None = None,
                   body_force: Density | None = None, displacements: Mapping | None = None,
                   viscoplastic: Callable | None = None, initial_displacement=None, initial_stress=None,
-                  initial_xi=None, progress: Progress = SILENT) -> Problem:
+                  initial_xi=None, progress: Progress = SILENT, ranks: Ranks = ALONE) -> Problem:
     """Assemble the problem of ``options`` (a case translated by :mod:`vpcontact.case.translate`: from a
     :class:`~vpcontact.Case`, whose outputs and adaptive meshes are not part of the problem, or from a
     :class:`~vpcontact.Model`) on ``mesh``; the other keyword arguments replace parts of the case by Python objects:
@@ -153,7 +166,11 @@ def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p
     shape or a value that is not finite is a CaseError.
 
     ``progress`` (:mod:`vpcontact.progress`) hears of the two phases: the mesh (when made here) and the assembly
-    (the operators, the loads, the contact surface and every check above)."""
+    (the operators, the loads, the contact surface and every check above).
+
+    On several MPI ranks (``ranks``, :mod:`vpcontact.parallel`), every rank builds the problem: the mesh's nodes
+    are partitioned among them (METIS), and each rank assembles only its rows of the stiffness A, from the elements
+    that touch its nodes; the rest (mesh, loads, contact surface, checks) is whole on every rank."""
     started = time.perf_counter()
     objects = {name: value for name, value in dict(
         p=p, stiffness_law=stiffness_law, tractions=tractions, body_force=body_force, displacements=displacements,
@@ -178,10 +195,11 @@ def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p
     stiffness_law = None if stiffness_law is None else api_law(stiffness_law, "stiffness_law")
     meshed = time.perf_counter()
     with progress.phase("assembly", "stiffness, loads, contact surface and checks") as phase:
+        partition = None if ranks.size == 1 else NodePartition.of(mesh.mesh.t, mesh.mesh.nvertices, ranks)
         problem = _assembled(options, mesh, p, stiffness_law, tractions, body_force, displacements, viscoplastic,
-                             initial_displacement, initial_stress, initial_xi)
+                             initial_displacement, initial_stress, initial_xi, partition)
         phase.done(f"{problem.free.size:,} free dofs of {problem.basis.N:,}, {problem.surface.size:,} contact nodes, "
-                   f"a stiffness of {problem.A.nnz:,} entries")
+                   f"a stiffness of {problem.stiffness_entries:,} entries{_shared(ranks)}")
     done = time.perf_counter()
     problem.objects, problem.source = objects, source
     problem.timings = {"mesh": meshed - started, "assembly": done - meshed, "build": done - started}
@@ -189,16 +207,19 @@ def build_problem(options: ProblemOptions, *, mesh: meshes.Mesh | None = None, p
 
 
 def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tractions, body_force, displacements,
-               viscoplastic, initial_displacement, initial_stress, initial_xi) -> Problem:
-    """The problem of ``options`` on ``mesh`` (the laws of the API already wrapped; see build_problem), without
-    its timings, the objects of the API and the source."""
+               viscoplastic, initial_displacement, initial_stress, initial_xi,
+               partition: NodePartition | None) -> Problem:
+    """The problem of ``options`` on ``mesh`` (the laws of the API already wrapped; see build_problem) with its
+    nodes shared among MPI ranks by ``partition`` (None: one process), without its timings, the objects of the API
+    and the source."""
     dim = mesh.dim
     check_dimension(options, dim)
     materials = body_materials(options.materials, mesh)
     with np.errstate(all="ignore"):  # a stiffness that is not finite is reported below
         basis = displacement_space(mesh)
-        A = stiffness(basis, materials.elasticity)
-    if not np.all(np.isfinite(A.data)):
+        ranks = ALONE if partition is None else partition.ranks
+        A = stiffness(basis, materials.elasticity, None if partition is None else partition.owner == ranks.rank)
+    if not ranks.all(np.all(np.isfinite(A.data))):
         moduli = ", ".join(f"{entry.key}.E = {brief(entry.E)}" for entry in options.materials)
         raise CaseError(f"{moduli}: the stiffness matrix is not finite in float64 (the moduli or the sizes of the "
                         f"{SIMPLICES[dim].plural} are out of its range); state them in other units")
@@ -241,7 +262,13 @@ def _assembled(options: ProblemOptions, mesh: meshes.Mesh, p, stiffness_law, tra
     constraints.check(grid)
     check_first_history(basis, initial, options.initial.stress, strain0, z0, viscoplastic, law_name, grid.k)
     return Problem(options, {}, mesh, basis, materials, A, free, loads, surface, law, probe, viscoplastic,
-                   initial=initial, initial_strain=strain0, initial_history=z0, constraints=constraints)
+                   initial=initial, initial_strain=strain0, initial_history=z0, constraints=constraints,
+                   partition=partition)
+
+
+def _shared(ranks: Ranks) -> str:
+    """How the stiffness is shared among ``ranks``, in words ("" in one process)."""
+    return "" if ranks.size == 1 else f", each of {ranks.size} MPI ranks assembling its rows"
 
 
 def mesh_words(m: MeshSource) -> str:

@@ -25,6 +25,7 @@ from .condensed import CondensedNewton
 from .distributed import DistributedNewton
 from .full import FullNewton, IterativeNewton
 from ..errors import CaseError
+from ..parallel.ranks import ALONE, Ranks
 from ..progress import SILENT, Progress
 from .errors import SingularMatrixError, SolverMemoryError
 from .factorization import installed_backends
@@ -89,10 +90,11 @@ def multigrid_reason(multigrid: str) -> str:
     return f"its CG preconditioned by {label} (solver.multigrid = \"auto\": petsc4py is {installed})"
 
 
-def augmentation_parameter(A, N, augmentation: float | None) -> float:
+def augmentation_parameter(A, N, augmentation: float | None, ranks: Ranks = ALONE) -> float:
     """The Alart–Curnier r: ``augmentation`` (solver.augmentation) or, for None, the median normal stiffness
-    at the contact nodes; CaseError for an ``augmentation`` more than 10¹² times away from that stiffness."""
-    r = default_augmentation(A, N)
+    at the contact nodes; CaseError for an ``augmentation`` more than 10¹² times away from that stiffness. On MPI
+    ranks (``ranks``), A is this rank's rows of the stiffness (r is the same on every rank)."""
+    r = default_augmentation(A, N, ranks)
     if augmentation is None:
         return r
     if not 1e-12 <= augmentation / r <= 1e12:

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..laws.contact import ContactLaw
 from ..parallel.dofs import norm  # noqa: F401  (the step solvers' norm, here with the rest they share)
+from ..parallel.ranks import ALONE, Ranks
 
 
 @dataclass(frozen=True)
@@ -103,11 +104,12 @@ class SolverWork:
         return SolverWork(*(mine + theirs for mine, theirs in zip(astuple(self), astuple(other))))
 
 
-def default_augmentation(A, N) -> float:
+def default_augmentation(A, N, ranks: Ranks = ALONE) -> float:
     """r = the median normal stiffness ν_iᵀ A_ii ν_i at the contact nodes: same units as the
-    problem, so no tuning is needed."""
+    problem, so no tuning is needed. On MPI ranks (``ranks``) A is a rank's rows: each contact node's value comes
+    from the rank that has its rows."""
     if N.shape[0] == 0:
         return 1.0
-    diagonal = np.asarray((N @ A).multiply(N).sum(axis=1)).ravel()
+    diagonal = ranks.sum(np.asarray((N @ A).multiply(N).sum(axis=1)).ravel())
     positive = diagonal[diagonal > 0.0]
     return float(np.median(positive)) if positive.size else 1.0

@@ -13,6 +13,7 @@ import scipy.sparse as sp
 
 from ..errors import CaseError
 from ..memory import available_memory
+from ..parallel.ranks import ALONE, Ranks
 from .cost import MethodCost, iterative_memory
 
 
@@ -31,12 +32,14 @@ def chosen_method(method: str, costs: dict[str, MethodCost]) -> tuple[str, str]:
                   (f"; {' and '.join(unfit)} would not fit in the memory available" if unfit else ""))
 
 
-def check_iterative_memory(A: sp.spmatrix, ranks: int = 1) -> None:
-    """Refuse, before building anything, an iterative method that would not fit in memory (its algebra shared
-    among ``ranks`` MPI ranks: each rank's share against the memory available here)."""
-    needed, available = iterative_memory(A) // ranks, available_memory()
+def check_iterative_memory(A: sp.spmatrix, ranks: Ranks = ALONE) -> None:
+    """Refuse, before building anything, an iterative method that would not fit in memory: on MPI ranks
+    (``ranks``), A is this rank's rows of the stiffness and the largest rank's share is weighed against the least
+    memory available to a rank, the same refusal on every rank."""
+    needed, available = ranks.max(iterative_memory(A)), -ranks.max(-available_memory())
     if needed > available:
-        shared = f" on each of {ranks} ranks" if ranks > 1 else ""
+        shared = f" on each of {ranks.size} ranks" if ranks.size > 1 else ""
         raise CaseError(f"solver.method = \"iterative\" needs about {needed / 2**30:.1f} GiB{shared} for "
-                        f"{A.shape[0]} dofs ({A.nnz} stiffness entries), more than the {available / 2**30:.1f} GiB "
-                        f"available; use a coarser mesh{' or more ranks' if ranks > 1 else ''}")
+                        f"{A.shape[0]} dofs ({int(ranks.sum(A.nnz))} stiffness entries), more than the "
+                        f"{available / 2**30:.1f} GiB available; use a coarser mesh"
+                        f"{' or more ranks' if ranks.size > 1 else ''}")

@@ -93,6 +93,11 @@ STEP_OVERHEAD_S = 1.5e-3
 ITERATIVE_BYTES_PER_ENTRY = 100
 
 
+def matrix_bytes(A: sp.csr_matrix) -> int:
+    """Bytes a CSR matrix holds: its values, column indices and row pointers."""
+    return int(A.data.nbytes + A.indices.nbytes + A.indptr.nbytes)
+
+
 def iterative_memory(A: sp.spmatrix) -> int:
     """Bytes the iterative method needs for the stiffness A (free dofs), at its peak."""
     return ITERATIVE_BYTES_PER_ENTRY * A.nnz

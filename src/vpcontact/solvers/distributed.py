@@ -10,8 +10,9 @@ IterativeNewton's own, line for line: its products need the ghosts' values (one 
 ranks) and its decisions only reductions (norms, the dot products of CG's start, the complementarity maximum and
 whether the active set changed), so every rank takes the same decisions.
 
-The time loop runs on every rank, on the whole problem but for the elements' history (each rank's own,
-:mod:`vpcontact.parallel.elements`): it gives each step's data, and
+The time loop runs on every rank, on the whole problem but for the stiffness (each rank assembled its rows alone,
+:mod:`vpcontact.problem.build`) and the elements' history (each rank's own, :mod:`vpcontact.parallel.elements`): it
+gives each step's data, and
 :class:`DistributedNewton` hands each rank its share and gathers the step's solution (u, λ, d and the active
 set) on every rank. The solution equals one process's iterative method's to the Newton tolerance (CG and GAMG on
 partitioned matrices take other iterates), and what the solver keeps across steps (the last correction, the

@@ -46,7 +46,6 @@ import numpy as np
 from ..fem.assembly import NonFiniteLoad
 from ..laws.contact import node_status
 from ..parallel.elements import ElementShare
-from ..parallel.ranks import ALONE, Ranks
 from ..estimate.indicators import Level
 from ..problem.build import Problem, checked_problem
 from ..problem.discretization import Discretization
@@ -77,30 +76,30 @@ class TimeLoop:
     ``run`` takes two hooks: ``after_step(loop)``, called after every completed time step (the checkpoints of
     :mod:`vpcontact.drivers.rundir`), and ``stop()``, asked before every step (a signal asked the run to stop: the
     status becomes "interrupted"). ``progress`` (:mod:`vpcontact.progress`; default: silent) hears of the solver's
-    set-up phases here, of the time steps in ``run``. ``ranks``: the MPI ranks running this loop together, each on
-    the whole problem, the step solver's algebra shared (:mod:`vpcontact.parallel`); ``stop`` must agree on all.
+    set-up phases here, of the time steps in ``run``. A problem shared among MPI ranks (``problem.ranks``) runs
+    on all of them together, the step solver's algebra shared (:mod:`vpcontact.parallel`); ``stop`` must agree.
     """
 
     def __init__(self, problem: Problem, output: OutputOptions | None = None, progress: Progress = SILENT,
-                 resumed_method: str | None = None, ranks: Ranks = ALONE):
+                 resumed_method: str | None = None):
         started = clock.perf_counter()
         self.problem, self.progress = checked_problem(problem), progress
         output = OutputOptions() if output is None else output
         free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
         A, N = free_operators(problem)
-        self.plan = plan = plan_run(problem, output, A, N, resumed_method, ranks.size)  # the refusals, first
+        self.plan = plan = plan_run(problem, output, A, N, resumed_method)  # the refusals, first
         modes = RigidModes.of_mesh(mesh.p, mesh.t, problem.basis.nodal_dofs)
         layout = DofLayout(free, mesh.dim(), mesh.nvertices, modes.matrix[free].toarray())
         rigid = modes.free_basis(free)
         self.motions = FreeMotions(rigid, surface.operator[:, free] @ rigid, surface.weights, options.tolerance)
 
-        self.method = RunMethod(problem, plan, A, N, layout, rigid, progress, ranks)
+        self.method = RunMethod(problem, plan, A, N, layout, rigid, progress)
         self.elements = ElementShare.of(problem, self.method.partition)  # the elements whose z this rank holds
         self.max_cuts = options.max_step_cuts
         constraints = problem.constraints
         #: A_fh, the coupling of the free and the held dofs: b = F_f − Bᵀz − A_fh u_D(t) (prescribed displacements)
-        self._coupling = problem.A[free][:, constraints.held].tocsr() if constraints.moves else None
+        self._coupling = problem.ranks.sum_matrix(problem.A[free][:, constraints.held]) if constraints.moves else None
         #: where b can be nonzero without z (positions among the free dofs): the loads' and the coupling's rows
         self._support = problem.loads.on(free).support
         if constraints.moves:
@@ -112,7 +111,7 @@ class TimeLoop:
         estimator = ESTIMATORS[EVERY_LEVEL] if output.error_estimate else None
         self.result = Result.start(discretization, problem.basis.N, self.solver, output,
                                    () if estimator is None else estimator.terms)
-        self.result.predicted, self.result.ranks = plan.predicted, ranks.size
+        self.result.predicted, self.result.ranks = plan.predicted, problem.ranks.size
         self.estimator = None if estimator is None else estimator.prepare(problem)
         self._created = started
         self.setup_time = clock.perf_counter() - started

@@ -16,8 +16,6 @@ import time as clock
 from dataclasses import replace
 
 from ..errors import CaseError
-from ..parallel.partition import NodePartition
-from ..parallel.ranks import ALONE, Ranks
 from ..progress import SILENT, Progress
 from ..solvers import SolverWork, make_solver
 from ..solvers.switch import MethodWeighing, Switch
@@ -30,13 +28,12 @@ class RunMethod:
     run) and of the method switched from; ``switch``: the switch made (None: none), ``switch_seconds`` what it took
     in this session."""
 
-    def __init__(self, problem, plan, A, N, layout, rigid, progress: Progress = SILENT, ranks: Ranks = ALONE):
-        """``ranks``: the MPI ranks that share the solve (:mod:`vpcontact.parallel`; the nodes are partitioned among
-        them), where the method is never switched."""
+    def __init__(self, problem, plan, A, N, layout, rigid, progress: Progress = SILENT):
+        """On the MPI ranks a problem is shared among (``problem.ranks``, :mod:`vpcontact.parallel`) the method is
+        never switched."""
         options, surface = problem.solver, problem.surface
-        mesh = problem.mesh.mesh
         #: the nodes shared among the ranks (None: one process)
-        self.partition = partition = None if ranks.size == 1 else NodePartition.of(mesh.t, mesh.nvertices, ranks)
+        self.partition = partition = problem.partition
 
         def solver_of(method: str, reason: str):
             return make_solver(method, A, N, surface.weights, surface.gap0, r=plan.augmentation, reason=reason,
@@ -45,9 +42,10 @@ class RunMethod:
                                multigrid=options.multigrid, layout=layout, progress=progress,
                                expected_seconds=plan.predicted[method]["setup_s"], partition=partition)
 
-        self._solver_of, self.progress, self._ranks = solver_of, progress, ranks
+        self._solver_of, self.progress, self._ranks = solver_of, progress, problem.ranks
+        self._entries = problem.A.nnz  # the entries of the stiffness this rank assembled
         self.solver = solver_of(plan.method, plan.method_reason)
-        if partition is not None:  # never switched: the whole A, which the ranks' solver no longer needs, is released
+        if partition is not None:  # never switched: the rows of A the ranks' solver has copied are released
             self._solver_of = None
         self.weighing = (MethodWeighing(A, N, problem.mesh.dim, plan.history, len(problem.times), plan.factor,
                                         plan.multigrid) if options.method == "auto" and partition is None else None)
@@ -57,10 +55,12 @@ class RunMethod:
 
     def ranks(self, elements: int) -> tuple[dict | None, list[int]]:
         """Each MPI rank's share of the solve (:attr:`~vpcontact.solvers.distributed.DistributedNewton.shares`) with
-        its ``elements`` (those whose history it holds; None in one process), and each one's peak resident memory so
-        far, in bytes: a collective call, every rank makes it."""
+        its ``elements`` (those whose history it holds) and the entries of its rows of the stiffness it assembled (None
+        in one process), and each one's peak resident memory so far, in bytes: a collective call, every rank makes
+        it."""
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # Linux gives kilobytes
-        shares = {**self.solver.shares, "elements": self._ranks.each(elements)} if self._ranks.size > 1 else None
+        shares = None if self._ranks.size == 1 else {**self.solver.shares, "elements": self._ranks.each(elements),
+                                                     "stiffness_entries": self._ranks.each(self._entries)}
         return shares, self._ranks.each(peak)
 
     def work(self) -> SolverWork:

@@ -96,20 +96,22 @@ def free_operators(problem: Problem) -> tuple[sp.csr_matrix, sp.csr_matrix]:
 
 
 def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
-             resumed_method: str | None = None, ranks: int = 1) -> RunPlan:
+             resumed_method: str | None = None) -> RunPlan:
     """The plan of a run of ``problem`` with the output options ``output`` (``output.field_steps`` and
     ``output.error_estimate``), whose stiffness and contact operator on the free dofs are A and N
     (:func:`free_operators`); CaseError for a run that cannot be made (see the module's docstring). A run resumed
     from a checkpoint made by ``resumed_method`` keeps it for ``solver.method = "auto"`` (the prediction weighs
     this machine's speed now: another session could choose another method, and the resumed run would then not
-    be the uninterrupted one bit for bit). On ``ranks`` MPI ranks (more than one) the method is the iterative one
-    with PETSc's GAMG, the one that shares a solve among ranks (:func:`ranks_method`)."""
+    be the uninterrupted one bit for bit). For a problem shared among MPI ranks (``problem.ranks``), whose A is this
+    rank's rows, the method is the iterative one with PETSc's GAMG, the one that shares a solve among ranks
+    (:func:`ranks_method`), and the costs and memory predicted are this rank's."""
+    ranks = problem.ranks.size
     mesh, surface, times = problem.mesh, problem.surface, problem.times
     nodes, elements = mesh.mesh.p.shape[1], mesh.mesh.t.shape[1]
     history = problem.viscoplastic is not None or bool(np.any(problem.initial_history != 0.0))
     held = len(held_parts(problem))
     check_memory(len(times), output, nodes, elements, surface.size, history, mesh.dim, held)
-    r = augmentation_parameter(A, N, problem.solver.augmentation)
+    r = augmentation_parameter(A, N, problem.solver.augmentation, problem.ranks)
     field_steps = len(field_step_numbers(output.field_steps, len(times)))
     multigrid = chosen_multigrid(problem.solver.multigrid) if ranks == 1 else "petsc"
     asked = problem.solver.method if ranks == 1 else "iterative"
@@ -123,8 +125,8 @@ def plan_run(problem: Problem, output, A: sp.csr_matrix, N: sp.csr_matrix,
         check_condensed_memory(N, A.shape[0])
         solver_memory = condensed_memory(N, A.shape[0])
     elif method == "iterative":
-        check_iterative_memory(A, ranks)
-        solver_memory = iterative_memory(A) // ranks
+        check_iterative_memory(A, problem.ranks)
+        solver_memory = iterative_memory(A)
     outputs = memory_needed(len(times), field_steps, nodes, elements, surface.size, history, mesh.dim,
                             estimate=output.error_estimate, held_parts=held)
     build = problem.timings.get("build", 0.0)

@@ -59,10 +59,11 @@ class Reactions:
                                       shape=(dim, basis.N)))
         free, constraints = problem.free, problem.constraints
         #: M (2k × free dofs): E A (the elastic part of the reactions) over the mean displacements
-        self.M = sp.vstack([self.E @ problem.A[:, free], *(m[:, free] for m in mean)]).tocsr() if parts else None
+        whole = problem.ranks.sum_matrix  # on MPI ranks, E A from every rank's rows of A
+        self.M = sp.vstack([whole(self.E @ problem.A[:, free]), *(m[:, free] for m in mean)]).tocsr() if parts else None
         #: M_h (2k × held dofs): the same rows on the held dofs, for a prescribed u_D (None: u_D = 0)
-        self.M_held = sp.vstack([self.E @ problem.A[:, constraints.held], *(m[:, constraints.held] for m in mean)
-                                 ]).tocsr() if parts and constraints.moves else None
+        self.M_held = None if not (parts and constraints.moves) else sp.vstack(
+            [whole(self.E @ problem.A[:, constraints.held]), *(m[:, constraints.held] for m in mean)]).tocsr()
         self._contact = (self.E @ problem.surface.operator.T).tocsr()  # k × m: E Nᵀ
         self._weights = problem.surface.weights
         self.columns = held_part_columns(dim, parts)
