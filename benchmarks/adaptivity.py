@@ -12,6 +12,12 @@ the reference at t = 0.5 and 1.1, on the reference mesh (the solution interpolat
     E = ‖I_ref u_h − u_ref‖_E   the energy norm (∫ ℰε:ε, vpcontact.results.norms.element_energies),
     V = ‖ε(I_ref u_h − u_ref)‖   and Q = ‖Π_ref σ_h − σ_ref‖, the paper's norms (vpcontact.results.norms.differences).
 
+The effectivity η(t) / E(t) of every uniform level and adaptive cycle (η(t) = (Σ_K η_K²(t))^½ of the chosen
+estimator at that step) is reported twice for the cycles: against the uniform reference, and against a nested
+reference, the last cycle's mesh with at most --nested-max-dofs dofs refined uniformly twice (so four times finer
+than every cycle up to it, everywhere: the uniform reference is coarser than the last cycles' meshes at the singular
+point (1, 1), and misses their error there; docs/adaptivity.md, "The effectivity on adaptive meshes").
+
 The adaptive cycles go on until the next mesh would have more than twice the dofs of the uniform 1/256 mesh
 (or --cycles), so that the adaptive curve passes that mesh's dofs. The target is that mesh's error: for
 each error the script reports the dofs the adaptive method needs to reach the target, interpolated linearly
@@ -41,6 +47,9 @@ import vpcontact
 from vpcontact import adapt
 from vpcontact.case.translate import adapt_options, output_options
 from vpcontact.adaptivity.cycles import solve_and_estimate
+from vpcontact.estimate.estimators import ESTIMATORS
+from vpcontact.estimate.indicators import Level
+from vpcontact.mesh.refinement import refine
 from vpcontact.results.norms import differences, element_energies, transfer
 from vpcontact import build_problem
 from vpcontact.mesh.simplex import determinants
@@ -89,6 +98,43 @@ class Reference:
         return found
 
 
+def estimates(result, beta: float, estimator: str) -> dict[str, float]:
+    """η(t) = (Σ_K η_K²(t))^½ of ``estimator`` at the compared steps of ``result`` (a run of the example on its mesh)."""
+    problem = build_problem(load(8, beta, {}), mesh=result.discretization.mesh)
+    prepared = ESTIMATORS[estimator].prepare(problem)
+    return {f"eta({t})": float(np.sqrt(prepared(Level.of(result, step, problem)).squared.sum()))
+            for step, t in TIMES.items()}
+
+
+def effectivities(eta: dict[str, float], errors: dict[str, float]) -> dict[str, float]:
+    """η(t) / E(t) at the compared times."""
+    return {f"effectivity({t})": eta[f"eta({t})"] / errors[f"E({t})"] for t in TIMES.values()}
+
+
+def nested_reference(cycles: list, beta: float, most: int) -> tuple[dict, "Reference"]:
+    """The last of the adaptive ``cycles`` (their runs) with at most ``most`` dofs, its mesh refined uniformly twice
+    and the example solved there: (its description, the reference)."""
+    chosen = [c for c in cycles if c.dofs <= most][-1]
+    mesh = chosen.discretization.mesh
+    for _ in range(2):
+        mesh = refine(mesh, np.arange(mesh.mesh.t.shape[1]))
+    started = time.perf_counter()
+    run = complete(vpcontact.solve(build_problem(load(8, beta, {}), mesh=mesh), output={"field_steps": list(TIMES)}))
+    described = {"from_cycle": cycles.index(chosen) + 1, "dofs": int(run.dofs), "solve_s": time.perf_counter() - started}
+    return described, Reference(run)
+
+
+def rates(rows: dict[str, list[dict]], least: int) -> dict:
+    """The convergence rates in dofs of each error and of the estimate, for each kind of ``rows`` (uniform,
+    adaptive), over the rows with at least ``least`` dofs."""
+    found = {"from_dofs": least}
+    for kind, chosen in rows.items():
+        dofs = [r["dofs"] for r in chosen]
+        found[kind] = {name: rate(dofs, [r["errors"][name] for r in chosen], least) for name in ERRORS}
+        found[kind]["estimate"] = rate(dofs, [r["estimate"] for r in chosen], least)
+    return found
+
+
 def reach(uniform: dict, cycles: list[dict]) -> dict:
     """For each error: the uniform mesh's, the dofs the adaptive cycles need to reach it
     (`vpcontact.reproduction.records.dofs_reaching`; None if no cycle does) and their ratio to the uniform mesh's dofs."""
@@ -135,7 +181,7 @@ def study(beta: float, args) -> dict:
         f"{found['reference']['solve_s']:.1f} s")
     del reference_run
 
-    found["uniform"] = []
+    found["uniform"], uniform_runs = [], []
     for level in args.levels:
         started = time.perf_counter()
         case = load(level, beta, settings)
@@ -143,17 +189,22 @@ def study(beta: float, args) -> dict:
                                                 output_options(case.output))
         row = {"level": level, "dofs": int(complete(result).dofs), "contact_nodes": int(result.contact_nodes),
                "estimate": float(np.sqrt(functional.sum())), "errors": reference.errors(result),
-               "wall_time_s": time.perf_counter() - started}
+               "wall_time_s": time.perf_counter() - started, **estimates(result, beta, args.estimator)}
+        row |= effectivities(row, row["errors"])
         found["uniform"].append(row)
+        uniform_runs.append(result)
         log(f"  uniform 1/{level}: {row['dofs']} dofs, estimate {row['estimate']:.4g}, "
             + ", ".join(f"{name} {value:.4g}" for name, value in row["errors"].items()))
     last = found["uniform"][-1]
 
-    found["adaptive"] = []
+    found["adaptive"], runs = [], []
 
     def report(cycle) -> None:
-        row = {**cycle.row, "errors": reference.errors(complete(cycle.result))}
+        row = {**cycle.row, "errors": reference.errors(complete(cycle.result)),
+               **estimates(cycle.result, beta, args.estimator)}
+        row |= effectivities(row, row["errors"])
         found["adaptive"].append(row)
+        runs.append(cycle.result)
         log(f"  cycle {row['cycle']}: {row['dofs']} dofs, estimate {row['estimate']:.4g}, "
             + ", ".join(f"{name} {value:.4g}" for name, value in row["errors"].items()) + f", {row['wall_time_s']:.1f} s")
 
@@ -161,17 +212,32 @@ def study(beta: float, args) -> dict:
     adaptation = adapt(build_problem(case), case.adapt, case.output, after_cycle=report)
     found["stopped"] = adaptation.message
     log(f"  {found['stopped']}")
+    found["nested_reference"], finer = nested_reference(runs, beta, args.nested_max_dofs)
+    log(f"  nested reference: cycle {found['nested_reference']['from_cycle']} refined twice, "
+        f"{found['nested_reference']['dofs']} dofs, {found['nested_reference']['solve_s']:.1f} s")
+    compared = found["adaptive"][:found["nested_reference"]["from_cycle"]]
+    for row, run in [*zip(found["uniform"], uniform_runs), *zip(compared, runs)]:
+        row["nested_errors"] = finer.errors(run)
+        row["nested_effectivity"] = effectivities(row, row["nested_errors"])
+        log(f"  {row['dofs']} dofs: E(1.1) {row['nested_errors']['E(1.1)']:.4g} against the nested reference, "
+            f"effectivity {row['effectivity(1.1)']:.2f} against the uniform reference, "
+            f"{row['nested_effectivity']['effectivity(1.1)']:.2f} against the nested one")
+    del finer
+    runs.clear()  # the runs' fields: no longer needed
+    uniform_runs.clear()
 
     cycles = found["adaptive"]
     found["reach"] = [reach(uniform, cycles) for uniform in found["uniform"]]
     found["target"] = found["reach"][-1]
     least = min((u["dofs"] for u in found["uniform"] if u["level"] >= RATE_FROM), default=0)
-    found["rates"] = {"from_dofs": least, "uniform": {}, "adaptive": {}}
-    for kind in ("uniform", "adaptive"):
-        rows = found[kind]
-        dofs = [r["dofs"] for r in rows]
-        found["rates"][kind] = {name: rate(dofs, [r["errors"][name] for r in rows], least) for name in ERRORS}
-        found["rates"][kind]["estimate"] = rate(dofs, [r["estimate"] for r in rows], least)
+    found["rates"] = rates({"uniform": found["uniform"], "adaptive": cycles}, least)
+
+    def nested_rows(rows: list[dict]) -> list[dict]:
+        return [{**row, "errors": row["nested_errors"]} for row in rows if "nested_errors" in row]
+
+    nested = {"uniform": nested_rows(found["uniform"]), "adaptive": nested_rows(cycles)}
+    found["nested_reach"] = [reach(uniform, nested["adaptive"]) for uniform in nested["uniform"]]
+    found["nested_rates"] = rates(nested, least)
     found["last_mesh"] = where_fine(adaptation.mesh)
     return found
 
@@ -217,6 +283,8 @@ def main() -> None:
                         help="1/h of the uniform meshes; the last one's errors are the adaptive target")
     parser.add_argument("--start", type=int, default=8, help="1/h of the first adaptive mesh")
     parser.add_argument("--cycles", type=int, default=30, help="at most this many adaptive cycles")
+    parser.add_argument("--nested-max-dofs", type=int, default=100_000,
+                        help="the nested reference refines the last cycle's mesh with at most this many dofs twice")
     parser.add_argument("--out", type=Path, help="write adaptivity_<estimator>.json and .png there")
     args = parser.parse_args()
     if args.reference <= max(args.levels):

@@ -53,7 +53,7 @@ def test_the_residual_adaptive_mesh_beats_the_uniform_mesh_of_about_the_same_dof
 
 def test_the_adaptivity_benchmark_reports_the_dofs_to_reach_the_uniform_error(tmp_path):
     """benchmarks/adaptivity.py on small meshes (1/8, 1/16 against 1/32): its JSON, the interpolated dofs at the
-    target between the two cycles around it, and the figure."""
+    target between the two cycles around it, the effectivities and the figure."""
     command = [sys.executable, str(ROOT / "benchmarks" / "adaptivity.py"), "--beta", "-1", "--reference", "32",
                "--levels", "8", "16", "--out", str(tmp_path)]
     done = subprocess.run(command, capture_output=True, text=True, timeout=300)
@@ -74,3 +74,20 @@ def test_the_adaptivity_benchmark_reports_the_dofs_to_reach_the_uniform_error(tm
         first = next(i for i, error in enumerate(errors) if error <= found["uniform_error"])
         assert (dofs[first - 1] if first else dofs[0]) <= found["adaptive_dofs"] <= dofs[first]
         assert found["ratio"] == found["adaptive_dofs"] / study["uniform"][-1]["dofs"]
+    assert_the_effectivity_does_not_drift_against_the_nested_reference(study)
+
+
+def assert_the_effectivity_does_not_drift_against_the_nested_reference(study: dict) -> None:
+    """The effectivity η / E of every cycle, against the uniform reference and against the last cycle's mesh refined
+    twice: against the nested reference it does not drift over the cycles (the estimator's constant holds on graded
+    meshes), against the uniform reference, coarser than the cycles' meshes at the singular point, it grows."""
+    cycles, nested = study["adaptive"], study["nested_reference"]
+    assert nested["from_cycle"] == len(cycles) and 12 * cycles[-1]["dofs"] < nested["dofs"] < 17 * cycles[-1]["dofs"]
+    for row in cycles:
+        for t in (0.5, 1.1):
+            assert row[f"effectivity({t})"] == row[f"eta({t})"] / row["errors"][f"E({t})"]
+            assert row["nested_effectivity"][f"effectivity({t})"] == row[f"eta({t})"] / row["nested_errors"][f"E({t})"]
+    nested_values = [row["nested_effectivity"]["effectivity(1.1)"] for row in cycles]
+    uniform_values = [row["effectivity(1.1)"] for row in cycles]
+    assert 2.0 < min(nested_values) and max(nested_values) < 1.25 * min(nested_values)
+    assert uniform_values[-1] > 1.25 * uniform_values[0]
