@@ -1,5 +1,5 @@
-"""Adaptive against uniform refinement on the paper's example: prints JSON (docs/adaptivity.md, "Measured on
-the paper's example").
+"""Adaptive against uniform refinement on the paper's example, or on a flat punch (--punch): prints JSON
+(docs/adaptivity.md, "Measured on the paper's example" and "Measured on a flat punch").
 
 For each β, examples/paper_ball.toml is solved on a uniform reference mesh (h = 1/512: 477,194 dofs), on the
 uniform meshes h = 1/8 … 1/256 and in the adaptive cycles of [adapt] from h = 1/8, all on the example's own
@@ -30,6 +30,11 @@ dofs (DIR/adaptivity_<estimator>.png).
 
     python benchmarks/adaptivity.py --out docs/figures          # β = 1 and −1, residual estimator
     python benchmarks/adaptivity.py --estimator recovery --beta 1
+    python benchmarks/adaptivity.py --punch --out docs/figures    # the punch of benchmarks/effectivity.py
+
+The punch (benchmarks/effectivity.py: the unit square pressed onto a flat rigid punch under half its bottom, the
+pressure growing like r^(−1/2) at the punch's edge) runs on the same time grid, its meshes with h = 1/n, and writes
+adaptivity_punch_<estimator>.json and .png.
 """
 
 from __future__ import annotations
@@ -40,6 +45,8 @@ import math
 import sys
 import time
 from pathlib import Path
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -56,6 +63,8 @@ from vpcontact.mesh.simplex import determinants
 from vpcontact.reproduction.plan import level_overrides
 from vpcontact.reproduction.records import dofs_reaching
 
+from effectivity import punch_case
+
 CASE = Path(__file__).resolve().parent.parent / "examples" / "paper_ball.toml"
 TIMES = {5: 0.5, 11: 1.1}  # step → t on the example's grid
 ERRORS = ("E(0.5)", "E(1.1)", "V(0.5)", "V(1.1)", "Q(0.5)", "Q(1.1)")
@@ -66,11 +75,31 @@ def log(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
-def load(level: int, beta: float, settings: dict):
-    """The example at h = 1/level (element edge √2/level) on its own 11 steps, with [adapt] ``settings``."""
-    return vpcontact.load_case(CASE, {"mesh.h": level_overrides(level)["mesh.h"], "contact.stiffness.beta": beta,
-                                      "output.field_steps": list(TIMES), "output.progress": False,
-                                      **{f"adapt.{key}": value for key, value in settings.items()}})
+@dataclass(frozen=True)
+class Example:
+    """A problem compared: the paper's example with the layer's ``beta``, or (``beta`` None) the flat rigid punch of
+    benchmarks/effectivity.py (the unit square, r^(−1/2) at the punch's edge), both on the paper's 11 steps."""
+
+    beta: float | None
+
+    @property
+    def label(self) -> str:
+        return "the punch" if self.beta is None else f"β = {self.beta:g}"
+
+    @property
+    def singular_point(self) -> tuple[float, float]:
+        """Where the stress is singular: the end of Γ3 at (1, 1), or the punch's edge at (1/2, 0)."""
+        return (0.5, 0.0) if self.beta is None else (1.0, 1.0)
+
+    def load(self, level: int, settings: dict):
+        """The example at h = 1/level (the paper's: element edge √2/level; the punch's square: h = 1/level), its
+        fields kept at the compared steps, with [adapt] ``settings``."""
+        if self.beta is None:
+            data = punch_case(level, None, list(TIMES)).model_dump(exclude_none=True)
+            return vpcontact.Case.model_validate({**data, "adapt": settings} if settings else data)
+        return vpcontact.load_case(CASE, {"mesh.h": level_overrides(level)["mesh.h"], "contact.stiffness.beta": self.beta,
+                                          "output.field_steps": list(TIMES), "output.progress": False,
+                                          **{f"adapt.{key}": value for key, value in settings.items()}})
 
 
 def complete(result):
@@ -98,9 +127,9 @@ class Reference:
         return found
 
 
-def estimates(result, beta: float, estimator: str) -> dict[str, float]:
+def estimates(result, example: Example, estimator: str) -> dict[str, float]:
     """η(t) = (Σ_K η_K²(t))^½ of ``estimator`` at the compared steps of ``result`` (a run of the example on its mesh)."""
-    problem = build_problem(load(8, beta, {}), mesh=result.discretization.mesh)
+    problem = build_problem(example.load(8, {}), mesh=result.discretization.mesh)
     prepared = ESTIMATORS[estimator].prepare(problem)
     return {f"eta({t})": float(np.sqrt(prepared(Level.of(result, step, problem)).squared.sum()))
             for step, t in TIMES.items()}
@@ -111,7 +140,7 @@ def effectivities(eta: dict[str, float], errors: dict[str, float]) -> dict[str, 
     return {f"effectivity({t})": eta[f"eta({t})"] / errors[f"E({t})"] for t in TIMES.values()}
 
 
-def nested_reference(cycles: list, beta: float, most: int) -> tuple[dict, "Reference"]:
+def nested_reference(cycles: list, example: Example, most: int) -> tuple[dict, "Reference"]:
     """The last of the adaptive ``cycles`` (their runs) with at most ``most`` dofs, its mesh refined uniformly twice
     and the example solved there: (its description, the reference)."""
     chosen = [c for c in cycles if c.dofs <= most][-1]
@@ -119,7 +148,7 @@ def nested_reference(cycles: list, beta: float, most: int) -> tuple[dict, "Refer
     for _ in range(2):
         mesh = refine(mesh, np.arange(mesh.mesh.t.shape[1]))
     started = time.perf_counter()
-    run = complete(vpcontact.solve(build_problem(load(8, beta, {}), mesh=mesh), output={"field_steps": list(TIMES)}))
+    run = complete(vpcontact.solve(build_problem(example.load(8, {}), mesh=mesh), output={"field_steps": list(TIMES)}))
     described = {"from_cycle": cycles.index(chosen) + 1, "dofs": int(run.dofs), "solve_s": time.perf_counter() - started}
     return described, Reference(run)
 
@@ -157,39 +186,41 @@ def rate(dofs: list[int], errors: list[float], least: int) -> float | None:
     return float(np.polyfit(x, y, 1)[0])
 
 
-def where_fine(mesh) -> dict:
-    """The median and least element size (√(2|K|), about the edge) in bands of height and near (1, 1)."""
+def where_fine(mesh, point: tuple[float, float]) -> dict:
+    """The median and least element size (√(2|K|), about the edge) in bands of height and near the singular
+    ``point``."""
     size = np.sqrt(2.0 * np.abs(determinants(mesh.mesh.p, mesh.mesh.t)))
     x, y = mesh.centroids
     bands = {f"y in [{low}, {high})": (y >= low) & (y < high)
              for low, high in ((0.0, 0.1), (0.1, 0.3), (0.3, 0.6), (0.6, 1.0), (1.0, 2.0))}
-    bands["within 0.05 of (1, 1)"] = np.hypot(x - 1.0, y - 1.0) < 0.05
+    bands[f"within 0.05 of ({point[0]:g}, {point[1]:g})"] = np.hypot(x - point[0], y - point[1]) < 0.05
     return {name: {"elements": int(inside.sum()), "median_size": float(np.median(size[inside])),
                    "min_size": float(size[inside].min())} for name, inside in bands.items() if inside.any()}
 
 
-def study(beta: float, args) -> dict:
-    """Reference, uniform levels and adaptive cycles for one β."""
+def study(example: Example, args) -> dict:
+    """Reference, uniform levels and adaptive cycles for one example."""
     settings = {"cycles": args.cycles, "theta": args.theta, "functional": args.functional,
                 "estimator": args.estimator}
     started = time.perf_counter()
-    reference_run = complete(vpcontact.solve(load(args.reference, beta, {})))
+    reference_run = complete(vpcontact.solve(example.load(args.reference, {})))
     reference = Reference(reference_run)
-    found = {"beta": beta, "reference": {"level": args.reference, "dofs": int(reference_run.dofs),
-                                         "solve_s": time.perf_counter() - started}}
-    log(f"β = {beta}: reference h = 1/{args.reference}, {reference_run.dofs} dofs, "
+    found = {"beta": example.beta, "example": example.label,
+             "reference": {"level": args.reference, "dofs": int(reference_run.dofs),
+                           "solve_s": time.perf_counter() - started}}
+    log(f"{example.label}: reference h = 1/{args.reference}, {reference_run.dofs} dofs, "
         f"{found['reference']['solve_s']:.1f} s")
     del reference_run
 
     found["uniform"], uniform_runs = [], []
     for level in args.levels:
         started = time.perf_counter()
-        case = load(level, beta, settings)
+        case = example.load(level, settings)
         result, functional = solve_and_estimate(build_problem(case), adapt_options(case.adapt),
                                                 output_options(case.output))
         row = {"level": level, "dofs": int(complete(result).dofs), "contact_nodes": int(result.contact_nodes),
                "estimate": float(np.sqrt(functional.sum())), "errors": reference.errors(result),
-               "wall_time_s": time.perf_counter() - started, **estimates(result, beta, args.estimator)}
+               "wall_time_s": time.perf_counter() - started, **estimates(result, example, args.estimator)}
         row |= effectivities(row, row["errors"])
         found["uniform"].append(row)
         uniform_runs.append(result)
@@ -201,18 +232,18 @@ def study(beta: float, args) -> dict:
 
     def report(cycle) -> None:
         row = {**cycle.row, "errors": reference.errors(complete(cycle.result)),
-               **estimates(cycle.result, beta, args.estimator)}
+               **estimates(cycle.result, example, args.estimator)}
         row |= effectivities(row, row["errors"])
         found["adaptive"].append(row)
         runs.append(cycle.result)
         log(f"  cycle {row['cycle']}: {row['dofs']} dofs, estimate {row['estimate']:.4g}, "
             + ", ".join(f"{name} {value:.4g}" for name, value in row["errors"].items()) + f", {row['wall_time_s']:.1f} s")
 
-    case = load(args.start, beta, {**settings, "max_dofs": 2 * last["dofs"]})
+    case = example.load(args.start, {**settings, "max_dofs": 2 * last["dofs"]})
     adaptation = adapt(build_problem(case), case.adapt, case.output, after_cycle=report)
     found["stopped"] = adaptation.message
     log(f"  {found['stopped']}")
-    found["nested_reference"], finer = nested_reference(runs, beta, args.nested_max_dofs)
+    found["nested_reference"], finer = nested_reference(runs, example, args.nested_max_dofs)
     log(f"  nested reference: cycle {found['nested_reference']['from_cycle']} refined twice, "
         f"{found['nested_reference']['dofs']} dofs, {found['nested_reference']['solve_s']:.1f} s")
     compared = found["adaptive"][:found["nested_reference"]["from_cycle"]]
@@ -238,12 +269,13 @@ def study(beta: float, args) -> dict:
     nested = {"uniform": nested_rows(found["uniform"]), "adaptive": nested_rows(cycles)}
     found["nested_reach"] = [reach(uniform, nested["adaptive"]) for uniform in nested["uniform"]]
     found["nested_rates"] = rates(nested, least)
-    found["last_mesh"] = where_fine(adaptation.mesh)
+    found["last_mesh"] = where_fine(adaptation.mesh, example.singular_point)
     return found
 
 
-def figure(studies: list[dict], estimator: str, out: Path) -> Path:
-    """Error (E and V at t = 1.1) and estimate against dofs, uniform and adaptive, log–log, one panel per β."""
+def figure(studies: list[dict], estimator: str, path: Path) -> Path:
+    """The energy error E(1.1) against the uniform and the nested reference, and the estimate, against dofs, uniform
+    and adaptive, log–log, one panel per example."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -254,7 +286,11 @@ def figure(studies: list[dict], estimator: str, out: Path) -> Path:
         for kind, marker in (("uniform", "o-"), ("adaptive", "s-")):
             rows = found[kind]
             dofs = [r["dofs"] for r in rows]
-            ax.loglog(dofs, [r["errors"]["E(1.1)"] for r in rows], marker, ms=4, label=f"{kind}: energy error E(1.1)")
+            ax.loglog(dofs, [r["errors"]["E(1.1)"] for r in rows], marker, ms=4, alpha=0.5,
+                      label=f"{kind}: E(1.1), uniform reference")
+            nested = [r for r in rows if "nested_errors" in r]
+            ax.loglog([r["dofs"] for r in nested], [r["nested_errors"]["E(1.1)"] for r in nested], marker, ms=4, lw=2,
+                      label=f"{kind}: E(1.1), nested reference")
             ax.loglog(dofs, [r["estimate"] for r in rows], marker.replace("-", ":"), ms=3, alpha=0.6,
                       label=f"{kind}: estimate ({estimator})")
         target = found["target"]
@@ -262,11 +298,11 @@ def figure(studies: list[dict], estimator: str, out: Path) -> Path:
                    label=f"uniform 1/{target['uniform_level']} error")
         ax.set_xlabel("dofs")
         ax.set_ylabel("energy norm")
-        ax.set_title(f"β = {found['beta']:g}: against the uniform 1/{found['reference']['level']} reference")
+        ax.set_title(f"{found['example']}: uniform 1/{found['reference']['level']} and nested "
+                     f"({found['nested_reference']['dofs']:,} dofs) references")
         ax.grid(True, which="both", lw=0.3)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    path = out / f"adaptivity_{estimator}.png"
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
@@ -274,7 +310,8 @@ def figure(studies: list[dict], estimator: str, out: Path) -> Path:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--beta", type=float, nargs="+", default=[1.0, -1.0])
+    parser.add_argument("--beta", type=float, nargs="+", default=[1.0, -1.0], help="the paper's example's β")
+    parser.add_argument("--punch", action="store_true", help="the flat punch instead of the paper's example")
     parser.add_argument("--estimator", choices=("residual", "recovery"), default="residual")
     parser.add_argument("--functional", choices=("max", "l2"), default="max")
     parser.add_argument("--theta", type=float, default=0.5)
@@ -291,17 +328,21 @@ def main() -> None:
         parser.error(f"--reference 1/{args.reference} must be finer than the finest uniform level 1/{max(args.levels)}")
 
     started = time.perf_counter()
-    studies = [study(beta, args) for beta in args.beta]
-    report = {"case": "examples/paper_ball.toml", "time_steps": 11, "times": list(TIMES.values()),
+    examples = [Example(None)] if args.punch else [Example(beta) for beta in args.beta]
+    studies = [study(example, args) for example in examples]
+    report = {"case": "punch (benchmarks/effectivity.py)" if args.punch else "examples/paper_ball.toml",
+              "time_steps": 11, "times": list(TIMES.values()),
               "estimator": args.estimator, "functional": args.functional, "theta": args.theta,
-              "mesh_convention": "h = 1/n: element edge √2/n (vpcontact.reproduction.plan.level_overrides)",
+              "mesh_convention": "h = 1/n: the mesh's h" if args.punch else
+              "h = 1/n: element edge √2/n (vpcontact.reproduction.plan.level_overrides)",
               "studies": studies, "wall_time_s": time.perf_counter() - started}
     text = json.dumps(report, indent=1)
     print(text)
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
-        (args.out / f"adaptivity_{args.estimator}.json").write_text(text + "\n")
-        log(f"wrote {figure(studies, args.estimator, args.out)}")
+        name = f"adaptivity_{'punch_' if args.punch else ''}{args.estimator}"
+        (args.out / f"{name}.json").write_text(text + "\n")
+        log(f"wrote {figure(studies, args.estimator, args.out / f'{name}.png')}")
 
 
 if __name__ == "__main__":
