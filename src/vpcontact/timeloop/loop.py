@@ -95,7 +95,7 @@ class TimeLoop:
         self.motions = FreeMotions(rigid, surface.operator[:, free] @ rigid, surface.weights, options.tolerance)
 
         self.method = RunMethod(problem, plan, A, N, layout, rigid, progress)
-        self.elements = ElementShare.of(problem, self.method.partition)  # the elements whose z this rank holds
+        self.elements = ElementShare.of(problem, problem.partition)  # the elements whose z this rank holds
         self.max_cuts = options.max_step_cuts
         constraints = problem.constraints
         #: A_fh, the coupling of the free and the held dofs: b = F_f − Bᵀz − A_fh u_D(t) (prescribed displacements)

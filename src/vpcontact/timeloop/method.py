@@ -32,8 +32,7 @@ class RunMethod:
         """On the MPI ranks a problem is shared among (``problem.ranks``, :mod:`vpcontact.parallel`) the method is
         never switched."""
         options, surface = problem.solver, problem.surface
-        #: the nodes shared among the ranks (None: one process)
-        self.partition = partition = problem.partition
+        partition = problem.partition  # the nodes shared among the ranks (None: one process)
 
         def solver_of(method: str, reason: str):
             return make_solver(method, A, N, surface.weights, surface.gap0, r=plan.augmentation, reason=reason,
