@@ -28,6 +28,7 @@ from .timeloop.loop import TimeLoop, solve_problem
 
 if TYPE_CHECKING:
     from .adaptivity.cycles import Adaptation
+    from .adaptivity.during_run import RunAdaptation
 
 
 def build_problem(case, *, mesh=None, progress: Progress = SILENT, **laws) -> Problem:
@@ -73,13 +74,24 @@ def solve(case, *, output=None, progress=False, **laws) -> Result:
 
 def adapt(problem: Problem, settings, output=None, *, after_cycle: Callable | None = None,
           stop: Callable[[], str | None] | None = None, progress=False,
-          after_step: Callable[[TimeLoop], None] | None = None) -> Adaptation:
-    """The adaptive cycles of ``settings`` (the ``[adapt]`` table: a dict, or a case's ``case.adapt``) from the
-    mesh of ``problem``, each run with the outputs ``output`` (the ``[output]`` table; default: its defaults):
-    see :func:`vpcontact.adaptivity.cycles.adapt`, whose hooks ``after_cycle``, ``stop`` and ``after_step`` these
-    are; ``progress``: True for each cycle, its set-up, steps and refinement reported on stderr, or a reporter."""
+          after_step: Callable[[TimeLoop], None] | None = None) -> Adaptation | RunAdaptation:
+    """The adaptive meshes of ``settings`` (the ``[adapt]`` table: a dict, or a case's ``case.adapt``) from the
+    mesh of ``problem``, run with the outputs ``output`` (the ``[output]`` table; default: its defaults). With
+    ``mode = "cycles"`` (the default) the cycles of :func:`vpcontact.adaptivity.cycles.adapt`, whose hooks
+    ``after_cycle``, ``stop`` and ``after_step`` these are (an Adaptation); with ``mode = "run"`` one run that
+    refines its mesh between steps, :func:`vpcontact.adaptivity.during_run.adapt_during_run` (a RunAdaptation;
+    ``after_step`` is called after each accepted step). ``progress``: True for every phase reported on stderr,
+    or a reporter."""
+    settings, output = adapt_options(settings), output_options(output)
+    if settings.mode == "run":
+        if after_cycle is not None:
+            raise CaseError("after_cycle is a hook of adapt.mode = \"cycles\": a run that adapts during the run has "
+                            "no cycles (after_step is called after each accepted step)")
+        from .adaptivity.during_run import adapt_during_run
+
+        with reporting(progress) as reporter:
+            return adapt_during_run(problem, settings, output, stop=stop, progress=reporter, after_step=after_step)
     from .adaptivity.cycles import adapt as cycles  # adaptive runs only: refinement is not loaded for the others
 
-    settings, output = adapt_options(settings), output_options(output)
     return cycles(problem, settings, output, after_cycle=after_cycle, stop=stop, progress=progress,
                   after_step=after_step)

@@ -150,7 +150,8 @@ def _run_case(args, ranks) -> int:
         print(f"vpcontact: {outcome.message}")
         return 0
     if case.adapt is not None:
-        print(f"adaptive: {outcome.message}; adapt.csv, cycles/ and the final_mesh.msh -> {args.out}")
+        written = "adapt.csv, cycles/" if case.adapt.mode == "cycles" else "adapt.csv, the run's outputs"
+        print(f"adaptive: {outcome.message}; {written} and the final_mesh.msh -> {args.out}")
     summary = outcome.result.summary()
     final = summary["final"]
     cuts = f", {summary['step_cuts']} step cuts" if summary["step_cuts"] else ""

@@ -99,12 +99,34 @@ class OutputSection(Section):
 
 
 class AdaptSection(Section):
-    """Adaptive meshes (:mod:`vpcontact.adaptivity.cycles`): up to ``cycles`` solves of the whole history, each on the
-    mesh refined from the one before by Dörfler marking (the fewest elements holding ``theta`` of the sum of
-    the time functional of the indicators), none with more than ``max_dofs`` dofs."""
+    """Adaptive meshes. ``mode = "cycles"`` (:mod:`vpcontact.adaptivity.cycles`): up to ``cycles`` solves of the
+    whole history, each on the mesh refined from the one before by Dörfler marking (the fewest elements holding
+    ``theta`` of the sum of the time functional of the indicators). ``mode = "run"``
+    (:mod:`vpcontact.adaptivity.during_run`): one run, the mesh refined between time steps until each level's
+    estimate is at most ``tolerance`` times the largest energy norm of the solution so far. No mesh has more than
+    ``max_dofs`` dofs."""
 
-    cycles: Annotated[int, Field(ge=1)]
+    mode: Literal["cycles", "run"] = "cycles"
+    cycles: Optional[Annotated[int, Field(ge=1)]] = None
+    tolerance: Optional[PositiveFloat] = None  # mode "run": η(t_n) ≤ tolerance · max_{m≤n} ‖u_h(t_m)‖_E
     theta: Annotated[float, Field(gt=0, le=1)] = 0.5
     max_dofs: Annotated[int, Field(gt=0)] = 1_000_000
     functional: Literal["max", "l2"] = "max"  # max over the steps of η_K²(t_n), or Σ_n k_n η_K²(t_n)
     estimator: Literal[ESTIMATORS.names] = "residual"  # vpcontact.estimate.estimators.ESTIMATORS
+
+    @model_validator(mode="after")
+    def _what_the_mode_needs(self):
+        if self.mode == "cycles" and self.cycles is None:
+            raise ValueError("missing required value 'adapt.cycles': mode = \"cycles\" needs the number of cycles (or "
+                             "set adapt.mode = \"run\" with adapt.tolerance to adapt during one run)")
+        if self.mode == "run" and self.tolerance is None:
+            raise ValueError("missing required value 'adapt.tolerance': mode = \"run\" refines a level until its "
+                             "estimate is at most adapt.tolerance times the largest energy norm of the solution so far "
+                             "(e.g. 0.1)")
+        if self.mode == "run" and self.cycles is not None:
+            raise ValueError(f"adapt.cycles = {self.cycles} with mode = \"run\": one run adapts its mesh; remove "
+                             f"adapt.cycles, or set mode = \"cycles\"")
+        if self.mode == "cycles" and self.tolerance is not None:
+            raise ValueError(f"adapt.tolerance = {show(self.tolerance)} with mode = \"cycles\": the cycles stop after "
+                             f"adapt.cycles; remove it, or set mode = \"run\"")
+        return self

@@ -33,7 +33,10 @@ A case with ``[adapt]`` runs its adaptive cycles (:mod:`vpcontact.adaptivity.cyc
 each cycle's run in ``cycles/<n>/`` (its outputs as above, summary.json last) with ``adapt.csv``
 refreshed after each cycle, then the last cycle's mesh ``final_mesh.msh`` and ``summary.json`` (the
 status, why the cycles stopped, the rows of adapt.csv). It writes no checkpoints: ``--resume`` is refused; the
-status and exit status are those of the last cycle's run ("failed" too when a refinement fails).
+status and exit status are those of the last cycle's run ("failed" too when a refinement fails). With
+``adapt.mode = "run"`` (:mod:`vpcontact.adaptivity.during_run`) it is one run: its outputs as above, on its last
+mesh, with ``adapt.csv`` (one row per estimated level, refreshed after each step) and ``final_mesh.msh``; no
+checkpoints either.
 """
 
 from __future__ import annotations
@@ -67,6 +70,7 @@ from .signals import StopOnSignals
 
 if TYPE_CHECKING:
     from ..adaptivity.cycles import Adaptation, Cycle
+    from ..adaptivity.during_run import RunAdaptation
 
 
 class RunStopped(OSError):
@@ -119,6 +123,10 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
 
                 check_start(problem, options.adapt)
                 started = True  # from here on the directory is written to: nothing above wrote to it
+                if options.adapt.mode == "run":
+                    during = _adapt_during_run_locked(problem, case, options, held, clear=overwrite and used,
+                                                      stopper=stopper, progress=progress)
+                    return Outcome(during.result, during.status, during.message, stopper.signal)
                 adaptation = _adapt_locked(problem, case, options, held, clear=overwrite and used, stopper=stopper,
                                            progress=progress)
                 return Outcome(adaptation.last.result, adaptation.status, adaptation.message, stopper.signal)
@@ -260,6 +268,53 @@ def _follow(loop: TimeLoop, stop, ranks: Ranks) -> Result:
     return result
 
 
+def _prepare(case: Case, out: Path, clear: bool) -> None:
+    """The run directory ``out`` of an adaptive run made ready: the outputs of an earlier run removed (``clear``),
+    temporaries and summary.json too, the resolved case written."""
+    if clear:
+        remove_outputs(out)
+    remove_temporaries(out)
+    remove_files(out, ("summary.json",))
+    write_resolved_case(case.to_toml(), out)
+
+
+def _write_adapt_csv(out: Path, columns: tuple[str, ...], rows: list[dict]) -> None:
+    """adapt.csv: ``rows`` under ``columns`` (floats as repr: every digit)."""
+    with replacing(out / "adapt.csv") as temporary, temporary.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns)
+        writer.writeheader()
+        writer.writerows({k: repr(float(v)) if isinstance(v, float) else v for k, v in row.items()} for row in rows)
+
+
+def _adapt_during_run_locked(problem: Problem, case: Case, options: CaseOptions, held: directory.Held, *,
+                             clear: bool, stopper, progress: Progress) -> RunAdaptation:
+    """One run of ``case`` that adapts its mesh between steps (``adapt.mode = "run"``) from ``problem`` in a directory
+    this process holds: its outputs as a run's (on its last mesh), adapt.csv refreshed after each step (one row per
+    estimated level), final_mesh.msh, summary.json last (with the adaptation's refinements and message)."""
+    from ..adaptivity.during_run import COLUMNS, adapt_during_run
+
+    out = held.path
+    _prepare(case, out, clear)
+    rows: list[dict] = []
+
+    def after_step(loop: TimeLoop) -> None:
+        held.check()
+        _write_adapt_csv(out, COLUMNS, rows)
+
+    adaptation = adapt_during_run(problem, options.adapt, options.output, stop=stopper.reason, progress=progress,
+                                  after_step=after_step, rows=rows)
+    _write_adapt_csv(out, COLUMNS, adaptation.rows)
+    with replacing(out / "final_mesh.msh") as temporary:
+        write_mesh(adaptation.mesh, temporary)
+    result = adaptation.result
+    result.status, result.message = adaptation.status, adaptation.message
+    result.adaptation = {"mode": "run", "tolerance": options.adapt.tolerance, "refinements": adaptation.refinements,
+                         "estimated_levels": len(adaptation.rows), "message": adaptation.message}
+    with progress.phase("outputs", f"writing into {out}"):
+        write_outputs(result, out)
+    return adaptation
+
+
 def _adapt_locked(problem: Problem, case: Case, options: CaseOptions, held: directory.Held, *, clear: bool, stopper,
                   progress: Progress) -> Adaptation:
     """The adaptive cycles of ``case.adapt`` (translated: ``options``) from ``problem`` (the case's) in a directory
@@ -267,11 +322,7 @@ def _adapt_locked(problem: Problem, case: Case, options: CaseOptions, held: dire
     from ..adaptivity.cycles import COLUMNS, adapt
 
     out = held.path
-    if clear:
-        remove_outputs(out)
-    remove_temporaries(out)
-    remove_files(out, ("summary.json",))
-    write_resolved_case(case.to_toml(), out)
+    _prepare(case, out, clear)
     rows = []
 
     def after_cycle(cycle: Cycle) -> None:
@@ -282,10 +333,7 @@ def _adapt_locked(problem: Problem, case: Case, options: CaseOptions, held: dire
         with progress.phase("outputs", f"writing cycle {cycle.number} into {folder}"):
             write_outputs(cycle.result, folder)
         rows.append(cycle.row)
-        with replacing(out / "adapt.csv") as temporary, temporary.open("w", newline="") as handle:
-            writer = csv.DictWriter(handle, fieldnames=COLUMNS)
-            writer.writeheader()
-            writer.writerows({k: repr(v) if isinstance(v, float) else v for k, v in row.items()} for row in rows)
+        _write_adapt_csv(out, COLUMNS, rows)
 
     adaptation = adapt(problem, options.adapt, options.output, after_cycle=after_cycle, stop=stopper.reason,
                        progress=progress,

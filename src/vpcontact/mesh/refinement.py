@@ -16,11 +16,20 @@ needs to stay conforming), then carries the model's data over:
 
 The refined mesh is nested in the old one before the projection; the projection must not turn an element
 inside out (a curve much more curved than its elements are small): that is checked, element by element.
+
+`refine_with_lineage` also returns the :class:`Lineage` of the refinement, what carries fields from the old mesh
+to the new one (:mod:`vpcontact.adaptivity.transfer`): the parent of each new element and the P1 interpolation
+of the old mesh at the new nodes, taken where the nodes were made (edge midpoints, before the projection onto
+curved boundaries), so that its weights are those of the nested meshes: dyadic fractions, rounded to them.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from dataclasses import dataclass
+
+import scipy.sparse as sp
 
 from ..errors import CaseError, point
 from .ball import quiet_bisection
@@ -31,15 +40,39 @@ from .mesh import Mesh, with_parts
 from .simplex import determinants
 
 
+#: The finest dyadic fraction a weight of `Lineage.interpolation` is rounded to (2^-20: twenty nested bisections).
+DYADIC = 2.0 ** 20
+
+
+@dataclass(frozen=True)
+class Lineage:
+    """How a refined mesh descends from the old one: ``parent`` (new elements,), the old element each new element
+    lies in; ``interpolation`` (new nodes × old nodes, sparse), the P1 interpolation of the old mesh at the new
+    nodes (an old node keeps its own value: the rows of the old nodes are the identity)."""
+
+    parent: np.ndarray
+    interpolation: sp.csr_matrix
+
+    def then(self, later: "Lineage") -> "Lineage":
+        """The lineage of this refinement followed by ``later``, a refinement of its mesh (the products of dyadic
+        weights are dyadic: still exact)."""
+        return Lineage(self.parent[later.parent], (later.interpolation @ self.interpolation).tocsr())
+
+
 def refine(mesh: Mesh, marked) -> Mesh:
     """The conforming refinement of `mesh` that refines at least the elements `marked` (indices of columns
     of ``mesh.mesh.t``), with its parts, regions, exact normals and curved parts and interfaces."""
+    return refine_with_lineage(mesh, marked)[0]
+
+
+def refine_with_lineage(mesh: Mesh, marked) -> tuple[Mesh, Lineage]:
+    """`refine` and the refinement's :class:`Lineage` (unmarked: the mesh itself, each element its own parent)."""
     old = mesh.mesh
     marked = np.unique(np.asarray(marked, dtype=np.int64))
     if marked.size and (marked[0] < 0 or marked[-1] >= old.t.shape[1]):
         raise ValueError(f"marked elements must be in 0 ... {old.t.shape[1] - 1}, got {marked[0]} ... {marked[-1]}")
     if not marked.size:
-        return mesh
+        return mesh, Lineage(np.arange(old.t.shape[1]), sp.identity(old.p.shape[1], format="csr"))
     kind = SKFEM_MESH[mesh.dim]
     with quiet_bisection():
         fine = with_facet_tables(kind(old.p, old.t).refined(marked))
@@ -51,8 +84,30 @@ def refine(mesh: Mesh, marked) -> Mesh:
     regions = {name: np.flatnonzero(np.isin(parent, elements)) for name, elements in mesh.regions.items()}
     p = _onto_curves(mesh, fine, parts, regions, first_new=old.p.shape[1])
     refined = kind(np.ascontiguousarray(p), np.ascontiguousarray(fine.t))
-    return Mesh(with_parts(refined, parts, built=fine), parts, mesh.exact_normals, mesh.file, regions, mesh.curved_parts,
-                mesh.curved_interfaces)
+    lineage = Lineage(parent, _interpolation(locator, fine.p, old.p.shape[1], parent, fine.t))
+    refined_mesh = Mesh(with_parts(refined, parts, built=fine), parts, mesh.exact_normals, mesh.file, regions,
+                        mesh.curved_parts, mesh.curved_interfaces)
+    return refined_mesh, lineage
+
+
+def _interpolation(locator: Locator, points: np.ndarray, old_nodes: int, parent: np.ndarray,
+                   elements: np.ndarray) -> sp.csr_matrix:
+    """The P1 interpolation (len(points) × old_nodes) of the old mesh (``locator``'s, its first ``old_nodes`` nodes
+    the same as the new mesh's) at the nested new ``points`` (d, nodes): each new node in the parent of one of the
+    new ``elements`` that hold it, its barycentric coordinates there rounded to dyadic fractions (exact for nested
+    midpoints) where they are within 1e-9 of one."""
+    new = np.arange(old_nodes, points.shape[1])
+    holder = np.zeros(points.shape[1], dtype=np.int64)
+    holder[elements.ravel()] = np.tile(np.arange(elements.shape[1]), elements.shape[0])  # any element holding it
+    element = parent[holder[new]]
+    weights = locator.barycentric(points[:, new].T, element)  # (d + 1, new)
+    dyadic = np.round(weights * DYADIC) / DYADIC
+    weights = np.where(np.abs(weights - dyadic) < 1e-9, dyadic, weights)
+    rows = np.concatenate([np.arange(old_nodes), np.repeat(new, weights.shape[0])])
+    columns = np.concatenate([np.arange(old_nodes), locator.elements[:, element].T.ravel()])
+    values = np.concatenate([np.ones(old_nodes), weights.T.ravel()])
+    keep = values != 0.0
+    return sp.csr_matrix((values[keep], (rows[keep], columns[keep])), shape=(points.shape[1], old_nodes))
 
 
 def _parent_facets(old, locator: Locator, fine, facets: np.ndarray, parent: np.ndarray) -> np.ndarray:

@@ -115,6 +115,7 @@ class Result:
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
     estimate_terms: tuple[str, ...] = ()  # output.error_estimate: the estimator's terms (the rows' estimate_columns)
     output: object = None  # the OutputOptions the run was made with (what the writers write)
+    adaptation: dict | None = None  # a run that adapted its mesh during the run: what it did (summary.json)
 
     @classmethod
     def start(cls, discretization: Discretization, dofs: int, solver, output,
@@ -313,6 +314,7 @@ class Result:
             "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s,
             "timings_s": self.timings, "final": final,
             "history_rows": len(self.rows), "step_cuts": self.step_cuts, "resumed_at_steps": list(self.resumed_at),
+            **({} if self.adaptation is None else {"adaptation": self.adaptation}),
         }
 
     @property

@@ -1,0 +1,221 @@
+"""Adapting the mesh during one run (``adapt.mode = "run"``): one pass through the history, the mesh refined
+between time steps where the estimator asks for it.
+
+After each time step t_n the estimator of ``adapt.estimator`` gives η_K(t_n) on every element, and the level is
+accepted when
+
+    η(t_n) = (Σ_K η_K²)^{1/2}  ≤  adapt.tolerance · max_{m ≤ n} ‖u_h(t_m)‖_E,     ‖u‖_E = (∫_Ω ℰε(u):ε(u))^{1/2},
+
+the largest energy norm of the run so far: a load that is released brings ‖u_h‖_E near zero, not the error of
+what the history left (ξ, z), which the mesh need not resolve better than at the peak.
+
+Otherwise Dörfler marking (``adapt.theta``, :func:`~.cycles.dorfler`) of η_K² chooses the elements to refine,
+the mesh is refined (:func:`~vpcontact.mesh.refinement.refine_with_lineage`), the level t_{n−1} is carried to it
+(:mod:`.transfer`: z and 𝒢 per element, ξ and the contact state on Γ3, u) and step n is solved again there, as
+many times as it takes. A refinement that would pass ``adapt.max_dofs`` is not made: the level is accepted
+above the tolerance (its row of adapt.csv says so) and the mesh stays for the rest of the run. The mesh is never
+coarsened.
+
+The steps solved on a mesh that was then refined are work done, and counted (the wall time and the solver's
+counters); their levels are not kept. The result is the run's on its last mesh: its history rows, one per
+accepted level; the per-node contact history and the fields of earlier steps carried to the last mesh (the
+coarser solutions, drawn on it). ``adapt.csv`` has one row per estimated level, refined or accepted.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import CaseError
+from ..estimate.estimators import ESTIMATORS
+from ..estimate.indicators import Level
+from ..problem.build import Problem, checked_problem
+from ..progress import SILENT, Progress
+from ..results.output_options import OutputOptions
+from ..results.result import Result
+from ..timeloop.loop import TimeLoop
+from ..timeloop.snapshot import LoopSnapshot
+from .cycles import check_start
+from .marking import refine_towards, wanted_dofs
+from .options import AdaptOptions
+from .transfer import Transfer
+
+#: The columns of adapt.csv of a run that adapts during the run, one row per estimated level.
+COLUMNS = ("step", "t", "dofs", "contact_nodes", "estimate", "energy_norm", "relative_estimate", "refined")
+
+
+@dataclass
+class RunAdaptation:
+    """What `adapt_during_run` did: the rows of adapt.csv (:data:`COLUMNS`), the run on its last mesh
+    (``result``, ``problem``), the status (the run's, or "failed" when a refined problem could not be made) and
+    what happened (``message``)."""
+
+    rows: list[dict] = field(default_factory=list)
+    result: Result | None = None
+    problem: Problem | None = None
+    status: str = "complete"
+    message: str = ""
+
+    @property
+    def mesh(self):
+        """The last mesh."""
+        return self.problem.mesh
+
+    @property
+    def refinements(self) -> int:
+        """The refinements made."""
+        return sum(row["refined"] for row in self.rows)
+
+
+@dataclass
+class _Refinement:
+    """A refinement asked for after a step: the new problem, the level before the step carried to it."""
+
+    problem: Problem
+    snapshot: LoopSnapshot
+
+
+class _Watcher:
+    """The hook after each step of a time loop: estimates the level, and either accepts it or makes the refined
+    problem and the level before the step on it (``pending``), which the loop's ``stop`` then ends the loop for."""
+
+    def __init__(self, settings: AdaptOptions, adaptation: RunAdaptation, wanted, progress: Progress,
+                 after_step: Callable[[TimeLoop], None] | None):
+        self.settings, self.adaptation, self.wanted = settings, adaptation, wanted
+        self.progress, self.after_step = progress, after_step
+        self.pending: _Refinement | None = None
+        self.capped = False  # adapt.max_dofs reached: no more refinements
+        self.largest = 0.0  # the largest ‖u_h‖_E of the levels accepted so far
+
+    def follow(self, loop: TimeLoop) -> None:
+        """Watch ``loop`` (not run yet, or restored at the level before the step to solve again)."""
+        self.loop, self.pending = loop, None
+        self.estimator = ESTIMATORS[self.settings.estimator].prepare(loop.problem)
+        self.loop.result.field_steps = range(1, len(loop.problem.times) + 1)  # every step's fields, for η
+        self._remember()
+
+    def _remember(self) -> None:
+        """The level the loop is at: what a refinement after the next step goes back to."""
+        loop = self.loop
+        self.before = (loop.state, loop.rigid_position(), len(loop.result.rows))
+
+    def __call__(self, loop: TimeLoop) -> None:
+        problem, result = loop.problem, loop.result
+        step, row = loop.state.step, result.rows[-1]
+        level = Level(problem, step, row["t"], row["k"], result.final,
+                      {name: np.asarray(values[-1]) for name, values in result.contact.items()})
+        indicators = self.estimator(level)
+        norm = energy_norm(problem, result.final.displacement)
+        estimate, scale = indicators.total, max(self.largest, norm)
+        relative = estimate / scale if scale > 0.0 else (0.0 if estimate == 0.0 else np.inf)
+        refine = relative > self.settings.tolerance and not self.capped
+        if refine:
+            refine = self._refine(loop, indicators.squared, step, relative)
+        self.adaptation.rows.append({"step": step, "t": row["t"], "dofs": problem.basis.N,
+                                     "contact_nodes": problem.surface.size, "estimate": estimate,
+                                     "energy_norm": norm, "relative_estimate": relative, "refined": refine})
+        if refine:
+            return
+        self.largest = scale
+        _drop_unwanted(result, self.wanted, before=step)  # this level's fields start the next step if it is refined
+        self._remember()
+        if self.after_step is not None:
+            self.after_step(loop)
+
+    def _refine(self, loop: TimeLoop, squared: np.ndarray, step: int, relative: float) -> bool:
+        """Refine towards the dofs the estimate η_T² (``squared``) asks for (:mod:`.marking`) and carry the level
+        before ``step`` to the new mesh (``pending``); False when no refinement fits in adapt.max_dofs (no
+        refinement from then on)."""
+        problem, settings = loop.problem, self.settings
+        ratio = relative / settings.tolerance
+        wanted = wanted_dofs(problem.basis.N, ratio, problem.mesh.dim)
+        with self.progress.phase("refinement", f"step {step}: η/‖u‖ = {relative:.3g}, {ratio:.3g} times "
+                                 f"adapt.tolerance; towards {wanted:,} dofs") as phase:
+            refined = refine_towards(problem.mesh, squared, wanted, settings.max_dofs, settings.theta)
+            phase.done(f"{refined[0].dim * refined[0].mesh.p.shape[1]:,} dofs" if refined is not None else
+                       f"none within adapt.max_dofs = {settings.max_dofs:,}")
+        if refined is None:
+            self.capped = True
+            self.adaptation.message = (f"at step {step} a refinement would have passed adapt.max_dofs = "
+                                       f"{settings.max_dofs:,}: the mesh of {problem.basis.N:,} dofs was kept")
+            return False
+        mesh, lineage = refined
+        new = problem.on(mesh, self.progress)
+        self.pending = _Refinement(new, Transfer(problem, new, lineage).snapshot(self._before_step(loop)))
+        return True
+
+    def _before_step(self, loop: TimeLoop) -> LoopSnapshot:
+        """The snapshot of ``loop`` at the level before its last step (the one remembered)."""
+        snapshot = loop.snapshot()
+        state, rigid, rows = self.before
+        arrays = {key: value for key, value in snapshot.arrays.items() if not key.startswith(("previous_", "trend_"))}
+        arrays.update(state.arrays(rigid, loop.elements))
+        for key in list(arrays):
+            if key.startswith(("row_", "contact_")):
+                arrays[key] = arrays[key][:rows]
+        fields = {n: values for n, values in snapshot.fields.items() if n <= state.step}
+        return LoopSnapshot(arrays, {**snapshot.meta, "field_steps": sorted(fields)}, fields)
+
+
+def energy_norm(problem: Problem, displacement: np.ndarray) -> float:
+    """‖u‖_E = (∫_Ω ℰε(u):ε(u))^{1/2} = (uᵀAu)^{1/2} for the nodal ``displacement`` (nodes, d), exact for P1."""
+    u = np.zeros(problem.basis.N)
+    u[problem.basis.nodal_dofs] = displacement.T
+    return float(np.sqrt(max(u @ (problem.A @ u), 0.0)))
+
+
+def adapt_during_run(problem: Problem, settings: AdaptOptions, output: OutputOptions | None = None, *,
+                     stop: Callable[[], str | None] | None = None, progress: Progress = SILENT,
+                     after_step: Callable[[TimeLoop], None] | None = None,
+                     rows: list[dict] | None = None) -> RunAdaptation:
+    """One run of ``problem`` whose mesh is refined between its time steps (``settings``: a case's ``[adapt]``
+    with ``mode = "run"``; see the module docstring), with the outputs ``output``; ``stop`` and ``after_step``
+    (called after each accepted step) are the time loop's hooks, ``progress`` hears of every phase; ``rows``: the
+    list the rows of adapt.csv are appended to as the run goes (default: a new one)."""
+    check_start(checked_problem(problem), settings)
+    output = OutputOptions() if output is None else output
+    adaptation = RunAdaptation([] if rows is None else rows)
+    loop = TimeLoop(problem, output, progress)
+    wanted = loop.result.field_steps
+    watcher = _Watcher(settings, adaptation, wanted, progress, after_step)
+    watcher.follow(loop)
+    while True:
+        result = loop.run(after_step=watcher, stop=lambda: "refinement" if watcher.pending else
+                          (stop() if stop is not None else None))
+        pending = watcher.pending
+        if pending is None:
+            break
+        try:
+            loop = TimeLoop(pending.problem, output, progress)
+        except CaseError as error:
+            adaptation.status, adaptation.message = "failed", f"after a refinement: {error}"
+            break
+        resumed = list(pending.snapshot.meta["resumed_at"])
+        loop.restore(_with_rigid(pending.snapshot, loop))
+        loop.result.resumed_at = resumed  # a refinement is not a resumption
+        watcher.follow(loop)
+    _drop_unwanted(result, wanted, before=len(loop.problem.times) + 1)
+    result.field_steps = wanted
+    adaptation.result, adaptation.problem = result, loop.problem
+    if adaptation.status == "complete":
+        adaptation.status = result.status
+        adaptation.message = adaptation.message or result.message or (
+            f"{adaptation.refinements} refinement(s) during the run, last mesh {loop.problem.basis.N:,} dofs")
+    return adaptation
+
+
+def _drop_unwanted(result: Result, wanted, before: int) -> None:
+    """Drop the fields of the steps before ``before`` that the outputs do not want."""
+    for step in [n for n in result.fields if n < before and n not in wanted]:
+        del result.fields[step]
+
+
+def _with_rigid(snapshot: LoopSnapshot, loop: TimeLoop) -> LoopSnapshot:
+    """``snapshot`` with Zᵀu on ``loop``'s rigid motions held only by contact (its ``previous_u``, when it has one)."""
+    basis = loop.motions.basis
+    u = snapshot.arrays.get("previous_u")
+    rigid = basis.T @ u if u is not None and basis.shape[1] else np.zeros(basis.shape[1])
+    return LoopSnapshot({**snapshot.arrays, "rigid": rigid}, snapshot.meta, snapshot.fields)
