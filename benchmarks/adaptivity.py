@@ -28,6 +28,12 @@ them without it in --levels; −1/2 is first order in h). The last adaptive mesh
 by region. With --out DIR it writes the JSON and a log–log figure of error against
 dofs (DIR/adaptivity_<estimator>.png).
 
+Then one run that adapts during the run (adapt.mode = "run", docs/adaptivity.md "Adapting during the run") for each
+of --run-tolerances, from h = 1/--start: its last mesh's dofs, the steps it refined at, its errors against both
+references, its wall time and that of one run on its last mesh (build and solve, the same outputs; in the same
+process, after the other runs: no import is timed), their ratio, and the dofs it needs to reach each uniform
+mesh's error ("run_nested_reach", interpolated between the tolerances' runs as for the cycles).
+
     python benchmarks/adaptivity.py --out docs/figures          # β = 1 and −1, residual estimator
     python benchmarks/adaptivity.py --estimator recovery --beta 1
     python benchmarks/adaptivity.py --punch --out docs/figures    # the punch of benchmarks/effectivity.py
@@ -153,6 +159,33 @@ def nested_reference(cycles: list, example: Example, most: int) -> tuple[dict, "
     return described, Reference(run)
 
 
+def run_adaptive(example: Example, args, tolerance: float, reference: Reference, finer: Reference,
+                 settings: dict) -> dict:
+    """One run that adapts its mesh during the run (adapt.mode = "run", ``tolerance``) from h = 1/--start: its last
+    mesh's dofs, refinements, errors against both references, wall time, and the wall time of one run on its last
+    mesh (build and solve, the same outputs) and their ratio."""
+    case = example.load(args.start, {})
+    started = time.perf_counter()
+    adaptation = adapt(build_problem(case), {"mode": "run", "tolerance": tolerance, "theta": settings["theta"],
+                                             "estimator": settings["estimator"]}, case.output)
+    seconds = time.perf_counter() - started
+    result = complete(adaptation.result)
+    started = time.perf_counter()
+    complete(vpcontact.solve(build_problem(case, mesh=adaptation.mesh), output=case.output))
+    plain = time.perf_counter() - started
+    row = {"tolerance": tolerance, "dofs": int(result.dofs), "contact_nodes": int(result.contact_nodes),
+           "refinements": adaptation.refinements, "refined_at_steps": sorted({r["step"] for r in adaptation.rows
+                                                                            if r["refined"]}),
+           "estimate": max(r["estimate"] for r in adaptation.rows if not r["refined"]),
+           "errors": reference.errors(result), "nested_errors": finer.errors(result), "wall_time_s": seconds,
+           "one_run_on_last_mesh_s": plain, "time_ratio": seconds / plain,
+           "last_mesh": where_fine(adaptation.mesh, example.singular_point)}
+    log(f"  run-adaptive, tolerance {tolerance:g}: {row['dofs']} dofs ({row['refinements']} refinements at steps "
+        f"{row['refined_at_steps']}), E(1.1) {row['nested_errors']['E(1.1)']:.4g} against the nested reference, "
+        f"{seconds:.2f} s, {row['time_ratio']:.2f}× one run on its last mesh ({plain:.2f} s)")
+    return row
+
+
 def rates(rows: dict[str, list[dict]], least: int) -> dict:
     """The convergence rates in dofs of each error and of the estimate, for each kind of ``rows`` (uniform,
     adaptive), over the rows with at least ``least`` dofs."""
@@ -253,10 +286,12 @@ def study(example: Example, args) -> dict:
         log(f"  {row['dofs']} dofs: E(1.1) {row['nested_errors']['E(1.1)']:.4g} against the nested reference, "
             f"effectivity {row['effectivity(1.1)']:.2f} against the uniform reference, "
             f"{row['nested_effectivity']['effectivity(1.1)']:.2f} against the nested one")
-    del finer
     runs.clear()  # the runs' fields: no longer needed
     uniform_runs.clear()
 
+    found["run_adaptive"] = [run_adaptive(example, args, tolerance, reference, finer, settings)
+                             for tolerance in args.run_tolerances]
+    del finer
     cycles = found["adaptive"]
     found["reach"] = [reach(uniform, cycles) for uniform in found["uniform"]]
     found["target"] = found["reach"][-1]
@@ -269,6 +304,9 @@ def study(example: Example, args) -> dict:
     nested = {"uniform": nested_rows(found["uniform"]), "adaptive": nested_rows(cycles)}
     found["nested_reach"] = [reach(uniform, nested["adaptive"]) for uniform in nested["uniform"]]
     found["nested_rates"] = rates(nested, least)
+    passes = sorted(found["run_adaptive"], key=lambda row: row["dofs"])
+    found["run_nested_reach"] = [reach(uniform, nested_rows(passes)) for uniform in nested["uniform"]]
+    found["run_rates"] = rates({"run_adaptive": nested_rows(passes)}, least) if len(passes) > 1 else None
     found["last_mesh"] = where_fine(adaptation.mesh, example.singular_point)
     return found
 
@@ -293,6 +331,10 @@ def figure(studies: list[dict], estimator: str, path: Path) -> Path:
                       label=f"{kind}: E(1.1), nested reference")
             ax.loglog(dofs, [r["estimate"] for r in rows], marker.replace("-", ":"), ms=3, alpha=0.6,
                       label=f"{kind}: estimate ({estimator})")
+        passes = sorted(found.get("run_adaptive", []), key=lambda row: row["dofs"])
+        if passes:
+            ax.loglog([r["dofs"] for r in passes], [r["nested_errors"]["E(1.1)"] for r in passes], "^-", ms=5, lw=2,
+                      label="run-adaptive (adapt.mode = \"run\"): E(1.1), nested reference")
         target = found["target"]
         ax.axhline(target["errors"]["E(1.1)"]["uniform_error"], color="grey", lw=0.7, ls="--",
                    label=f"uniform 1/{target['uniform_level']} error")
@@ -322,6 +364,8 @@ def main() -> None:
     parser.add_argument("--cycles", type=int, default=30, help="at most this many adaptive cycles")
     parser.add_argument("--nested-max-dofs", type=int, default=100_000,
                         help="the nested reference refines the last cycle's mesh with at most this many dofs twice")
+    parser.add_argument("--run-tolerances", type=float, nargs="*", default=[0.2, 0.1, 0.07, 0.05, 0.035],
+                        help="adapt.tolerance of the runs that adapt during the run (adapt.mode = \"run\")")
     parser.add_argument("--out", type=Path, help="write adaptivity_<estimator>.json and .png there")
     args = parser.parse_args()
     if args.reference <= max(args.levels):

@@ -80,12 +80,12 @@ def test_every_node_of_the_block_follows_the_scalar_recursion(beta, alpha, g):
     np.testing.assert_allclose(result.contact_history("pressure_rigid"),
                                np.repeat(expected[:, 3:4], d.shape[1], axis=1), rtol=0, atol=1e-8)
     at_limit = expected[:, 3] > 0  # the steps at which the recursion is on the rigid base
-    # a step that ends exactly on the base with no reaction from it (α = 0: d = g at step 2) is a tie:
-    # rounding in the last digits of u decides whether the base's multiplier is active there
+    # a step that ends exactly on the base with no reaction from it (α = 0: d = g at step 2) is a tie: rounding in
+    # the last digits of u decides, node by node, whether the base's multiplier is active there (11 of the 25 nodes
+    # on 2026-11-28, numpy 2.4.6, scipy 1.17.1); its reaction is zero either way (asserted above)
     tie = (expected[:, 0] == g) & ~at_limit
     counted = result.series("nodes_at_limit")
     np.testing.assert_array_equal(counted[~tie], np.where(at_limit, 25, 0)[~tie])
-    assert np.isin(counted[tie], (0, 25)).all()
     assert at_limit.any() == math.isfinite(g)  # g = 0.2 is reached: at steps 6 (β = 1), 2 (β = −1), 3 (α = 0)
     # equilibrium: the foundation carries the whole load q·area (area 1), straight up
     np.testing.assert_allclose(result.series("contact_force_z"), Q_RATE * result.series("t"), rtol=1e-10)

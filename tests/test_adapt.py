@@ -169,6 +169,10 @@ def test_a_quarter_ball_adapts_in_3d(tmp_path):
     ("adapt.estimator=\"kelly\"", ["adapt.estimator", "'residual'"]),
     ("adapt.cycle=2", ["unknown key 'adapt.cycle'", "adapt.cycles"]),
     ("initial={from_run=\"elsewhere\", step=1}", ["[adapt] with initial.from_run"]),
+    ("adapt.mode=\"run\"", ["missing required value 'adapt.tolerance'", "energy norm"]),
+    ("adapt={mode=\"run\", tolerance=0.1, cycles=3}", ["adapt.cycles = 3 with mode = \"run\"", "remove adapt.cycles"]),
+    ("adapt.tolerance=0.1", ["adapt.tolerance = 0.1 with mode = \"cycles\""]),
+    ("adapt.mode=\"steps\"", ["adapt.mode", "'cycles' or 'run'"]),
 ])
 def test_bad_adapt_settings_are_refused_in_one_line(tmp_path, setting, words):
     path = write_case(tmp_path, adaptive_case())

@@ -9,12 +9,17 @@ accepted when
 the largest energy norm of the run so far: a load that is released brings ‖u_h‖_E near zero, not the error of
 what the history left (ξ, z), which the mesh need not resolve better than at the peak.
 
-Otherwise Dörfler marking (``adapt.theta``, :func:`~.cycles.dorfler`) of η_K² chooses the elements to refine,
-the mesh is refined (:func:`~vpcontact.mesh.refinement.refine_with_lineage`), the level t_{n−1} is carried to it
+Otherwise the mesh is refined towards the dofs the estimate asks for, by rounds of Dörfler marking (``adapt.theta``)
+of η_K² and then of its predictions (:mod:`.marking`), the level t_{n−1} is carried to the new mesh
 (:mod:`.transfer`: z and 𝒢 per element, ξ and the contact state on Γ3, u) and step n is solved again there, as
 many times as it takes. A refinement that would pass ``adapt.max_dofs`` is not made: the level is accepted
 above the tolerance (its row of adapt.csv says so) and the mesh stays for the rest of the run. The mesh is never
 coarsened.
+
+Not every level is estimated: an estimate costs the level's fields and the estimator's pass over the mesh, more
+than a step of the condensed method. After an accepted level whose η is at most half the tolerance the next
+estimate waits twice as many steps as the last (1, 2, 4, up to LONGEST_WAIT); after any other, the next step is
+estimated, and so is the last step. The levels in between are accepted on the mesh of the estimate before them.
 
 The steps solved on a mesh that was then refined are work done, and counted (the wall time and the solver's
 counters); their levels are not kept. The result is the run's on its last mesh: its history rows, one per
@@ -25,7 +30,7 @@ coarser solutions, drawn on it). ``adapt.csv`` has one row per estimated level, 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -43,6 +48,9 @@ from .marking import refine_towards, wanted_dofs
 from .options import AdaptOptions
 from .transfer import Transfer
 
+#: The most steps from one estimated level to the next (the wait doubles while the estimate stays under half the
+#: tolerance).
+LONGEST_WAIT = 8
 #: The columns of adapt.csv of a run that adapts during the run, one row per estimated level.
 COLUMNS = ("step", "t", "dofs", "contact_nodes", "estimate", "energy_norm", "relative_estimate", "refined")
 
@@ -89,22 +97,32 @@ class _Watcher:
         self.pending: _Refinement | None = None
         self.capped = False  # adapt.max_dofs reached: no more refinements
         self.largest = 0.0  # the largest ‖u_h‖_E of the levels accepted so far
+        self.wait = 1  # steps from one estimated level to the next
 
     def follow(self, loop: TimeLoop) -> None:
-        """Watch ``loop`` (not run yet, or restored at the level before the step to solve again)."""
-        self.loop, self.pending = loop, None
+        """Watch ``loop`` (not run yet, or restored at the level before the step to solve again): its next step is
+        estimated."""
+        self.loop, self.pending, self.wait = loop, None, 1
         self.estimator = ESTIMATORS[self.settings.estimator].prepare(loop.problem)
-        self.loop.result.field_steps = range(1, len(loop.problem.times) + 1)  # every step's fields, for η
+        self._estimate_at(loop.state.step + 1)
         self._remember()
+
+    def _estimate_at(self, step: int) -> None:
+        """Estimate the level of ``step`` next (and the last one): the loop computes their fields."""
+        self.due = step
+        self.loop.result.field_steps = set(self.wanted) | {step, len(self.loop.problem.times)}
 
     def _remember(self) -> None:
         """The level the loop is at: what a refinement after the next step goes back to."""
-        loop = self.loop
-        self.before = (loop.state, loop.rigid_position(), len(loop.result.rows))
+        self.before = (self.loop.state, len(self.loop.result.rows))
 
     def __call__(self, loop: TimeLoop) -> None:
+        step = loop.state.step
+        if step < self.due and step < len(loop.problem.times):
+            self._accept(loop, step)
+            return
         problem, result = loop.problem, loop.result
-        step, row = loop.state.step, result.rows[-1]
+        row = result.rows[-1]
         level = Level(problem, step, row["t"], row["k"], result.final,
                       {name: np.asarray(values[-1]) for name, values in result.contact.items()})
         indicators = self.estimator(level)
@@ -120,7 +138,14 @@ class _Watcher:
         if refine:
             return
         self.largest = scale
-        _drop_unwanted(result, self.wanted, before=step)  # this level's fields start the next step if it is refined
+        self.wait = min(2 * self.wait, LONGEST_WAIT) if relative <= 0.5 * self.settings.tolerance else 1
+        self._accept(loop, step)
+
+    def _accept(self, loop: TimeLoop, step: int) -> None:
+        """Step ``step`` accepted: the next estimated step set, the fields the outputs do not want dropped."""
+        if step >= self.due:
+            self._estimate_at(step + self.wait)
+        _drop_unwanted(loop.result, self.wanted, before=step + 1)
         self._remember()
         if self.after_step is not None:
             self.after_step(loop)
@@ -148,11 +173,18 @@ class _Watcher:
         return True
 
     def _before_step(self, loop: TimeLoop) -> LoopSnapshot:
-        """The snapshot of ``loop`` at the level before its last step (the one remembered)."""
+        """The snapshot of ``loop`` at the level before its last step (the one remembered), with u there (which the
+        condensed method computes only when asked)."""
         snapshot = loop.snapshot()
-        state, rigid, rows = self.before
+        state, rows = self.before
+        previous, basis = state.previous, loop.motions.basis
+        if previous is not None and previous.u is None:
+            previous = replace(previous, u=loop.solver.displacement(state.step_problem, previous))
+        rigid = state.rigid
+        if rigid is None:
+            rigid = loop.solver.rigid_coordinates(state.step_problem, previous) if basis.shape[1] else np.zeros(0)
         arrays = {key: value for key, value in snapshot.arrays.items() if not key.startswith(("previous_", "trend_"))}
-        arrays.update(state.arrays(rigid, loop.elements))
+        arrays.update(replace(state, previous=previous).arrays(rigid, loop.elements))
         for key in list(arrays):
             if key.startswith(("row_", "contact_")):
                 arrays[key] = arrays[key][:rows]

@@ -4,9 +4,9 @@ A level whose estimate η is r times the tolerance (r = η / (tolerance max ‖u
 at the optimal rate of P1 elements on adapted meshes (η ∝ N^{−1/d}, d the dimension), about N r^d dofs. One
 Dörfler step (``theta``) adds far fewer near a singularity (a graded mesh deepens by one level a step), so the
 refinement is repeated on *predicted* indicators, without solving, until the mesh has that many dofs (at most
-GROWTH times the dofs it had, at least one refinement): a new element's predicted η_T² is its parent's times
-|T| / |parent| (the indicator's share of the area or volume), and times REDUCTION where the parent was split (the
-error density of a refined element falls). The next solve then checks the prediction.
+GROWTH times the dofs it had, at least one refinement): a new element's predicted η_T² is its parent's times its
+share of the parent's area or volume, and times REDUCTION where the parent was split (the error density of a refined
+element falls). The next solve then checks the prediction.
 """
 
 from __future__ import annotations

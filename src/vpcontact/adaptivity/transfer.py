@@ -17,8 +17,8 @@ What each transfer keeps:
   the step problem from ξ_{n−1} and z_n), so the carried u only starts the next Newton iteration; the trend
   that extrapolates it is dropped, and the solver's kept state too (it belongs to the old matrices).
 - **Fields of the steps kept so far**: the displacement interpolated, the element fields taken from the parent
-  (the same functions: the coarse solution drawn on the new mesh), the error indicator scaled by
-  (|T| / |parent|)^½ so that Σ_T η_T² is conserved.
+  (the same functions: the coarse solution drawn on the new mesh), the error indicator scaled by the square root
+  of the element's share of its parent's area or volume, so that Σ_T η_T² is conserved.
 
 Where every old value an interpolated value is made of is the same, that value is copied: a uniform state
 survives any refinement bit for bit. The history rows (forces, areas, counters) do not depend on the mesh and
@@ -100,7 +100,9 @@ class Transfer:
         u[old.free] = free_values
         if old.constraints.moves:
             u[old.constraints.held] = old.constraints(t)
-        return _dofs(self.nodal(u[old.basis.nodal_dofs].T), self.new)
+        whole = np.zeros(self.new.basis.N)
+        whole[self.new.basis.nodal_dofs] = self.nodal(u[old.basis.nodal_dofs].T).T
+        return whole
 
     # --- a whole snapshot --------------------------------------------------------------------------
     def snapshot(self, snapshot: LoopSnapshot) -> LoopSnapshot:
@@ -120,9 +122,6 @@ class Transfer:
             arrays["previous_active"] = self.surface(arrays["previous_active"].astype(float)) == 1.0
         if "previous_u" in arrays:
             arrays["previous_u"] = self.displacement(arrays["previous_u"], t)[self.new.free]
-        elif "previous_lam" in arrays and int(arrays["step"]) in snapshot.fields:  # a method that keeps no u
-            carried = self.nodal(snapshot.fields[int(arrays["step"])]["displacement"])
-            arrays["previous_u"] = _dofs(carried, self.new)[self.new.free]
         contact = {name[8:]: arrays[name] for name in arrays if name.startswith("contact_")}
         for name, values in contact.items():
             if name not in ("status", "K"):
@@ -144,9 +143,3 @@ class Transfer:
                 carried[name] = self.elemental(value)
         return carried
 
-
-def _dofs(nodal: np.ndarray, problem) -> np.ndarray:
-    """The dof vector of ``problem`` of the nodal values ``nodal`` (nodes, d)."""
-    whole = np.zeros(problem.basis.N)
-    whole[problem.basis.nodal_dofs] = nodal.T
-    return whole

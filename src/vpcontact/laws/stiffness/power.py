@@ -18,10 +18,19 @@ class PowerStiffness:
     beta: float | np.ndarray
 
     def __call__(self, xi: np.ndarray) -> np.ndarray:
-        return self.c_v * (1.0 + self.alpha * xi) ** self.beta
+        return self.c_v * elementwise_power(1.0 + self.alpha * xi, self.beta)
 
     def derivative(self, xi: np.ndarray) -> np.ndarray:
-        return self.c_v * self.alpha * self.beta * (1.0 + self.alpha * xi) ** (self.beta - 1.0)
+        return self.c_v * self.alpha * self.beta * elementwise_power(1.0 + self.alpha * xi, self.beta - 1.0)
+
+
+def elementwise_power(base: np.ndarray, exponent: float | np.ndarray) -> np.ndarray:
+    """base ** exponent by NumPy's loop for an array of exponents, whether ``exponent`` is a number or an array:
+    NumPy 2.4 computes a number exponent (or a broadcast one) by another loop, which differs in the last bit
+    (measured for −1), and a layer given by a constant expression must be the layer given by the number, bit for
+    bit. So the exponent is always a whole array."""
+    base = np.asarray(base, dtype=float)
+    return np.power(base, np.array(np.broadcast_to(np.asarray(exponent, dtype=float), base.shape)))
 
 
 LAW = Law(
