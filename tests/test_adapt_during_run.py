@@ -13,6 +13,7 @@ from vpcontact import adapt, build_problem
 from vpcontact.adaptivity.transfer import Transfer
 from vpcontact.mesh.refinement import refine_with_lineage
 from vpcontact.mesh.simplex import measures
+from vpcontact.results import norms
 from vpcontact.timeloop.loop import TimeLoop
 from vpcontact.timeloop.snapshot import LoopSnapshot
 from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
@@ -114,6 +115,10 @@ def test_refining_at_the_first_step_only_is_a_run_on_the_last_mesh():
     assert refined and set(refined) == {1} and adaptation.status == "complete"
     plain = vpcontact.solve(build_problem(case, mesh=adaptation.mesh), output=case.output)
     result = adaptation.result
+    mesh, final = adaptation.mesh.mesh, result.fields[11]  # the last row's norm, as the norms module computes it
+    lame = adaptation.problem.elasticity.lame
+    np.testing.assert_allclose(adaptation.rows[-1]["energy_norm"],
+                               norms.energy_norm(mesh.p, mesh.t, final.displacement, lame), rtol=1e-12)
     assert len(result.rows) == len(plain.rows) == 11 and result.dofs == plain.dofs
     for column in ("contact_force_y", "max_penetration", "K_max", "reaction_left_x"):
         np.testing.assert_allclose(result.series(column), plain.series(column), rtol=1e-9, atol=1e-12)

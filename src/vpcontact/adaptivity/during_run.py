@@ -123,9 +123,7 @@ class _Watcher:
             return
         problem, result = loop.problem, loop.result
         row = result.rows[-1]
-        level = Level(problem, step, row["t"], row["k"], result.final,
-                      {name: np.asarray(values[-1]) for name, values in result.contact.items()})
-        indicators = self.estimator(level)
+        indicators = self.estimator(Level(problem, step, row["t"], row["k"], result.final, result.contact_row()))
         norm = energy_norm(problem, result.final.displacement)
         estimate, scale = indicators.total, max(self.largest, norm)
         relative = estimate / scale if scale > 0.0 else (0.0 if estimate == 0.0 else np.inf)
@@ -193,7 +191,9 @@ class _Watcher:
 
 
 def energy_norm(problem: Problem, displacement: np.ndarray) -> float:
-    """‖u‖_E = (∫_Ω ℰε(u):ε(u))^{1/2} = (uᵀAu)^{1/2} for the nodal ``displacement`` (nodes, d), exact for P1."""
+    """‖u‖_E = (∫_Ω ℰε(u):ε(u))^{1/2} = (uᵀAu)^{1/2} for the nodal ``displacement`` (nodes, d), exact for P1: the
+    value of :func:`vpcontact.results.norms.energy_norm`, from the problem's assembled stiffness A (one product,
+    where that one computes the strains of every element again; in one process, where A is whole)."""
     u = np.zeros(problem.basis.N)
     u[problem.basis.nodal_dofs] = displacement.T
     return float(np.sqrt(max(u @ (problem.A @ u), 0.0)))

@@ -35,7 +35,8 @@ from ..mesh.refinement import Lineage
 from ..mesh.simplex import measures
 from ..timeloop.snapshot import LoopSnapshot
 
-#: The arrays of a loop's snapshot that belong to one level's solution on Γ3 or to the solver, dropped or rebuilt.
+#: The last level's trend (how it changed since the level before), not carried: the first step on the new mesh
+#: starts from the carried level itself, not extrapolated.
 DROPPED = ("trend_u", "trend_lam", "trend_d")
 
 

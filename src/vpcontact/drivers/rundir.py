@@ -35,8 +35,8 @@ refreshed after each cycle, then the last cycle's mesh ``final_mesh.msh`` and ``
 status, why the cycles stopped, the rows of adapt.csv). It writes no checkpoints: ``--resume`` is refused; the
 status and exit status are those of the last cycle's run ("failed" too when a refinement fails). With
 ``adapt.mode = "run"`` (:mod:`vpcontact.adaptivity.during_run`) it is one run: its outputs as above, on its last
-mesh, with ``adapt.csv`` (one row per estimated level, refreshed after each step) and ``final_mesh.msh``; no
-checkpoints either.
+mesh, with ``adapt.csv`` (one row per estimated level, rewritten after each step that adds rows) and
+``final_mesh.msh``; no checkpoints either.
 """
 
 from __future__ import annotations
@@ -289,17 +289,21 @@ def _write_adapt_csv(out: Path, columns: tuple[str, ...], rows: list[dict]) -> N
 def _adapt_during_run_locked(problem: Problem, case: Case, options: CaseOptions, held: directory.Held, *,
                              clear: bool, stopper, progress: Progress) -> RunAdaptation:
     """One run of ``case`` that adapts its mesh between steps (``adapt.mode = "run"``) from ``problem`` in a directory
-    this process holds: its outputs as a run's (on its last mesh), adapt.csv refreshed after each step (one row per
-    estimated level), final_mesh.msh, summary.json last (with the adaptation's refinements and message)."""
+    this process holds: its outputs as a run's (on its last mesh), adapt.csv (one row per estimated level) rewritten
+    after each step that adds rows, final_mesh.msh, summary.json last (with the adaptation's refinements and
+    message)."""
     from ..adaptivity.during_run import COLUMNS, adapt_during_run
 
     out = held.path
     _prepare(case, out, clear)
     rows: list[dict] = []
+    written = [0]  # the rows in adapt.csv
 
     def after_step(loop: TimeLoop) -> None:
         held.check()
-        _write_adapt_csv(out, COLUMNS, rows)
+        if len(rows) > written[0]:  # a level was estimated: adapt.csv again, not at every step
+            _write_adapt_csv(out, COLUMNS, rows)
+            written[0] = len(rows)
 
     adaptation = adapt_during_run(problem, options.adapt, options.output, stop=stopper.reason, progress=progress,
                                   after_step=after_step, rows=rows)
