@@ -94,13 +94,13 @@ def test_the_docs_build_without_warnings_and_run_the_gallery(tmp_path):
                                                         "laws.contact", "mesh.shapes", "laws.materials",
                                                         "estimate.indicators", "estimate.residual", "adaptivity.cycles",
                                                         "adaptivity.during_run", "adaptivity.transfer",
-                                                        "io.run")]
+                                                        "timeloop.companion", "timeloop.time_control", "io.run")]
     for name in (*public, *modules, "vpcontact.results.plots.contact_pressure", "vpcontact.results.norms.differences"):
         assert f'id="{name}"' in reference, f"{name} is not in the API reference (docs/api/)"
     # every example has its page, and the figures it made (our scraper) are on it
     examples = sorted(path.stem for path in (DOCS / "examples").glob("plot_*.py"))
     assert {"plot_paper_example", "plot_hertz", "plot_rho_limit", "plot_user_stiffness_law",
-            "plot_punch_cyclic", "plot_adaptive_during_run"} <= set(examples)
+            "plot_punch_cyclic", "plot_adaptive_during_run", "plot_adaptive_time_steps"} <= set(examples)
     for name in examples:
         page = (html / "gallery" / f"{name}.html").read_text()
         figures = sorted((html / "_images").glob(f"sphx_glr_{name}_[0-9][0-9][0-9].png"))

@@ -268,11 +268,11 @@ def test_a_value_that_is_not_a_boolean_is_refused(tmp_path):
 
 
 def test_the_memory_guard_counts_the_estimate():
-    """Its 7 columns in every row (and their copy) and η_K in every kept field (and its copy)."""
+    """Its 9 columns in every row (and their copy) and η_K in every kept field (and its copy)."""
     steps, fields, nodes, elements, m = 1000, 10, 500, 900, 40
     off = memory_needed(steps, fields, nodes, elements, m, False)
     on = memory_needed(steps, fields, nodes, elements, m, False, estimate=True)
-    assert on["history rows"] - off["history rows"] == steps * (900 + 8 * len(ESTIMATE_COLUMNS))
+    assert on["history rows"] - off["history rows"] == steps * (1020 + 8 * len(ESTIMATE_COLUMNS))
     assert on["fields"] - off["fields"] == (fields + 1) * (112 + 2 * 8 * elements)
     assert on["contact rows"] == off["contact rows"]
 

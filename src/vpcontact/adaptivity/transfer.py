@@ -16,6 +16,8 @@ What each transfer keeps:
 - **u** (per node): P1 interpolation, the same function. In this model u is not a history variable (u_n solves
   the step problem from ξ_{n−1} and z_n), so the carried u only starts the next Newton iteration; the trend
   that extrapolates it is dropped, and the solver's kept state too (it belongs to the old matrices).
+- **The second-order companion of the estimate in time** (:mod:`vpcontact.timeloop.companion`): its ξ̃ and d̃ as ξ,
+  its z̃ and 𝒢̃ as z, its ũ − u as u.
 - **Fields of the steps kept so far**: the displacement interpolated, the element fields taken from the parent
   (the same functions: the coarse solution drawn on the new mesh), the error indicator scaled by the square root
   of the element's share of its parent's area or volume, so that Σ_T η_T² is conserved.
@@ -101,8 +103,19 @@ class Transfer:
         u[old.free] = free_values
         if old.constraints.moves:
             u[old.constraints.held] = old.constraints(t)
+        return self._whole(u)
+
+    def free_difference(self, free_values: np.ndarray) -> np.ndarray:
+        """A difference of two displacements that agree at the held dofs, given at the free ones, on the new mesh's
+        free dofs (P1 interpolation)."""
+        u = np.zeros(self.old.basis.N)
+        u[self.old.free] = free_values
+        return self._whole(u)[self.new.free]
+
+    def _whole(self, u: np.ndarray) -> np.ndarray:
+        """A displacement at every dof of the old mesh, interpolated at every dof of the new one."""
         whole = np.zeros(self.new.basis.N)
-        whole[self.new.basis.nodal_dofs] = self.nodal(u[old.basis.nodal_dofs].T).T
+        whole[self.new.basis.nodal_dofs] = self.nodal(u[self.old.basis.nodal_dofs].T).T
         return whole
 
     # --- a whole snapshot --------------------------------------------------------------------------
@@ -113,10 +126,14 @@ class Transfer:
                   if not key.startswith("solver_") and key not in DROPPED}
         law = self.new.law  # K per level, as the loop computes it (a law may vary along Γ3)
         t = float(arrays["row_time"][-1]) if len(arrays["row_time"]) else self.old.times.start
-        arrays["xi"] = self.surface(arrays["xi"])
-        for name in ("z", "rate"):  # (d, d, elements)
+        for name in ("xi", "companion_xi", "companion_d"):
+            if name in arrays:
+                arrays[name] = self.surface(arrays[name])
+        for name in ("z", "rate", "companion_z", "companion_rate"):  # (d, d, elements)
             if name in arrays:
                 arrays[name] = self.elemental(arrays[name], axis=-1)
+        if "companion_difference" in arrays:  # ũ − u of the error estimate in time: 0 at the held dofs
+            arrays["companion_difference"] = self.free_difference(arrays["companion_difference"])
         if "previous_lam" in arrays:
             arrays["previous_d"] = self.surface(arrays["previous_d"])
             arrays["previous_lam"] = self.pressure_force(arrays["previous_lam"])

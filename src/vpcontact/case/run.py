@@ -17,16 +17,25 @@ from .values import MAX_STEPS, NonNegativeFloat, PositiveFloat, Section, show
 
 class TimeSection(Section):
     """[t_0, T] in ``steps`` equal steps k = (T − t_0) / steps; t_0 = ``start`` (default 0, or the time of
-    the step a restart starts from, initial.from_run)."""
+    the step a restart starts from, initial.from_run). ``adaptive = true``: each step in as many sub-steps as keep
+    the error estimate in time within ``balance`` (default 1) times the estimate in space, a step halved at most
+    ``max_halvings`` times (default 6)."""
 
     T: PositiveFloat
     steps: Annotated[int, Field(ge=1, le=MAX_STEPS)]
     start: Optional[float] = None
+    adaptive: bool = False
+    balance: Optional[PositiveFloat] = None
+    max_halvings: Optional[Annotated[int, Field(ge=0, le=30)]] = None
 
     @model_validator(mode="after")
     def _start_before_end(self):
         if self.start is not None:
             check_time_span(self.start, self.T, self.steps, "time.start")
+        for key in ("balance", "max_halvings"):
+            if getattr(self, key) is not None and not self.adaptive:
+                raise ValueError(f"time.{key} = {show(getattr(self, key))} is used only by time.adaptive = true: "
+                                 f"remove it, or set time.adaptive = true")
         return self
 
 

@@ -53,11 +53,17 @@ def problem_options(model: Model) -> ProblemOptions:
         boundary=_boundary(model.boundary),
         contact=None if model.contact is None else _contact(model.contact),
         initial=_initial(model.initial, model.from_run_path),
-        time=TimeOptions(model.time.T, model.time.steps, model.time.start),
+        time=_time(model.time),
         solver=SolverOptions(**model.solver.model_dump()),
         mesh=None if case is None else mesh_source(case.mesh, case.base_dir),
         source=None if case is None else case.to_toml(),
     )
+
+
+def _time(time) -> TimeOptions:
+    """The ``[time]`` table as options, the defaults of time.adaptive's keys where they are not given."""
+    given = {key: value for key, value in time.model_dump().items() if value is not None and key != "start"}
+    return TimeOptions(start=time.start, **given)
 
 
 def output_options(output) -> OutputOptions:

@@ -123,11 +123,16 @@ class InitialOptions:
 
 @dataclass(frozen=True)
 class TimeOptions:
-    """[t_0, T] in ``steps`` equal steps; t_0 = ``start`` (None: 0, or the time of a restart's step)."""
+    """[t_0, T] in ``steps`` equal steps; t_0 = ``start`` (None: 0, or the time of a restart's step); ``adaptive``:
+    each step in as many sub-steps as keep the time estimate within ``balance`` times the space estimate, halved at
+    most ``max_halvings`` times (:mod:`vpcontact.timeloop.time_control`)."""
 
     T: float
     steps: int
     start: float | None
+    adaptive: bool = False
+    balance: float = 1.0
+    max_halvings: int = 6
 
 
 @dataclass(frozen=True)

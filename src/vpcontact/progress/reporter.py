@@ -29,7 +29,7 @@ def size(nbytes: float) -> str:
 class StepReport:
     """A time step done: its number n, t_n, the Newton iterations of its (sub-)steps, the last residual, its
     contact nodes at the limit and in compliance (None without contact), its step cuts, those of the run so
-    far, and its wall time."""
+    far, its wall time and the (sub-)steps it was done in."""
 
     n: int
     t: float
@@ -40,6 +40,16 @@ class StepReport:
     cuts: int
     all_cuts: int
     seconds: float
+    substeps: int = 1
+
+    @classmethod
+    def of_rows(cls, n: int, rows: list[dict], contact: bool, cuts: int, all_cuts: int,
+                seconds: float) -> "StepReport":
+        """Step n from the history rows of its (sub-)steps (``contact``: whether the body has contact nodes)."""
+        last = rows[-1]
+        return cls(n, last["t"], sum(row["newton_iterations"] for row in rows), last["residual"],
+                   last["nodes_at_limit"] if contact else None, last["nodes_in_compliance"] if contact else None,
+                   cuts, all_cuts, seconds, len(rows))
 
 
 class Progress:
@@ -179,6 +189,7 @@ class Steps(Activity):
         contact = (f", {r.at_limit:,} nodes at the limit, {r.in_compliance:,} in compliance"
                    if r.at_limit is not None else "")
         cuts = f", {r.cuts} step cut{'s' if r.cuts != 1 else ''}" if r.cuts else ""
+        cuts += f", {r.substeps} sub-steps" if r.substeps > 1 else ""
         iterations = f"{r.newton_iterations} Newton iteration{'s' if r.newton_iterations != 1 else ''}"
         return f"step {r.n:,}/{self.total:,}: t = {r.t:.6g}, {iterations}{contact}{cuts} ({duration(r.seconds)})"
 

@@ -42,9 +42,13 @@ def held_part_columns(dim: int, parts: tuple[str, ...]) -> tuple[str, ...]:
 
 
 def estimate_columns(terms: tuple[str, ...]) -> tuple[str, ...]:
-    """The history columns of an error estimate of ``terms`` at every level (``output.error_estimate``): η(t) =
-    (Σ_K η_K²)^½ and each term's share (Σ_K η_K,term²)^½; none without terms (no estimate)."""
-    return ("error_estimate", *(f"error_estimate_{term}" for term in terms)) if terms else ()
+    """The history columns of the error estimates at every level (``output.error_estimate``, ``time.adaptive``): in
+    space, of the estimator's ``terms``, η(t) = (Σ_K η_K²)^½ and each term's share (Σ_K η_K,term²)^½; in time
+    (:mod:`vpcontact.timeloop.companion`), η_k(t) and θ, what the (sub-)step added to it; none without terms (no
+    estimate)."""
+    if not terms:
+        return ()
+    return ("error_estimate", *(f"error_estimate_{term}" for term in terms), "time_estimate", "time_estimate_step")
 
 
 #: The history columns of a 2D body (the paper's case).

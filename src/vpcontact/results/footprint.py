@@ -14,9 +14,10 @@ from .steps import field_step_numbers
 #: Bytes of one history row in memory: a dict of its columns, ROW_BYTES + COLUMN_BYTES per column (CPython 3.11,
 #: measured: a 2D row of 31 columns 2250 bytes, a 3D one of 55 columns, five held parts, 3700 bytes).
 ROW_BYTES, COLUMN_BYTES = 400, 60
-#: Bytes the columns of the estimate of output.error_estimate add to a history row in memory, and their number (the
-#: residual estimator's η and six terms: 7 float objects and the larger dict; CPython 3.11, measured).
-ESTIMATE_ROW_BYTES, ESTIMATE_ROW_COLUMNS = 900, 7
+#: Bytes the columns of the estimates of output.error_estimate add to a history row in memory, and their number (the
+#: residual estimator's η and six terms, measured on CPython 3.11: 7 float objects and the larger dict, 900 bytes;
+#: with the estimate in time and its step's share, COLUMN_BYTES each).
+ESTIMATE_ROW_BYTES, ESTIMATE_ROW_COLUMNS = 900 + 2 * COLUMN_BYTES, 9
 #: Bytes of a NumPy array object besides its data.
 ARRAY_BYTES = 112
 #: Bytes the writers add while they write, whatever the run's length (contact.csv is written in blocks).

@@ -112,6 +112,8 @@ class Result:
     discretization: Discretization | None = None  # what the result needs of the problem, always there
     completed_steps: int = 0  # time steps t_n reached
     step_cuts: int = 0  # halvings of a step or sub-step whose Newton iteration failed
+    time_cuts: int = 0  # halvings of a step or sub-step whose time estimate was above its share (time.adaptive)
+    time_over_share: int = 0  # levels accepted above their share, at time.max_halvings (time.adaptive)
     resumed_at: list = field(default_factory=list)  # steps at which the run was resumed from a checkpoint
     estimate_terms: tuple[str, ...] = ()  # output.error_estimate: the estimator's terms (the rows' estimate_columns)
     output: object = None  # the OutputOptions the run was made with (what the writers write)
@@ -138,10 +140,10 @@ class Result:
         ``held``: the applied force and the Dirichlet parts' columns (``held_part_columns``)."""
         surface = self.discretization.surface
         w, normals = surface.weights, surface.normals
-        rigid = np.divide(solution.lam, w, out=np.zeros_like(w), where=w > 0)
-        d = solution.d
-        for name, value in zip(CONTACT_ARRAYS, (d, xi, K, compliance, rigid, status)):
-            self.contact[name].append(np.asarray(value).copy())
+        contact = level_contact(w, solution, xi, K, compliance, status)
+        for name, value in contact.items():
+            self.contact[name].append(value)
+        d, rigid = contact["penetration"], contact["pressure_rigid"]
         force = -(normals * (w * (compliance + rigid))).sum(axis=1)
         positive = np.maximum(d, 0.0)
         has_contact = d.size > 0
@@ -174,12 +176,14 @@ class Result:
         """The per-node contact arrays (CONTACT_ARRAYS) of one history row (default: the last)."""
         return {name: np.asarray(self.contact[name][row]) for name in CONTACT_ARRAYS}
 
-    def record_estimate(self, indicators, fields: Fields) -> None:
-        """Add the error estimate (:class:`~vpcontact.estimate.indicators.Indicators`) of the last recorded level to
-        its history row (the estimate_columns of its terms) and its η_K to that level's ``fields``."""
+    def record_estimate(self, indicators, fields: Fields, companion) -> None:
+        """Add the error estimates of the last recorded level to its history row (the estimate_columns): in space
+        (:class:`~vpcontact.estimate.indicators.Indicators`; its η_K to that level's ``fields`` too) and in time
+        (``companion``, a :class:`~vpcontact.timeloop.companion.CompanionLevel`: η_k(t) and the step's θ)."""
         self.rows[-1].update({"error_estimate": indicators.total,
                               **{f"error_estimate_{term}": float(np.sqrt(indicators.terms[term].sum()))
-                                 for term in self.estimate_terms}})
+                                 for term in self.estimate_terms},
+                              "time_estimate": companion.estimate, "time_estimate_step": companion.step_estimate})
         fields.error_indicator = np.sqrt(indicators.squared)
 
     def fail(self, message: str) -> None:
@@ -301,7 +305,7 @@ class Result:
             final.update(contact_area=last["contact_area"], limit_area=last["limit_area"],
                          **balance(last, self.dim, self.discretization.held_parts))
             if self.estimate_terms:
-                final["error_estimate"] = last["error_estimate"]
+                final["error_estimate"], final["time_estimate"] = last["error_estimate"], last["time_estimate"]
         return {
             "status": self.status, "message": self.message, "dofs": self.dofs, "elements": self.elements,
             "nodes": self.nodes, "contact_nodes": self.contact_nodes, "steps": self.steps,
@@ -313,7 +317,8 @@ class Result:
             "krylov_iterations": self.krylov_iterations, "newton_factorizations": self.newton_factorizations,
             "augmentation_r": self.augmentation, "wall_time_s": self.wall_time_s,
             "timings_s": self.timings, "final": final,
-            "history_rows": len(self.rows), "step_cuts": self.step_cuts, "resumed_at_steps": list(self.resumed_at),
+            "history_rows": len(self.rows), "step_cuts": self.step_cuts, "time_cuts": self.time_cuts,
+            "time_over_share": self.time_over_share, "resumed_at_steps": list(self.resumed_at),
             **({} if self.adaptation is None else {"adaptation": self.adaptation}),
         }
 
@@ -362,3 +367,11 @@ class Result:
             return text
         message = self.message if len(self.message) <= REPR_MESSAGE else self.message[:REPR_MESSAGE] + " …"
         return f"{text}\n  {message}"
+
+
+def level_contact(weights: np.ndarray, solution, xi, K, compliance, status) -> dict[str, np.ndarray]:
+    """The per-node contact arrays (CONTACT_ARRAYS) of a converged level: its ``solution``'s penetration, ξ, K, the
+    compliance pressure, the rigid pressure λ_i / w_i (``weights``: the nodes' w_i) and the node status (new arrays)."""
+    rigid = np.divide(solution.lam, weights, out=np.zeros_like(weights), where=weights > 0)
+    values = (solution.d, xi, K, compliance, rigid, status)
+    return {name: np.asarray(value).copy() for name, value in zip(CONTACT_ARRAYS, values)}

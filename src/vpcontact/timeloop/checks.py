@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import point
 from ..mesh.cells import coordinates
 from ..laws.contact import AT_LIMIT, IN_COMPLIANCE, SEPARATED, node_status
+from ..solvers import StepSolution
 
 
 class LawShapeError(ValueError):
@@ -67,6 +68,33 @@ def pulled_off(problem, motions, n: int, attempt) -> str | None:
             f"loads' resultant on {it} ({pull / attempt.resultant:.0%}) is a pull that no contact pressure can "
             f"balance, so nothing holds the body; keep the loads pressing it on the foundation, or hold {that} with "
             f"boundary.dirichlet entries")
+
+
+def not_finite(problem, n: int, t: float, share, values: dict[str, np.ndarray], fields, computed) -> str | None:
+    """The failure of step n at a level (time t) where one of ``values`` (name: array), the displacement or the
+    stress (of its ``fields``, else of what was ``computed`` there: (u, ε, σ, z) on the elements of ``share``) is
+    not finite (a viscoplastic history that blows up, float64 overflow); None when all are."""
+    values = dict(values)
+    if fields is not None:
+        values.update({"the displacement": fields.displacement, "the stress": fields.von_mises})
+    elif computed is not None:
+        values.update({"the displacement": computed[0]})
+    wrong = [name for name, value in values.items() if not np.all(np.isfinite(value))]
+    if fields is None and computed is not None and not share.all_finite(computed[2]):
+        wrong.append("the stress")
+    if not wrong:
+        return None
+    cause = (f"the viscoplastic history blows up: is the explicit step k = {problem.k:g} small against the "
+             f"law's relaxation time?" if problem.viscoplastic is not None else
+             "float64 overflow: state the loads, moduli and laws in units that keep them far from 1e308")
+    return f"step {n} (t = {problem.times[n - 1]:g}) failed: {wrong[0]} is not finite at t = {t:.10g} ({cause})"
+
+
+def failed_solve(problem, message: str, advice: str) -> StepSolution:
+    """The record of a step of ``problem`` whose Newton iteration stopped on a failed linear solve."""
+    m = problem.surface.size
+    return StepSolution(None, np.zeros(m), np.full(m, np.nan), np.zeros(m, dtype=bool), 0, np.nan, np.nan, False,
+                        message, advice)
 
 
 def law_violation(problem, d: np.ndarray, xi: np.ndarray) -> str | None:

@@ -17,11 +17,11 @@ extrapolated linearly in time through the last two levels (u, λ, d: `LoopState.
 quarter ball, 100 steps, it saved 13 % of the Newton iterations and 26 % of the CG iterations). The bulk
 operator is the same at every step; with 𝒢 ≠ 0, u_n is computed at every step (σ_n feeds z_{n+1}).
 
-Step cuts: when the Newton iteration of a step fails (iteration limit, non-finite iterates, a
-singular Newton matrix), the step is done as two sub-steps of length k/2, each of them cut again if
-it fails, down to ``solver.max_step_cuts`` halvings. A sub-step of length h ending at t is an
-ordinary step of the same scheme: loads at t, z advanced by h 𝒢 from the last converged level, ξ
-by h d⁺ (the same rules with h for k), so a cut step is exactly the same scheme on a finer grid.
+Step cuts: a step whose Newton iteration fails (iteration limit, non-finite iterates, a singular Newton matrix) is
+done as two sub-steps of length k/2, each cut again if it fails, down to ``solver.max_step_cuts`` halvings; one whose
+time estimate is above its share (``time.adaptive``, :mod:`~vpcontact.timeloop.time_control`) too, down to
+``time.max_halvings``. A sub-step of length h ending at t is an ordinary step of the scheme (loads at t, z + h 𝒢,
+ξ + h d⁺).
 The state carried from level to level is a :class:`~vpcontact.timeloop.state.LoopState`; with the
 solver's kept state, the counters of work and the result so far it is the loop's snapshot
 (``TimeLoop.snapshot``, :class:`~vpcontact.timeloop.snapshot.LoopSnapshot`), all a checkpoint needs:
@@ -30,15 +30,16 @@ solver's kept state, the counters of work and the result so far it is the loop's
 The step solver is the run's :class:`~vpcontact.timeloop.method.RunMethod`'s: under ``solver.method = "auto"`` it
 may switch once after a step, the loop's state unchanged (:mod:`vpcontact.solvers.switch`).
 
-With ``output.error_estimate`` the fields are computed at every level and the estimator of every level
-(:data:`~vpcontact.estimate.estimators.EVERY_LEVEL`, the residual one) adds η(t) and its terms to the level's history
-row and η_K to its fields.
+With ``output.error_estimate`` (or ``time.adaptive``) the fields are computed at every level, the estimator of every
+level (:data:`~vpcontact.estimate.estimators.EVERY_LEVEL`, the residual one) adds η(t) and its terms to the level's
+history row and η_K to its fields, and the second-order companion (:mod:`~vpcontact.timeloop.companion`) the
+estimate in time η_k(t) and the step's share of it.
 """
 
 from __future__ import annotations
 
 import time as clock
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from typing import Callable
 
 import numpy as np
@@ -52,18 +53,25 @@ from ..problem.discretization import Discretization
 from ..progress import SILENT, Progress, StepReport, reporting
 from ..estimate.estimators import ESTIMATORS, EVERY_LEVEL
 from ..results.output_options import OutputOptions
-from ..results.result import Result
+from ..results.result import Result, level_contact
 from ..fem.rigid_modes import RigidModes
-from ..solvers import DofLayout, SolverWork, StepData, StepSolution
+from ..solvers import DofLayout, SolverWork, StepData
 from ..solvers.errors import NotConvergedError, SingularMatrixError
-from .checks import LawShapeError, failure_message, history_failure, invalid_law, pulled_off, viscoplastic_rate
+from .checks import (LawShapeError, failed_solve, failure_message, history_failure, invalid_law, not_finite, pulled_off,
+                     viscoplastic_rate)
+from .companion import Companion
+from .time_control import TimeControl
 from .level_fields import level_fields
 from .method import RunMethod
 from .plan import free_operators, plan_run
 from .reactions import Reactions
 from .resting import FreeMotions
-from .snapshot import LoopSnapshot
+from .snapshot import LoopSnapshot, loop_snapshot, restore_loop
 from .state import Attempt, LoopState, Trend
+
+
+#: What ``TimeLoop._accept`` returns for a level whose time estimate is above its share (``time.adaptive``).
+TOO_COARSE = object()
 
 
 class TimeLoop:
@@ -85,6 +93,9 @@ class TimeLoop:
         started = clock.perf_counter()
         self.problem, self.progress = checked_problem(problem), progress
         output = OutputOptions() if output is None else output
+        time = problem.options.time
+        if time.adaptive:  # balanced against the space estimate: both estimates at every level, as written
+            output = replace(output, error_estimate=True)
         free, surface, options = problem.free, problem.surface, problem.solver
         mesh = problem.mesh.mesh
         A, N = free_operators(problem)
@@ -108,6 +119,7 @@ class TimeLoop:
         discretization = Discretization.of(problem)
         self.reactions = Reactions(problem, discretization.held_parts)
         self._functionals = None if self.reactions.M is None else self.solver.functionals(self.reactions.M)
+        self.time_control = TimeControl(problem.times, time.balance if time.adaptive else None, time.max_halvings)
         estimator = ESTIMATORS[EVERY_LEVEL] if output.error_estimate else None
         self.result = Result.start(discretization, problem.basis.N, self.solver, output,
                                    () if estimator is None else estimator.terms)
@@ -117,10 +129,12 @@ class TimeLoop:
         self.setup_time = clock.perf_counter() - started
         self.earlier_time = 0.0  # wall time of earlier sessions (resumed)
         self.state = LoopState.initial(problem, rigid, self.elements)
+        #: the second-order companion that estimates the error in time, with the estimate in space
+        self.companion = None if estimator is None else Companion(problem, self.elements, self.state)
         # (u, ε, σ, z) of the last level if its Fields were not built: ``run`` makes them ``result.final``
         self._level_without_fields: tuple | None = None
         self._u = np.zeros(problem.basis.N)
-        self._newton = 0  # Newton iterations of the levels so far (earlier sessions included)
+        self.newton = 0  # Newton iterations of the levels so far (earlier sessions included)
 
     # --- the loop ---------------------------------------------------------------------------------
     def run(self, *, progress: bool | Progress | None = None, after_step: Callable[["TimeLoop"], None] | None = None,
@@ -144,12 +158,14 @@ class TimeLoop:
                 step_started, cuts = clock.perf_counter(), result.step_cuts
                 self._substep = 0
                 failure = history_failure(problem, self.state, n, self.elements)
-                failure = failure or self._advance(n, times[n - 1], problem.k, 0)
+                failure = failure or self._advance_step(n)
                 if failure is not None:
                     result.fail(failure)
                     break
                 self.state.step = n
-                steps.finished(self._report(n, clock.perf_counter() - step_started, result.step_cuts - cuts))
+                steps.finished(StepReport.of_rows(n, result.rows[-self._substep:], problem.surface.size > 0,
+                                                  result.step_cuts - cuts, result.step_cuts,
+                                                  clock.perf_counter() - step_started))
                 self._weigh(n)
                 if after_step is not None:
                     after_step(self)
@@ -157,6 +173,7 @@ class TimeLoop:
             result.final = level_fields(problem, self.elements, *self._level_without_fields)
             self._level_without_fields = None
         now = clock.perf_counter()
+        result.time_over_share = self.time_control.over_share
         for name, count in asdict(self.work()).items():
             setattr(result, name, count)
         result.ranks_detail, result.peak_memory_bytes = self.method.ranks(self.elements.count)
@@ -168,14 +185,6 @@ class TimeLoop:
         result.wall_time_s += self.earlier_time
         return result
 
-    def _report(self, n: int, seconds: float, cuts: int) -> StepReport:
-        """Step n, just done in ``seconds`` with ``cuts`` step cuts, for the progress reporter."""
-        rows = self.result.rows[-self._substep:]
-        contact = self.problem.surface.size > 0
-        return StepReport(n, rows[-1]["t"], sum(row["newton_iterations"] for row in rows), rows[-1]["residual"],
-                          rows[-1]["nodes_at_limit"] if contact else None,
-                          rows[-1]["nodes_in_compliance"] if contact else None, cuts, self.result.step_cuts, seconds)
-
     def work(self) -> SolverWork:
         """The step solver's work in the run so far, earlier sessions included (summary.json reports it)."""
         return self.method.work()
@@ -186,36 +195,14 @@ class TimeLoop:
 
     # --- a snapshot -------------------------------------------------------------------------------
     def snapshot(self) -> LoopSnapshot:
-        """The loop at the end of its last completed step (:class:`~.snapshot.LoopSnapshot`): its state, results so
-        far, the step solver's kept state, wall time and counters, what a checkpoint keeps (collective on MPI ranks)."""
-        result, solver = self.result, self.solver
-        kept = {f"solver_{key}": value for key, value in solver.kept().items()}
-        arrays = {**self.state.arrays(self.rigid_position(), self.elements), **result.arrays(), **kept,
-                  "solver_method": np.array(solver.name)}
-        meta = {"field_steps": sorted(result.fields), "step_cuts": result.step_cuts,
-                "method_switch": None if self.method.switch is None else self.method.switch.as_dict(),
-                "resumed_at": list(result.resumed_at), "elapsed_s": self.elapsed(), **asdict(self.work())}
-        return LoopSnapshot(arrays, meta, result.field_arrays())
+        """The loop at the end of its last completed step (:func:`~.snapshot.loop_snapshot`: what a checkpoint keeps;
+        collective on MPI ranks)."""
+        return loop_snapshot(self)
 
     def restore(self, snapshot: LoopSnapshot) -> None:
-        """Continue from ``snapshot`` (of a loop of the same problem, not run yet) as if the loop had never
-        stopped: its state, its results so far (the step it ends becomes a step where the run was resumed), the
-        step solver's kept state (a solver of another method rebuilds its own), and its wall time and counters
-        as those of earlier sessions. KeyError for an array or value it lacks."""
-        arrays, meta = snapshot.arrays, snapshot.meta
-        self.state = LoopState.from_arrays(arrays, self.elements)
-        step = self.state.step
-        self.result.resume(arrays, snapshot.fields, step, int(meta["step_cuts"]), [*meta["resumed_at"], step])
-        if "solver_method" in arrays and str(arrays["solver_method"]) == self.solver.name:
-            self.solver.restore({key[7:]: value for key, value in arrays.items()
-                                 if key.startswith("solver_") and key != "solver_method"})
-        self.earlier_time = float(meta["elapsed_s"])
-        self.method.restore(meta)
-        self._newton = sum(row["newton_iterations"] for row in self.result.rows)
-        if self.method.switch is not None:
-            self.result.method_switch = self.method.switch.as_dict()
-        if self.motions.held_by_contact_only:
-            self.motions.recall(self.result.contact)
+        """Continue from ``snapshot`` (of a loop of the same problem, not run yet) as if the loop had never stopped
+        (:func:`~.snapshot.restore_loop`). KeyError for an array or value it lacks."""
+        restore_loop(self, snapshot)
 
     @property
     def solver(self):
@@ -225,33 +212,48 @@ class TimeLoop:
     def _weigh(self, n: int) -> None:
         """After step n: under ``solver.method = "auto"``, the switch of method the work done calls for
         (:class:`~vpcontact.timeloop.method.RunMethod`), and what depends on the step solver made again."""
-        if not self.method.weigh(n, self._newton, self.state):
+        if not self.method.weigh(n, self.newton, self.state):
             return
         if self.reactions.M is not None:
             self._functionals = self.solver.functionals(self.reactions.M)
         self.result.method, self.result.method_reason = self.solver.name, self.solver.reason
         self.result.method_switch = self.method.switch.as_dict()
 
-    def _advance(self, n: int, t: float, h: float, cuts: int) -> str | None:
-        """Reach time t of step n from the current level by one step of length h, or by two halves if
-        its Newton iteration fails (recursively); None, or the failure's message. A load that is not
-        finite at t (only a sub-step time can hold one: the step times are checked before the run)
-        ends the run: no cut can help."""
+    def _advance_step(self, n: int) -> str | None:
+        """Reach t_n from t_{n−1}, in the sub-steps :class:`~.time_control.TimeControl` starts it with; None, or
+        the failure's message."""
+        for t, h in self.time_control.sub_steps(n):
+            failure = self._advance(n, t, h, self.time_control.halvings, 0)
+            if failure is not None:
+                return failure
+        return None
+
+    def _advance(self, n: int, t: float, h: float, halvings: int, cuts: int) -> str | None:
+        """Reach time t of step n from the current level by one step of length h (the step's length halved
+        ``halvings`` times, ``cuts`` of them for a Newton iteration that failed), or by two halves if its Newton
+        iteration fails or (``time.adaptive``) its time estimate is above its share (recursively); None, or the
+        failure's message. A load that is not finite at t (only a sub-step time can hold one: the step times are
+        checked before the run) ends the run: no cut can help."""
         try:
             attempt = self._attempt(t, h)
         except NonFiniteLoad as error:
             t_n = self.problem.times[n - 1]
             return f"step {n} (t = {t_n:g}) failed{'' if t == t_n else ' at a sub-step'}: {error}"
         if attempt.solution.converged:
-            return self._accept(n, t == self.problem.times[n - 1], attempt)
-        pulled = pulled_off(self.problem, self.motions, n, attempt)
-        if pulled is not None:
-            return pulled
-        if cuts == self.max_cuts:
-            return failure_message(self.problem, self.state, n, attempt, cuts, self.elements)
-        self.result.step_cuts += 1
-        failure = self._advance(n, t - 0.5 * h, 0.5 * h, cuts + 1)
-        return failure if failure is not None else self._advance(n, t, 0.5 * h, cuts + 1)
+            accepted = self._accept(n, t == self.problem.times[n - 1], attempt, halvings)
+            if accepted is not TOO_COARSE:
+                return accepted
+            self.result.time_cuts += 1
+        else:
+            pulled = pulled_off(self.problem, self.motions, n, attempt)
+            if pulled is not None:
+                return pulled
+            if cuts == self.max_cuts:
+                return failure_message(self.problem, self.state, n, attempt, cuts, self.elements)
+            self.result.step_cuts += 1
+            cuts += 1
+        failure = self._advance(n, t - 0.5 * h, 0.5 * h, halvings + 1, cuts)
+        return failure if failure is not None else self._advance(n, t, 0.5 * h, halvings + 1, cuts)
 
     def _attempt(self, t: float, h: float) -> Attempt:
         """Solve the step problem of the level at time t, h after the last one (the state is unchanged)."""
@@ -272,29 +274,24 @@ class TimeLoop:
                 step = StepData(b, problem.law, state.xi, h, support)
                 solution = self.solver.solve(step, state.start(h))
         except SingularMatrixError as error:
-            solution = self._failed(f"the Newton matrix is singular ({error})",
+            solution = failed_solve(self.problem, f"the Newton matrix is singular ({error})",
                                     "a part of the body held only by contact may have lost it: hold it with "
                                     "boundary.dirichlet entries, or try smaller time steps (time.steps)")
         except NotConvergedError as error:
-            solution = self._failed(f"the Newton system was not solved ({error})",
+            solution = failed_solve(self.problem, f"the Newton system was not solved ({error})",
                                     "try smaller time steps (time.steps), or solver.method = \"full\" "
                                     "(a direct solver)")
         return Attempt(t, h, step, z, solution, resultant, load=load, history_force=history_force, held=held)
 
-    def _failed(self, message: str, advice: str) -> StepSolution:
-        """The record of a step whose Newton iteration stopped on a failed linear solve."""
-        m = self.problem.surface.size
-        return StepSolution(None, np.zeros(m), np.full(m, np.nan), np.zeros(m, dtype=bool), 0, np.nan, np.nan, False,
-                            message, advice)
-
-    def _accept(self, n: int, ends_step: bool, attempt: Attempt) -> str | None:
-        """Make a converged attempt the new level: ξ, fields, z and 𝒢 there; record it. Values that are
-        not finite there (float64 overflow: loads, moduli or laws in unsuitable units) are not recorded:
-        the failure's message instead."""
+    def _accept(self, n: int, ends_step: bool, attempt: Attempt, halvings: int) -> str | None | object:
+        """Make a converged attempt (its step's length halved ``halvings`` times) the new level: ξ, fields, z and 𝒢
+        there, the error estimates; record it. Values that are not finite there (float64 overflow: loads, moduli or
+        laws in unsuitable units) are not recorded: the failure's message instead; nor is a level whose time
+        estimate is above its share (``time.adaptive``) while the step can be cut again: TOO_COARSE instead."""
         with np.errstate(all="ignore"):  # values that are not finite are reported
-            return self._accept_finite(n, ends_step, attempt)
+            return self._accept_finite(n, ends_step, attempt, halvings)
 
-    def _accept_finite(self, n: int, ends_step: bool, attempt: Attempt) -> str | None:
+    def _accept_finite(self, n: int, ends_step: bool, attempt: Attempt, halvings: int) -> str | None | object:
         problem, state, result = self.problem, self.state, self.result
         law, h = problem.law, attempt.h
         compliance, _ = law.pressure(attempt.solution.d, state.xi, h)
@@ -331,32 +328,29 @@ class TimeLoop:
                 shape_error = self.elements.ranks.agreed(shape_error)  # a rank that fails alone stops every one
                 if shape_error:
                     return f"step {n} (t = {problem.times[n - 1]:g}) failed: at t = {attempt.t:.10g} {shape_error}"
-        values = {"ξ": xi, "K": K, "the compliance pressure": compliance}
-        if fields is not None:
-            values.update({"the displacement": fields.displacement, "the stress": fields.von_mises})
-        elif computed is not None:
-            values.update({"the displacement": computed[0]})
-        wrong = [name for name, value in values.items() if not np.all(np.isfinite(value))]
-        if fields is None and computed is not None and not self.elements.all_finite(sigma):
-            wrong.append("the stress")
-        if wrong:
-            cause = (f"the viscoplastic history blows up: is the explicit step k = {problem.k:g} small against the "
-                     f"law's relaxation time?" if G is not None else
-                     "float64 overflow: state the loads, moduli and laws in units that keep them far from 1e308")
-            return (f"step {n} (t = {problem.times[n - 1]:g}) failed: {wrong[0]} is not finite at t = "
-                    f"{attempt.t:.10g} ({cause})")
+        wrong = not_finite(problem, n, attempt.t, self.elements, {"ξ": xi, "K": K, "the compliance pressure": compliance},
+                           fields, computed)
+        if wrong is not None:
+            return wrong
+        status = node_status(d, solution.active)
+        estimate = companion = None
+        if self.estimator is not None:
+            contact = level_contact(problem.surface.weights, solution, xi, K, compliance, status)
+            estimate = self.estimator(Level(problem, n, attempt.t, h, fields, contact))
+            companion = self.companion.attempt(self.solver, attempt, computed[0], state.rate, rate)
+            if self.time_control.too_coarse(estimate.total, companion, h, halvings):
+                return TOO_COARSE
         self._substep += 1
-        self._newton += solution.iterations
+        self.newton += solution.iterations
         functionals = None if self._functionals is None else self._functionals(attempt.step, solution)
         parts = self.reactions.row(functionals, compliance, solution.lam, attempt.load, attempt.history_force,
                                    attempt.held)
         result.record(n, attempt.t, solution, fields, xi=xi, K=K, compliance=compliance,
-                      status=node_status(d, solution.active), substep=self._substep, k=h, ends_step=ends_step,
-                      held=parts)
+                      status=status, substep=self._substep, k=h, ends_step=ends_step, held=parts)
         self._level_without_fields = computed if fields is None else None
-        if self.estimator is not None:
-            level = Level(problem, n, attempt.t, h, fields, result.contact_row())
-            result.record_estimate(self.estimator(level), fields)
+        if estimate is not None:
+            result.record_estimate(estimate, fields, companion)
+            self.companion.accept(companion)
         trend = None if state.previous is None else Trend.between(state.previous, solution, h)
         self.state = LoopState(state.step, xi, attempt.z, rate, solution, trend, attempt.step, attempt.rigid)
         if self.motions.held_by_contact_only:
@@ -366,12 +360,8 @@ class TimeLoop:
 
     def _resting(self, n: int, attempt: Attempt, compliance: np.ndarray) -> tuple[Attempt, str | None]:
         """A level of a body that only the contact holds, as accepted: the attempt itself while a contact node
-        carries a force (its pressure above ``solver.tolerance`` times the largest pressure of the run so far;
-        below is the rounding of a zero force); where none does, nothing presses the body on the foundation and
-        its position is not determined by the step problem (any rigid motion that keeps the nodes unloaded
-        solves it: the Newton iteration returns the one its start holds), so the body is placed where it
-        changes least from the last level (:mod:`vpcontact.timeloop.resting`), its contact nodes unloaded. The failure's
-        message instead when no such place exists (a node that no free motion moves, beyond its room)."""
+        carries a force; where none does, the body placed where it changes least from the last level, its contact
+        nodes unloaded (:mod:`vpcontact.timeloop.resting`); the failure's message instead when no such place exists."""
         if self.motions.pressed(attempt.solution, compliance):
             return attempt, None
         now = self.solver.rigid_coordinates(attempt.step, attempt.solution)

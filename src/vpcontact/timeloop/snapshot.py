@@ -5,9 +5,11 @@ from, bit for bit (tests/test_resume_matrix.py: every step method, after SIGTERM
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
+
+from .state import LoopState
 
 
 @dataclass
@@ -28,3 +30,45 @@ class LoopSnapshot:
     arrays: dict[str, np.ndarray]
     meta: dict
     fields: dict[int, dict[str, np.ndarray]]
+
+
+def loop_snapshot(loop) -> LoopSnapshot:
+    """The time loop ``loop`` (a :class:`~vpcontact.timeloop.loop.TimeLoop`) at the end of its last completed step:
+    its state, its second-order companion's level, the results so far, the step solver's kept state, wall time and
+    counters (a collective call on MPI ranks)."""
+    result, solver = loop.result, loop.solver
+    kept = {f"solver_{key}": value for key, value in solver.kept().items()}
+    arrays = {**loop.state.arrays(loop.rigid_position(), loop.elements), **result.arrays(), **kept,
+              **({} if loop.companion is None else loop.companion.arrays()), "solver_method": np.array(solver.name)}
+    meta = {"field_steps": sorted(result.fields), "step_cuts": result.step_cuts, "time_cuts": result.time_cuts,
+            "halvings": loop.time_control.halvings, "time_over_share": loop.time_control.over_share,
+            "method_switch": None if loop.method.switch is None else loop.method.switch.as_dict(),
+            "resumed_at": list(result.resumed_at), "elapsed_s": loop.elapsed(), **asdict(loop.work())}
+    return LoopSnapshot(arrays, meta, result.field_arrays())
+
+
+def restore_loop(loop, snapshot: LoopSnapshot) -> None:
+    """Continue ``loop`` (not run yet, of the problem ``snapshot`` was taken from) from ``snapshot`` as if it had
+    never stopped: its state and companion, its results so far (the step it ends becomes a step where the run was
+    resumed), the step solver's kept state (a solver of another method rebuilds its own), and its wall time and
+    counters as those of earlier sessions. KeyError for an array or value it lacks."""
+    arrays, meta, result = snapshot.arrays, snapshot.meta, loop.result
+    loop.state = LoopState.from_arrays(arrays, loop.elements)
+    step = loop.state.step
+    result.resume(arrays, snapshot.fields, step, int(meta["step_cuts"]), [*meta["resumed_at"], step])
+    control = loop.time_control
+    result.time_cuts, control.halvings, control.over_share = (int(meta[key]) for key in ("time_cuts", "halvings",
+                                                                                         "time_over_share"))
+    solver = loop.solver
+    if "solver_method" in arrays and str(arrays["solver_method"]) == solver.name:
+        solver.restore({key[7:]: value for key, value in arrays.items()
+                        if key.startswith("solver_") and key != "solver_method"})
+    if loop.companion is not None:
+        loop.companion.restore(arrays)
+    loop.earlier_time = float(meta["elapsed_s"])
+    loop.method.restore(meta)
+    loop.newton = sum(row["newton_iterations"] for row in result.rows)
+    if loop.method.switch is not None:
+        result.method_switch = loop.method.switch.as_dict()
+    if loop.motions.held_by_contact_only:
+        loop.motions.recall(result.contact)
