@@ -3,7 +3,7 @@ time").
 
 Part "rates": the paper's half disc on one mesh (h = 1/32 by default, as the rate in k of `vpcontact reproduce`), its
 layer softening (β = −1) and hardening (β = 1), and the viscoplastic ball of examples/viscoplastic_ball.toml; each
-run with --steps and against the reference with 8× the last of them (the reproduction's 563 for 141): the energy
+run with --steps and against the reference with 8× the last of them (1,128 for 141): the energy
 error E = ‖u_n − u_ref‖_E at T, the estimate in time η_k(T), their ratio (effectivity) and their rates in k; the
 space estimate η_h(T) beside them (it does not change with k). Then, at 141 steps, the meshes h = 1/4 … 1/32: η_h
 and η_k against h (the space estimate carries the rate in h, the time estimate stays), so that the paper's two

@@ -189,3 +189,43 @@ def test_a_gmsh_pad_pressed_and_released_in_adaptive_steps_from_the_command_line
     np.testing.assert_allclose(history["reaction_top_y"] + history["contact_force_y"], 0.0, atol=1e-8 * scale)
     assert np.all(history["time_estimate"] <= history["time_estimate_step"].cumsum() * (1 + 1e-12))
     assert vtu_displacement(out / "fields" / "body_00002.vtu")[:, 1].min() < -2e-5
+
+
+@pytest.mark.parametrize("time_adaptive", [False, True], ids=["uniform steps", "time.adaptive"])
+def test_a_run_that_adapts_its_mesh_carries_the_companion_to_each_new_mesh(time_adaptive):
+    """adapt.mode = "run" with output.error_estimate (and time.adaptive): the companion's level (ξ̃, d̃ on Γ3, z̃, 𝒢̃
+    per element, ũ − u) is carried with the run's level before the step solved again, through every refinement; the
+    estimate in time stays a number at every level, and within the sum of what the levels added."""
+    from test_adapt_during_run import punch_case
+
+    case = punch_case()
+    case = vpcontact.load_case({**case, "output": {"field_steps": [11], "error_estimate": True},
+                                "time": {**case["time"], **({"adaptive": True} if time_adaptive else {})},
+                                "adapt": {"mode": "run", "tolerance": 0.3}})
+    adaptation = vpcontact.adapt(build_problem(case), case.adapt, case.output)
+    history = adaptation.result.history
+    assert adaptation.refinements >= 1 and history["step"].iloc[-1] == 11
+    assert (len(history) > 11) == time_adaptive
+    assert np.all(np.isfinite(history["time_estimate"])) and history["time_estimate"].iloc[-1] > 0
+    assert np.all(history["time_estimate"] <= history["time_estimate_step"].cumsum() * (1 + 1e-12))
+
+
+def test_the_benchmark_prints_the_rates_and_the_adaptive_runs(tmp_path):
+    """benchmarks/time_estimate.py on coarse settings: its JSON has both parts, and the rates in k are first order."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = Path(__file__).parents[1] / "benchmarks" / "time_estimate.py"
+    done = subprocess.run([sys.executable, str(script), "--level", "4", "--steps", "4", "9", "18", "--levels", "4", "8",
+                           "--adaptive-level", "4", "--balances", "1", "--repeats", "1", "--out", str(tmp_path)],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert json.loads((tmp_path / "time_estimate.json").read_text()) == report
+    for name in ("softening layer (beta = -1)", "hardening layer (beta = 1)", "viscoplastic ball"):
+        assert 0.7 < report["rates"][name]["rate_time_estimate"] < 1.3, report["rates"][name]
+    assert set(report["adaptive"]) == {"ramp and hold", "rise and fall"}
+    for part in report["adaptive"].values():
+        run = part["adaptive"][0]
+        assert run["levels"] >= part["steps"] and run["uniform_steps_for_that_ratio"] >= 1

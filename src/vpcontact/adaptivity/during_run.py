@@ -113,8 +113,11 @@ class _Watcher:
         self.loop.result.field_steps = set(self.wanted) | {step, len(self.loop.problem.times)}
 
     def _remember(self) -> None:
-        """The level the loop is at: what a refinement after the next step goes back to."""
-        self.before = (self.loop.state, len(self.loop.result.rows))
+        """The level the loop is at: what a refinement after the next step goes back to (its state, rows, the error
+        estimate in time's companion and control)."""
+        loop = self.loop
+        companion = None if loop.companion is None else loop.companion.level
+        self.before = (loop.state, len(loop.result.rows), companion, loop.time_control.meta(), loop.result.time_cuts)
 
     def __call__(self, loop: TimeLoop) -> None:
         step = loop.state.step
@@ -174,7 +177,7 @@ class _Watcher:
         """The snapshot of ``loop`` at the level before its last step (the one remembered), with u there (which the
         condensed method computes only when asked)."""
         snapshot = loop.snapshot()
-        state, rows = self.before
+        state, rows, companion, control, time_cuts = self.before
         previous, basis = state.previous, loop.motions.basis
         if previous is not None and previous.u is None:
             previous = replace(previous, u=loop.solver.displacement(state.step_problem, previous))
@@ -183,11 +186,14 @@ class _Watcher:
             rigid = loop.solver.rigid_coordinates(state.step_problem, previous) if basis.shape[1] else np.zeros(0)
         arrays = {key: value for key, value in snapshot.arrays.items() if not key.startswith(("previous_", "trend_"))}
         arrays.update(replace(state, previous=previous).arrays(rigid, loop.elements))
+        if companion is not None:
+            arrays.update(loop.companion.arrays(companion))
         for key in list(arrays):
             if key.startswith(("row_", "contact_")):
                 arrays[key] = arrays[key][:rows]
         fields = {n: values for n, values in snapshot.fields.items() if n <= state.step}
-        return LoopSnapshot(arrays, {**snapshot.meta, "field_steps": sorted(fields)}, fields)
+        return LoopSnapshot(arrays, {**snapshot.meta, **control, "time_cuts": time_cuts, "field_steps": sorted(fields)},
+                            fields)
 
 
 def energy_norm(problem: Problem, displacement: np.ndarray) -> float:

@@ -130,10 +130,10 @@ class Companion:
         return float(np.sqrt(max(share.ranks.sum(float(share.geometry.volumes @ density)), 0.0)))
 
     # --- a checkpoint -----------------------------------------------------------------------------
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The companion's level as named arrays (``companion_*``; z̃ and 𝒢̃ over all the elements: a collective
-        call on several ranks)."""
-        level, share = self.level, self.share
+    def arrays(self, level: CompanionLevel | None = None) -> dict[str, np.ndarray]:
+        """The companion's level (default: its last) as named arrays (``companion_*``; z̃ and 𝒢̃ over all the
+        elements: a collective call on several ranks)."""
+        level, share = self.level if level is None else level, self.share
         arrays = {"companion_xi": level.xi, "companion_d": level.d, "companion_difference": level.difference}
         if level.z is not None:
             arrays["companion_z"] = share.whole(level.z)

@@ -41,7 +41,7 @@ def loop_snapshot(loop) -> LoopSnapshot:
     arrays = {**loop.state.arrays(loop.rigid_position(), loop.elements), **result.arrays(), **kept,
               **({} if loop.companion is None else loop.companion.arrays()), "solver_method": np.array(solver.name)}
     meta = {"field_steps": sorted(result.fields), "step_cuts": result.step_cuts, "time_cuts": result.time_cuts,
-            "halvings": loop.time_control.halvings, "time_over_share": loop.time_control.over_share,
+            **loop.time_control.meta(),
             "method_switch": None if loop.method.switch is None else loop.method.switch.as_dict(),
             "resumed_at": list(result.resumed_at), "elapsed_s": loop.elapsed(), **asdict(loop.work())}
     return LoopSnapshot(arrays, meta, result.field_arrays())
@@ -56,9 +56,8 @@ def restore_loop(loop, snapshot: LoopSnapshot) -> None:
     loop.state = LoopState.from_arrays(arrays, loop.elements)
     step = loop.state.step
     result.resume(arrays, snapshot.fields, step, int(meta["step_cuts"]), [*meta["resumed_at"], step])
-    control = loop.time_control
-    result.time_cuts, control.halvings, control.over_share = (int(meta[key]) for key in ("time_cuts", "halvings",
-                                                                                         "time_over_share"))
+    result.time_cuts = int(meta["time_cuts"])
+    loop.time_control.restore(meta)
     solver = loop.solver
     if "solver_method" in arrays and str(arrays["solver_method"]) == solver.name:
         solver.restore({key[7:]: value for key, value in arrays.items()

@@ -41,6 +41,16 @@ class TimeControl:
         self.over_share = 0  # levels accepted above their share, at max_halvings
         self.largest = 0.0  # the largest space estimate of the run so far
 
+    def meta(self) -> dict:
+        """What a checkpoint keeps of the control: the next step's halvings, the levels over their share, the largest
+        space estimate so far."""
+        return {"halvings": self.halvings, "time_over_share": self.over_share, "time_largest": self.largest}
+
+    def restore(self, meta: dict) -> None:
+        """The control of :meth:`meta`."""
+        self.halvings, self.over_share = int(meta["halvings"]), int(meta["time_over_share"])
+        self.largest = float(meta["time_largest"])
+
     def sub_steps(self, n: int) -> list[tuple[float, float]]:
         """(t, h) of each sub-step that starts step n: 2^halvings of length k / 2^halvings, ending at t_n − j h
         (the times a step cut in halves reaches), the last at t_n exactly."""
