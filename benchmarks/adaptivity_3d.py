@@ -18,8 +18,14 @@ two cycles around it) and their ratio to that mesh's dofs, and where the last ad
 finest uniform one are fine (longest edge of the tetrahedra by distance from the bottom point, and at the
 equator z = 1 where Γ3 meets the loaded Γ2).
 
+With ``--run-tolerances``, also one run that adapts during the run (adapt.mode = "run") from the coarsest uniform
+mesh for each tolerance: its dofs, refinements, errors at t = 0.5 and 1.1 (the fields of t = 0.5 as the run carried
+them to its last mesh: the solution it computed then, on the mesh of then) and wall time, and the dofs at which
+those runs reach the finest uniform mesh's error; ``--skip-cycles`` leaves the cycles out.
+
     python benchmarks/adaptivity_3d.py                 # h = 0.3 … 0.1 against 0.05, 12 cycles from 0.3
     python benchmarks/adaptivity_3d.py --quick         # h = 0.6, 0.4 against 0.2, 3 cycles (seconds)
+    python benchmarks/adaptivity_3d.py --skip-cycles --run-tolerances 0.3 0.2 0.15 0.1
 """
 
 from __future__ import annotations
@@ -131,12 +137,37 @@ def line(row: dict) -> str:
             + f" {row['wall_time_s']:6.1f}")
 
 
+def adapted_during_run(h: float, tolerance: float, theta: float, max_dofs: int, references: dict) -> dict:
+    """One run that adapts during the run from the mesh of edge h: its dofs, refinements, errors at t = 0.5 and 1.1
+    against ``references`` and wall time."""
+    case = load(h, **{"adapt.mode": "run", "adapt.tolerance": tolerance, "adapt.theta": theta,
+                      "adapt.max_dofs": max_dofs})
+    begun = time.perf_counter()
+    adaptation = adapt(build_problem(case), case.adapt, case.output)
+    seconds = time.perf_counter() - begun
+    if adaptation.status != "complete":
+        raise SystemExit(f"the run that adapts during the run failed: {adaptation.message}")
+    result = adaptation.result
+    row = {"tolerance": tolerance, "dofs": int(result.dofs), "contact_nodes": int(result.contact_nodes),
+           "refinements": adaptation.refinements, "wall_time_s": seconds}
+    for t, step in STEPS.items():
+        found = differences(result.snapshot(step), references[t])
+        row[f"t={t:g}"] = {"error": found["energy"], "V": found["V"]}
+    print(f"during the run, tolerance {tolerance:g}: {row['dofs']} dofs, {row['refinements']} refinements, "
+          f"E(0.5) = {row['t=0.5']['error']:.4g}, E(1.1) = {row['t=1.1']['error']:.4g}, {seconds:.1f} s",
+          file=sys.stderr, flush=True)
+    return row
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="coarse meshes (seconds)")
     parser.add_argument("--theta", type=float, default=0.5, help="Dörfler fraction")
     parser.add_argument("--cycles", type=int, help="adaptive cycles (default: 12, quick 3)")
     parser.add_argument("--out", type=Path, help="write the JSON there too (a file)")
+    parser.add_argument("--run-tolerances", type=float, nargs="*", default=[],
+                        help="adapt.tolerance of runs that adapt during the run (none by default)")
+    parser.add_argument("--skip-cycles", action="store_true", help="leave the adaptive cycles out")
     arguments = parser.parse_args(argv)
     setting = SETTINGS["quick" if arguments.quick else "full"]
     levels, cycles = setting["levels"], arguments.cycles or setting["cycles"]
@@ -156,7 +187,7 @@ def main(argv=None) -> int:
         print(line(uniform[-1]), file=sys.stderr, flush=True)
     finest = result
 
-    adaptive = []
+    adaptive, adaptation = [], None
 
     def record(cycle) -> None:
         problem = start.on(cycle.result.discretization.mesh)  # the cycle's problem, built again on its mesh
@@ -164,31 +195,43 @@ def main(argv=None) -> int:
                          "cycle_estimate": cycle.estimate, "wall_time_s": cycle.wall_time_s})
         print(line(adaptive[-1]), file=sys.stderr, flush=True)
 
-    case = load(levels[0], **{"adapt.cycles": cycles, "adapt.theta": arguments.theta, "adapt.functional": "max",
-                              "adapt.max_dofs": int(reference.dofs) // 2})
-    start = build_problem(case)
-    adaptation = adapt(start, case.adapt, case.output, after_cycle=record)
-    if adaptation.status != "complete":
-        raise SystemExit(f"the adaptation failed: {adaptation.message}")
+    if not arguments.skip_cycles:
+        case = load(levels[0], **{"adapt.cycles": cycles, "adapt.theta": arguments.theta, "adapt.functional": "max",
+                                  "adapt.max_dofs": int(reference.dofs) // 2})
+        start = build_problem(case)
+        adaptation = adapt(start, case.adapt, case.output, after_cycle=record)
+        if adaptation.status != "complete":
+            raise SystemExit(f"the adaptation failed: {adaptation.message}")
+    during_run = [adapted_during_run(levels[0], tolerance, arguments.theta, int(reference.dofs) // 2, references)
+                  for tolerance in arguments.run_tolerances]
 
     target = uniform[-1]
-    reached = {t: crossing(adaptive, target[t]["error"], t) for t in ("t=0.5", "t=1.1")}
-    bottom = adaptation.mesh.mesh.p[:, adaptation.mesh.nodes("bottom")]
+    reached = {t: crossing(adaptive, target[t]["error"], t) for t in ("t=0.5", "t=1.1")} if adaptive else None
+    reached_run = {t: crossing(during_run, target[t]["error"], t) for t in ("t=0.5", "t=1.1")} if during_run else None
     report = {
         "case": "examples/quarter_ball.toml", "steps": 11, "theta": arguments.theta, "functional": "max",
         "reference": {"h": setting["reference"], "dofs": int(reference.dofs), "wall_time_s": reference_s},
-        "uniform": uniform, "adaptive": adaptive,
+        "uniform": uniform, "adaptive": adaptive, "during_run": during_run,
         "effectivity_uniform": {t: [row[t]["effectivity"] for row in uniform] for t in ("t=0.5", "t=1.1")},
         "finest_uniform": {"h": target["h"], "dofs": target["dofs"]},
         "adaptive_dofs_at_finest_uniform_error": reached,
-        "dofs_ratio": {t: None if dofs is None else dofs / target["dofs"] for t, dofs in reached.items()},
-        "contact_nodes_off_sphere": float(np.abs(np.linalg.norm(bottom - np.array([[0.0], [0.0], [1.0]]), axis=0)
-                                                 - 1.0).max()),
-        "sizes": {"last_cycle": sizes(adaptation.mesh.mesh), "finest_uniform": sizes(finest.discretization.mesh.mesh)},
-        "message": adaptation.message,
+        "dofs_ratio": None if reached is None else {t: None if dofs is None else dofs / target["dofs"]
+                                                    for t, dofs in reached.items()},
+        "during_run_dofs_at_finest_uniform_error": reached_run,
+        "during_run_dofs_ratio": None if reached_run is None else {
+            t: None if dofs is None else dofs / target["dofs"] for t, dofs in reached_run.items()},
         "wall_time_s": time.perf_counter() - started,
     }
-    print(f"adaptive reaches the h = {target['h']:g} error ({target['dofs']} dofs) at: {reached}", file=sys.stderr)
+    if adaptation is not None:
+        bottom = adaptation.mesh.mesh.p[:, adaptation.mesh.nodes("bottom")]
+        report.update({
+            "contact_nodes_off_sphere": float(np.abs(np.linalg.norm(bottom - np.array([[0.0], [0.0], [1.0]]), axis=0)
+                                                     - 1.0).max()),
+            "sizes": {"last_cycle": sizes(adaptation.mesh.mesh),
+                      "finest_uniform": sizes(finest.discretization.mesh.mesh)},
+            "message": adaptation.message})
+    print(f"adaptive reaches the h = {target['h']:g} error ({target['dofs']} dofs) at: cycles {reached}, "
+          f"during the run {reached_run}", file=sys.stderr)
     text = json.dumps(report, indent=1)
     if arguments.out is not None:
         arguments.out.write_text(text)

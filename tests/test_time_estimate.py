@@ -181,6 +181,7 @@ def test_a_gmsh_pad_pressed_and_released_in_adaptive_steps_from_the_command_line
     assert {"error_estimate", "time_estimate", "time_estimate_step"} <= set(history.columns)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "complete" and summary["time_cuts"] > 0 and len(history) > 8
+    assert f"8 steps in {len(history)} levels" in stdout and "error estimates at t = 1.9: in space" in stdout
     assert summary["final"]["time_estimate"] == pytest.approx(history["time_estimate"].iloc[-1], rel=1e-12)
     ends = history.drop_duplicates("step", keep="last")
     np.testing.assert_allclose(ends["t"], 1.9 * np.arange(1, 9) / 8, rtol=1e-15)

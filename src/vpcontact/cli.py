@@ -155,12 +155,16 @@ def _run_case(args, ranks) -> int:
     summary = outcome.result.summary()
     final = summary["final"]
     cuts = f", {summary['step_cuts']} step cuts" if summary["step_cuts"] else ""
+    cuts += f" in {summary['history_rows']} levels" if summary["history_rows"] > summary["steps"] else ""
     print(f"complete: {summary['steps']} steps{cuts}, {summary['dofs']} dofs, {summary['contact_nodes']} contact nodes, "
           f"{summary['newton_iterations']} Newton iterations, {summary['wall_time_s']:.1f} s -> {args.out}")
     if final.get("K_probe") is not None and summary["contact_nodes"]:
         print(f"final t = {final['t']:g}: K_probe = {final['K_probe']:.6g}, penetration_probe = "
               f"{final['penetration_probe']:.6g}, nodes separated/compliance/limit = {final['nodes_separated']}/"
               f"{final['nodes_in_compliance']}/{final['nodes_at_limit']}")
+    if "time_estimate" in final:
+        print(f"error estimates at t = {final['t']:g}: in space {final['error_estimate']:.4g}, in time "
+              f"{final['time_estimate']:.4g} (energy norm)")
     return 0
 
 

@@ -88,8 +88,8 @@ class Companion:
                 return self._restarted(attempt, u, run_rate)
         difference = companion_u[problem.free] - u[problem.free]
         xi = before.xi + 0.5 * h * (np.maximum(before.d, 0.0) + np.maximum(solution.d, 0.0))
-        return CompanionLevel(xi, solution.d.copy(), z, rate, difference, self.energy(difference),
-                              self.energy(difference - before.difference), self.energy(u[problem.free]))
+        return CompanionLevel(xi, solution.d.copy(), z, rate, difference, self.free_energy(difference),
+                              self.free_energy(difference - before.difference), self.energy(u))
 
     def _solve(self, solver, attempt, u: np.ndarray, z: np.ndarray | None, xi_start: np.ndarray):
         """(u at every dof, the step solution) of the run's attempted step problem with the history z at its level
@@ -113,17 +113,20 @@ class Companion:
         solution: StepSolution = attempt.solution
         xi = attempt.step.xi_prev + attempt.h * np.maximum(solution.d, 0.0)
         return CompanionLevel(xi, solution.d.copy(), attempt.z, run_rate, np.zeros(self.problem.free.size),
-                              np.nan, np.nan, self.energy(u[self.problem.free]))
+                              np.nan, np.nan, self.energy(u))
 
     def accept(self, level: CompanionLevel) -> None:
         """Make ``level`` the companion's last level."""
         self.level = level
 
-    def energy(self, free_values: np.ndarray) -> float:
-        """‖v‖_E = (∫_Ω ℰε(v):ε(v))^{1/2} of v, given at the free dofs (0 at the held ones), over every rank's
-        elements."""
+    def free_energy(self, free_values: np.ndarray) -> float:
+        """‖v‖_E of v given at the free dofs, 0 at the held ones (a difference of two displacements with the same u_D)."""
         v = np.zeros(self.problem.basis.N)
         v[self.problem.free] = free_values
+        return self.energy(v)
+
+    def energy(self, v: np.ndarray) -> float:
+        """‖v‖_E = (∫_Ω ℰε(v):ε(v))^{1/2} of v at every dof, over every rank's elements."""
         share = self.share
         strain = share.strain(v)
         density = np.einsum("ij...,ij...->...", share.elasticity.stress(strain), strain)
