@@ -133,8 +133,9 @@ def body_arrays(path: Path) -> dict[str, np.ndarray]:
 
 
 @pytest.mark.parametrize("arguments", [coated_viscoplastic, VISCOPLASTIC + ["--set", "contact.stiffness.beta=-1"],
-                                       QUARTER_BALL],
-                         ids=["2d-hardening-coated-by-region", "2d-softening-to-the-base", "3d-quarter-ball"])
+                                       QUARTER_BALL, VISCOPLASTIC + ["--set", "time.adaptive=true"]],
+                         ids=["2d-hardening-coated-by-region", "2d-softening-to-the-base", "3d-quarter-ball",
+                              "2d-adaptive-time-steps"])
 def test_two_ranks_give_the_numbers_of_one_process(arguments, tmp_path):
     """... and each rank keeps the history z of its own elements: every element's once, whole in the fields."""
     arguments = arguments(tmp_path) if callable(arguments) else arguments
