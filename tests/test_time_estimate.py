@@ -113,6 +113,7 @@ def test_adaptive_steps_keep_the_estimate_in_time_within_its_share_and_pay_where
     assert within.all() if summary["time_over_share"] == 0 else within.mean() > 0.9
     k = history.groupby("step")["k"].min()
     assert k[1] <= 0.5 / 2**5 and k[8] >= 0.25  # the rise in sub-steps of ~10 ms, the creep in steps of 0.25 s or more
+    assert summary["step_cuts"] == 0 and history["k"].min() == 0.5 / 2**6  # time.max_halvings (6) and no deeper
     steps = history["step"].to_numpy()
     assert np.all(history["t"].to_numpy()[np.r_[steps[1:] != steps[:-1], True]] == 0.5 * np.arange(1, 9))
     uniform = vpcontact.solve(ball(len(history), T=4.0, load=RAMP_AND_HOLD, viscoplastic=True, beta=1.0)).history
@@ -186,10 +187,43 @@ def test_a_gmsh_pad_pressed_and_released_in_adaptive_steps_from_the_command_line
     ends = history.drop_duplicates("step", keep="last")
     np.testing.assert_allclose(ends["t"], 1.9 * np.arange(1, 9) / 8, rtol=1e-15)
     assert history.groupby("step")["k"].sum().round(12).eq(round(1.9 / 8, 12)).all()
+    assert summary["step_cuts"] > 0 or history["k"].min() >= 1.9 / 8 / 2**6  # at most time.max_halvings halvings
     scale = history["reaction_top_y"].abs().max()
     np.testing.assert_allclose(history["reaction_top_y"] + history["contact_force_y"], 0.0, atol=1e-8 * scale)
     assert np.all(history["time_estimate"] <= history["time_estimate_step"].cumsum() * (1 + 1e-12))
     assert vtu_displacement(out / "fields" / "body_00002.vtu")[:, 1].min() < -2e-5
+
+
+def test_a_gmsh_pad_pressed_released_and_lifted_off_in_adaptive_steps_stays_within_its_halvings(tmp_path):
+    """The same pad on a rigid step under its right half, its top moved by −30 µm·sin(πt) to t = 1.5 (pressed,
+    released, lifted off: the load reverses), a body that yields: the sub-steps gather where the contact nodes
+    separate, a step is never halved more than time.max_halvings times (the next step's halvings, predicted anew
+    by each sub-step, do not change those of the step being done), the reaction balances the contact force at every
+    level and the pad is off the layer at the end."""
+    import pandas
+    import tomli_w
+
+    pad_mesh(tmp_path / "pad.msh")
+    case = {"mesh": {"file": "pad.msh"},
+            "material": {"E": 5e6, "nu": 0.45, "viscoplastic": {"law": "perzyna", "eta": 0.2, "yield_stress": 1e3}},
+            "boundary": {"dirichlet": [{"part": "left", "components": ["x"]},
+                                       {"part": "top", "components": ["y"], "value": ["-3e-5*sin(pi*t)"]}]},
+            "contact": {"part": "bottom", "gap": "2e-3*max(x - 0.02, 0)", "g": 1e-4,
+                        "stiffness": {"law": "power", "c_v": 2e10, "alpha": 1e4, "beta": 1.0}},
+            "time": {"T": 1.5, "steps": 6, "adaptive": True, "balance": 0.1}, "output": {"field_steps": "all"}}
+    (tmp_path / "pad.toml").write_text(tomli_w.dumps(case))
+    status, stdout, stderr = run_cli("run", "pad.toml", "--out", "run", cwd=tmp_path)
+    assert status == 0, stderr
+    history = pandas.read_csv(tmp_path / "run" / "history.csv")
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["step_cuts"] == 0 and summary["time_cuts"] > 0 and summary["time_over_share"] > 0
+    assert history["k"].min() == 0.25 / 2**6
+    levels = history.groupby("step").size()
+    assert levels[[3, 4]].sum() > levels[[1, 5, 6]].sum()  # the release, where the nodes separate
+    scale = history["reaction_top_y"].abs().max()
+    np.testing.assert_allclose(history["reaction_top_y"] + history["contact_force_y"], 0.0, atol=1e-8 * scale)
+    assert history["nodes_separated"].iloc[-1] == summary["contact_nodes"]
+    assert vtu_displacement(tmp_path / "run" / "fields" / "body_00006.vtu")[:, 1].max() > 0  # lifted above its start
 
 
 @pytest.mark.parametrize("time_adaptive", [False, True], ids=["uniform steps", "time.adaptive"])

@@ -222,8 +222,9 @@ class TimeLoop:
     def _advance_step(self, n: int) -> str | None:
         """Reach t_n from t_{n−1}, in the sub-steps :class:`~.time_control.TimeControl` starts it with; None, or
         the failure's message."""
+        halvings = self.time_control.halvings  # each sub-step's own estimate predicts the next step's anew
         for t, h in self.time_control.sub_steps(n):
-            failure = self._advance(n, t, h, self.time_control.halvings, 0)
+            failure = self._advance(n, t, h, halvings, 0)
             if failure is not None:
                 return failure
         return None

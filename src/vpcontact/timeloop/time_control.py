@@ -53,7 +53,8 @@ class TimeControl:
 
     def sub_steps(self, n: int) -> list[tuple[float, float]]:
         """(t, h) of each sub-step that starts step n: 2^halvings of length k / 2^halvings, ending at t_n − j h
-        (the times a step cut in halves reaches), the last at t_n exactly."""
+        (the times a step cut in halves reaches), the last at t_n exactly (``halvings`` as it is
+        now: each sub-step's estimate predicts the next step's anew)."""
         times, pieces = self.times, 2**self.halvings
         end, h = times[n - 1], times.k / pieces
         return [(end - (pieces - j) * h, h) for j in range(1, pieces + 1)]
