@@ -3,6 +3,7 @@ norms, resuming after a kill, retrying failed runs, run ids that are safe direct
 study directories, and SIGTERM/SIGINT stopping a study and its workers."""
 
 import csv
+import ctypes
 import json
 import os
 import signal
@@ -370,6 +371,18 @@ def test_a_second_study_into_a_directory_in_use_is_refused(tmp_path):
         process.wait()
 
 
+def exchange(first, second):
+    """Swap two directories in one step (Linux renameat2 with RENAME_EXCHANGE): a rename away and a mkdir leave a
+    moment with no directory, which the study may see first and report as removed."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    if not hasattr(libc, "renameat2"):
+        pytest.skip("this C library has no renameat2")
+    at_current_directory, rename_exchange = -100, 2
+    if libc.renameat2(at_current_directory, os.fsencode(first), at_current_directory, os.fsencode(second),
+                      rename_exchange) != 0:
+        pytest.skip(f"renameat2 cannot exchange here: {os.strerror(ctypes.get_errno())}")
+
+
 def test_a_study_whose_directory_is_replaced_stops_and_writes_nothing_there(tmp_path):
     path = write_study(tmp_path, steps=600, h=0.1)
     out = tmp_path / "out"
@@ -383,9 +396,10 @@ def test_a_study_whose_directory_is_replaced_stops_and_writes_nothing_there(tmp_
             assert process.poll() is None and time.time() < deadline, process.communicate()
             workers |= children(process.pid)
             time.sleep(0.02)
-        out.rename(tmp_path / "moved")
-        out.mkdir()
-        (out / "notes.txt").write_text("a new directory of the user")
+        replacement = tmp_path / "moved"
+        replacement.mkdir()
+        (replacement / "notes.txt").write_text("a new directory of the user")
+        exchange(out, replacement)
         before = snapshot_tree(out)
         _, stderr = process.communicate(timeout=60)
     finally:
