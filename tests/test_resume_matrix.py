@@ -346,3 +346,58 @@ def test_a_resumed_run_is_the_uninterrupted_one(tmp_path, references, request, n
     assert main(["run", str(path), "--out", str(out), "--quiet", "--resume"]) == 0, f"seed {seed}"
     assert_same_outputs(out, references(name), steps_of(field_steps, case["time"]["steps"]), xdmf, resumed_at)
     assert not (out / directory.LOCK).exists()
+
+
+def older(out: Path, case_keys: dict[str, tuple[str, ...]], meta_keys: tuple[str, ...],
+          array_prefixes: tuple[str, ...] = ()) -> None:
+    """Make the checkpoint in ``out`` look written by an earlier vpcontact: without the case keys (section: names),
+    meta values and arrays (by prefix) added since."""
+    path = checkpoint.folder(out) / checkpoint.STATE
+    with np.load(path) as stored:
+        arrays = {key: stored[key] for key in stored.files if not key.startswith(array_prefixes or ("\0",))}
+    case = tomllib.loads(str(arrays["case"]))
+    for section, names in case_keys.items():
+        assert any(name in case[section] for name in names), case[section]
+        case[section] = {k: v for k, v in case[section].items() if k not in names}
+    meta = json.loads(str(arrays["meta"]))
+    assert all(key in meta for key in meta_keys)
+    arrays["case"] = np.array(tomli_w.dumps(case))
+    arrays["meta"] = np.array(json.dumps({k: v for k, v in meta.items() if k not in meta_keys}))
+    np.savez(path, **arrays)
+
+
+#: What checkpoints of vpcontact before the estimate in time (time.adaptive) lack.
+BEFORE_TIME_ADAPTIVE = {"case_keys": {"time": ("adaptive", "balance", "max_halvings")},
+                        "meta_keys": ("time_cuts", "halvings", "time_over_share", "time_largest")}
+
+
+def test_a_checkpoint_of_an_earlier_version_resumes_with_the_new_keys_at_their_defaults(tmp_path, references):
+    """A run stopped by an earlier vpcontact, whose case had no time.adaptive (a key added since, whose default
+    keeps what that run did) and whose checkpoint has no time control: it resumes, and is the uninterrupted run
+    bit for bit."""
+    case = CASES["viscoplastic"]()
+    case["output"].update(field_steps="all", xdmf=True, figures="viscoplastic" in FIGURES, checkpoint_every_steps=1)
+    path = write(tmp_path, "case", case)
+    out = tmp_path / "run"
+    step = interrupt("SIGTERM", path, out, None, random.Random(5), resume=False)
+    older(out, **BEFORE_TIME_ADAPTIVE)
+    assert main(["run", str(path), "--out", str(out), "--quiet", "--resume"]) == 0
+    assert_same_outputs(out, references("viscoplastic"), steps_of("all", case["time"]["steps"]), True, [step])
+
+
+def test_a_checkpoint_of_an_earlier_version_without_what_the_case_needs_is_refused(tmp_path, capsys):
+    """The error estimate in time needs the companion's level and the history's columns of it, which a checkpoint
+    of an earlier version has not: exit 2, one line naming what is missing; the checkpoint stays."""
+    case = elastic_2d(steps=12)
+    case["output"].update(error_estimate=True, checkpoint_every_steps=1)
+    path = write(tmp_path, "case", case)
+    out = tmp_path / "run"
+    interrupt("SIGTERM", path, out, None, random.Random(6), resume=False)
+    older(out, **BEFORE_TIME_ADAPTIVE, array_prefixes=("companion_", "row_time_estimate"))
+    kept = (checkpoint.folder(out) / checkpoint.STATE).read_bytes()
+    capsys.readouterr()
+    assert main(["run", str(path), "--out", str(out), "--quiet", "--resume"]) == 2
+    stderr = capsys.readouterr().err
+    assert stderr.count("\n") == 1 and "the checkpoint has no 'row_time_estimate" in stderr, stderr
+    assert "written by an earlier one" in stderr and "--overwrite" in stderr
+    assert (checkpoint.folder(out) / checkpoint.STATE).read_bytes() == kept

@@ -107,6 +107,17 @@ def remove_unrecorded(out: Path, recorded: Collection[int]) -> None:
     remove_files(out, tuple(str(path) for path in found if path.name[7:-4] not in {f"{n:05d}" for n in recorded}))
 
 
+def with_new_defaults(stored: dict) -> dict:
+    """A resolved case as this vpcontact resolves it: the keys added since it was written (a checkpoint of an
+    earlier version) at their defaults, which keep what the run did then; as it is when this version refuses it."""
+    from ..case.model import Case
+
+    try:
+        return Case.model_validate(stored).resolved()
+    except ValueError:
+        return stored
+
+
 def comparable(case_dict: dict) -> dict:
     """A resolved case without the keys that do not change the numbers."""
     output = {k: v for k, v in case_dict.get("output", {}).items() if k not in FREE_KEYS}
@@ -149,7 +160,10 @@ def restore(loop: TimeLoop, out: Path) -> int:
     arrays = _read(path)
     try:
         return _restore(loop, out, path, arrays)
-    except (KeyError, IndexError, TypeError, json.JSONDecodeError, tomllib.TOMLDecodeError) as error:
+    except KeyError as error:
+        raise ResumeError(f"cannot resume from '{path}': the checkpoint has no {error}, which this version of "
+                          f"vpcontact needs (it was written by an earlier one); {RESTART}") from None
+    except (IndexError, TypeError, json.JSONDecodeError, tomllib.TOMLDecodeError) as error:
         raise ResumeError(f"cannot resume from '{path}': unreadable checkpoint ({type(error).__name__}: {error}); "
                           f"{RESTART}") from None
 
@@ -162,6 +176,7 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
         raise ResumeError(f"cannot resume from '{path}': checkpoint format {int(arrays['format'])}, expected {FORMAT}")
     problem = loop.problem
     case_now = tomllib.loads(problem.source or "")
+    stored_case = with_new_defaults(stored_case)
     if comparable(stored_case) != comparable(case_now):
         raise ResumeError(f"cannot resume: the run in '{out}' was started with a different case "
                           f"({first_difference(stored_case, case_now)})")

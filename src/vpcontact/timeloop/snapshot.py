@@ -56,7 +56,7 @@ def restore_loop(loop, snapshot: LoopSnapshot) -> None:
     loop.state = LoopState.from_arrays(arrays, loop.elements)
     step = loop.state.step
     result.resume(arrays, snapshot.fields, step, int(meta["step_cuts"]), [*meta["resumed_at"], step])
-    result.time_cuts = int(meta["time_cuts"])
+    result.time_cuts = int(meta.get("time_cuts", 0))  # 0: a checkpoint of before time.adaptive
     loop.time_control.restore(meta)
     solver = loop.solver
     if "solver_method" in arrays and str(arrays["solver_method"]) == solver.name:

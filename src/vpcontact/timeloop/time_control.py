@@ -47,9 +47,9 @@ class TimeControl:
         return {"halvings": self.halvings, "time_over_share": self.over_share, "time_largest": self.largest}
 
     def restore(self, meta: dict) -> None:
-        """The control of :meth:`meta`."""
-        self.halvings, self.over_share = int(meta["halvings"]), int(meta["time_over_share"])
-        self.largest = float(meta["time_largest"])
+        """The control of :meth:`meta` (a checkpoint of before ``time.adaptive`` has none: a control at rest)."""
+        self.halvings, self.over_share = int(meta.get("halvings", 0)), int(meta.get("time_over_share", 0))
+        self.largest = float(meta.get("time_largest", 0.0))
 
     def sub_steps(self, n: int) -> list[tuple[float, float]]:
         """(t, h) of each sub-step that starts step n: 2^halvings of length k / 2^halvings, ending at t_n − j h
