@@ -136,7 +136,7 @@ def run(case: Case, out: str | Path, *, resume: bool = False, overwrite: bool = 
                             resumed_method=ranks.first(checkpoint.saved_method(out)) if resuming else None)
             if resuming:
                 with progress.phase("checkpoint", f"restoring {checkpoint.folder(out)}") as phase:
-                    checkpoint.restore(loop, out)
+                    checkpoint.restore(loop, out, as_now=with_new_defaults)
                     phase.done(f"{loop.state.step:,} of {len(problem.times):,} steps done")
                 if ranks.root:
                     _warn_versions(out)
@@ -358,6 +358,16 @@ def _finished(case: Case, out: Path) -> Outcome | None:
     _check_same_case(case, out)
     message = summary.get("message", "") or f"the run in '{out}' is already complete; nothing to resume"
     return Outcome(None, summary["status"], message)
+
+
+def with_new_defaults(stored: dict) -> dict:
+    """A resolved case as this version of vpcontact resolves it: the keys added since it was written (by an earlier
+    version, in a checkpoint) at their defaults, which keep what the run did then; as it is when this version refuses
+    it."""
+    try:
+        return Case.model_validate(stored).resolved()
+    except ValueError:
+        return stored
 
 
 def _check_same_case(case: Case, out: Path) -> None:

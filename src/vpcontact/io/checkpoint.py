@@ -40,7 +40,7 @@ import hashlib
 import json
 import tomllib
 import zipfile
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from pathlib import Path
 
 import numpy as np
@@ -107,17 +107,6 @@ def remove_unrecorded(out: Path, recorded: Collection[int]) -> None:
     remove_files(out, tuple(str(path) for path in found if path.name[7:-4] not in {f"{n:05d}" for n in recorded}))
 
 
-def with_new_defaults(stored: dict) -> dict:
-    """A resolved case as this vpcontact resolves it: the keys added since it was written (a checkpoint of an
-    earlier version) at their defaults, which keep what the run did then; as it is when this version refuses it."""
-    from ..case.model import Case
-
-    try:
-        return Case.model_validate(stored).resolved()
-    except ValueError:
-        return stored
-
-
 def comparable(case_dict: dict) -> dict:
     """A resolved case without the keys that do not change the numbers."""
     output = {k: v for k, v in case_dict.get("output", {}).items() if k not in FREE_KEYS}
@@ -152,23 +141,22 @@ def save(loop: TimeLoop, out: Path) -> None:
         np.savez(temporary, **arrays)
 
 
-def restore(loop: TimeLoop, out: Path) -> int:
+def restore(loop: TimeLoop, out: Path, as_now: Callable[[dict], dict] = lambda case: case) -> int:
     """Load the checkpoint in ``out`` into a fresh ``loop`` (same case, same mesh: else ResumeError; the
     snapshot's arrays and the fields files it lists, handed to ``loop.restore``); returns the step it
-    continues after."""
+    continues after. ``as_now``: the resolved case the checkpoint holds as this version resolves it (the keys added
+    since it was written at their defaults), compared with the case now."""
     path = folder(out) / STATE
     arrays = _read(path)
     try:
-        return _restore(loop, out, path, arrays)
-    except KeyError as error:
-        raise ResumeError(f"cannot resume from '{path}': the checkpoint has no {error}, which this version of "
-                          f"vpcontact needs (it was written by an earlier one); {RESTART}") from None
-    except (IndexError, TypeError, json.JSONDecodeError, tomllib.TOMLDecodeError) as error:
+        return _restore(loop, out, path, arrays, as_now)
+    except (KeyError, IndexError, TypeError, json.JSONDecodeError, tomllib.TOMLDecodeError) as error:
         raise ResumeError(f"cannot resume from '{path}': unreadable checkpoint ({type(error).__name__}: {error}); "
                           f"{RESTART}") from None
 
 
-def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray]) -> int:
+def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray],
+             as_now: Callable[[dict], dict]) -> int:
     """``restore`` once state.npz (at ``path``) is read into ``arrays``."""
     meta = json.loads(str(arrays["meta"]))
     stored_case = tomllib.loads(str(arrays["case"]))
@@ -176,7 +164,7 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
         raise ResumeError(f"cannot resume from '{path}': checkpoint format {int(arrays['format'])}, expected {FORMAT}")
     problem = loop.problem
     case_now = tomllib.loads(problem.source or "")
-    stored_case = with_new_defaults(stored_case)
+    stored_case = as_now(stored_case)
     if comparable(stored_case) != comparable(case_now):
         raise ResumeError(f"cannot resume: the run in '{out}' was started with a different case "
                           f"({first_difference(stored_case, case_now)})")
@@ -184,7 +172,11 @@ def _restore(loop: TimeLoop, out: Path, path: Path, arrays: dict[str, np.ndarray
         raise ResumeError(f"cannot resume: the mesh of the run in '{out}' differs from the mesh of the case now")
 
     fields = {n: _read(folder(out) / f"fields_{n:05d}.npz") for n in meta["field_steps"]}
-    loop.restore(LoopSnapshot(arrays, meta, fields))
+    try:
+        loop.restore(LoopSnapshot(arrays, meta, fields))
+    except KeyError as error:  # a checkpoint of this case and mesh, without what this version keeps
+        raise ResumeError(f"cannot resume from '{path}': the checkpoint has no {error}, which this version of "
+                          f"vpcontact needs (it was written by an earlier one); {RESTART}") from None
     return loop.state.step
 
 
