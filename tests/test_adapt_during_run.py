@@ -10,9 +10,14 @@ import pytest
 import vpcontact
 from conftest import block_3d_case, run_cli
 from vpcontact import adapt, build_problem
+from vpcontact.adaptivity.during_run import RunAdaptation, _Watcher, energy_norm
+from vpcontact.adaptivity.options import AdaptOptions
 from vpcontact.adaptivity.transfer import Transfer
+from vpcontact.estimate.estimators import ESTIMATORS
+from vpcontact.estimate.indicators import Level
 from vpcontact.mesh.refinement import refine_with_lineage
 from vpcontact.mesh.simplex import measures
+from vpcontact.progress import SILENT
 from vpcontact.results import norms
 from vpcontact.timeloop.loop import TimeLoop
 from vpcontact.timeloop.snapshot import LoopSnapshot
@@ -127,6 +132,50 @@ def test_refining_at_the_first_step_only_is_a_run_on_the_last_mesh():
                                    atol=1e-10 * np.abs(plain.fields[step].displacement).max())
         np.testing.assert_allclose(result.fields[step].z, plain.fields[step].z, rtol=0,
                                    atol=1e-9 * np.abs(plain.fields[step].z).max())
+
+
+def test_the_levels_not_estimated_are_within_the_tolerance_the_trend_predicts():
+    """After its refinement at the first step the run estimates only the levels its trend asks for (the wait doubles
+    while the estimate extrapolated from the two last estimates stays within the tolerance); every level of its
+    history, estimated afterwards on its last mesh, is within the tolerance, and the levels estimated are fewer than
+    the steps."""
+    case = vpcontact.load_case({**punch_case(late=0.0), "time": {"T": 1.1, "steps": 22},
+                                "output": {"field_steps": "all"}})
+    tolerance = 0.6
+    adaptation = adapt(build_problem(case), {"mode": "run", "tolerance": tolerance, "theta": 0.5}, case.output)
+    assert {row["step"] for row in adaptation.rows if row["refined"]} == {1} and adaptation.status == "complete"
+    estimated = [row["step"] for row in adaptation.rows if not row["refined"]]
+    assert estimated[0] == 1 and estimated[-1] == 22 and len(estimated) <= 22 // 3, estimated
+    assert max(b - a for a, b in zip(estimated, estimated[1:])) >= 4  # the waits grew
+    problem, result = adaptation.problem, adaptation.result
+    estimator = ESTIMATORS["residual"].prepare(problem)
+    largest = 0.0
+    for step in range(1, 23):
+        eta = np.sqrt(estimator(Level.of(result, step, problem)).squared.sum())
+        largest = max(largest, energy_norm(problem, result.fields[step].displacement))
+        assert eta <= tolerance * largest, (step, eta / largest)
+
+
+@pytest.mark.parametrize("levels, waits", [
+    ([(1, 0.08), (2, 0.08), (4, 0.08), (8, 0.08), (16, 0.08)], [1, 2, 4, 8, 8]),  # flat within: doubles to the longest
+    ([(1, 0.04), (3, 0.03)], [2, 4]),  # at most half the tolerance, then falling
+    ([(1, 0.05), (2, 0.07), (3, 0.085)], [2, 1, 1]),  # rising: (0.1 - 0.07) / 0.02 = 1.5 steps, then 1
+    ([(1, 0.06), (2, 0.065), (4, 0.07), (8, 0.083)], [1, 2, 4, 5]),  # rising slowly, then faster: 0.017 / 0.00325
+    ([(1, 0.02), (3, 0.09)], [2, 1]),  # rising fast from under half the tolerance
+])
+def test_the_wait_to_the_next_estimate_follows_the_trend_of_the_estimate(levels, waits):
+    """The steps from an accepted level to the next estimate (tolerance 0.1, one mesh): twice the last while the
+    estimate extrapolated linearly from the two last accepted levels stays within the tolerance, else as many as it
+    stays within it, at least one; from a first level, twice the last when it is at most half the tolerance."""
+    settings = AdaptOptions(cycles=None, theta=0.5, max_dofs=10**6, functional="max", estimator="residual",
+                            mode="run", tolerance=0.1)
+    watcher = _Watcher(settings, RunAdaptation(), set(), SILENT, None)
+    found = []
+    for step, relative in levels:
+        watcher.wait = watcher._next_wait(step, relative, dofs=1000)
+        found.append(watcher.wait)
+    assert found == waits
+    assert watcher._next_wait(30, 0.09, dofs=4000) == 1  # a new mesh: no trend yet, over half the tolerance
 
 
 def test_a_refinement_in_the_middle_of_the_history_keeps_the_balance_and_conserves_the_history():

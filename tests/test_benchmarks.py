@@ -148,3 +148,16 @@ def test_the_ladder_runs_each_method_and_auto_picks_the_one_its_cost_model_predi
     assert punch["contact_nodes"] < punch["dofs"] / 3  # the flat face of the gmsh punch, meshed finer
     assert [s["rung"] for s in report["summaries"]] == ["punch-quick"]
     assert all(s["auto_over_fastest"] > 0 and s["auto_ran"] and s["auto_switch"] is None for s in report["summaries"])
+
+
+def test_the_long_history_benchmark_compares_one_adaptive_pass_with_one_run_on_its_last_mesh():
+    done = subprocess.run([sys.executable, str(BENCHMARKS / "adaptivity_long_history.py"), "--steps", "11", "22",
+                           "--tolerances", "0.3", "--repeat", "1"], capture_output=True, text=True, timeout=300,
+                          cwd=BENCHMARKS)
+    assert done.returncode == 0, done.stderr
+    runs = json.loads(done.stdout)["runs"]
+    assert [(r["steps"], r["tolerance"]) for r in runs] == [(11, 0.3), (22, 0.3)]
+    for run in runs:
+        assert run["refined_at_steps"] and run["refined_at_steps"][0] == 1 and run["dofs"] > 162  # past h = 1/8 (81 nodes)
+        assert 2 <= run["levels_estimated"] < run["steps"]  # the first and the last, not every one
+        assert run["time_ratio"] == run["wall_time_s"] / run["one_run_on_last_mesh_s"] > 0

@@ -17,9 +17,11 @@ above the tolerance (its row of adapt.csv says so) and the mesh stays for the re
 coarsened.
 
 Not every level is estimated: an estimate costs the level's fields and the estimator's pass over the mesh, more
-than a step of the condensed method. After an accepted level whose η is at most half the tolerance the next
-estimate waits twice as many steps as the last (1, 2, 4, up to LONGEST_WAIT); after any other, the next step is
-estimated, and so is the last step. The levels in between are accepted on the mesh of the estimate before them.
+than a step of the condensed method. After an accepted level the next estimate waits twice as many steps as the last
+(1, 2, 4, up to LONGEST_WAIT) when the estimate is predicted to stay within the tolerance until then (the trend of the
+two last levels accepted on this mesh, extrapolated linearly; with one, when it is at most half the tolerance), else as
+many steps as the prediction stays within it, at least one. The last step is always estimated. The levels in
+between are accepted on the mesh of the estimate before them.
 
 The steps solved on a mesh that was then refined are work done, and counted (the wall time and the solver's
 counters); their levels are not kept. The result is the run's on its last mesh: its history rows, one per
@@ -98,6 +100,7 @@ class _Watcher:
         self.capped = False  # adapt.max_dofs reached: no more refinements
         self.largest = 0.0  # the largest ‖u_h‖_E of the levels accepted so far
         self.wait = 1  # steps from one estimated level to the next
+        self.last: tuple[int, float, int] | None = None  # (step, relative estimate, dofs) of the last level accepted
 
     def follow(self, loop: TimeLoop) -> None:
         """Watch ``loop`` (not run yet, or restored at the level before the step to solve again): its next step is
@@ -139,8 +142,23 @@ class _Watcher:
         if refine:
             return
         self.largest = scale
-        self.wait = min(2 * self.wait, LONGEST_WAIT) if relative <= 0.5 * self.settings.tolerance else 1
+        self.wait = self._next_wait(step, relative, problem.basis.N)
         self._accept(loop, step)
+
+    def _next_wait(self, step: int, relative: float, dofs: int) -> int:
+        """The steps from the level ``step`` just accepted (its η / max ‖u_h‖_E ``relative``, on a mesh of ``dofs``) to
+        the next estimate: twice the last wait (at most LONGEST_WAIT) when the estimate is predicted to stay within the
+        tolerance until then, else the most steps it is predicted to stay within it (at least 1). The prediction
+        extrapolates linearly from the level accepted before on the same mesh; without one, the estimate stays
+        within the tolerance when it is at most half of it."""
+        tolerance, longer = self.settings.tolerance, min(2 * self.wait, LONGEST_WAIT)
+        last, self.last = self.last, (step, relative, dofs)
+        if last is None or last[2] != dofs or last[0] >= step:
+            return longer if relative <= 0.5 * tolerance else 1
+        growth = (relative - last[1]) / (step - last[0])
+        if growth * longer <= tolerance - relative:
+            return longer
+        return max(1, min(longer, int((tolerance - relative) / growth)))
 
     def _accept(self, loop: TimeLoop, step: int) -> None:
         """Step ``step`` accepted: the next estimated step set, the fields the outputs do not want dropped."""
