@@ -146,8 +146,8 @@ class _Watcher:
         self._accept(loop, step)
 
     def _next_wait(self, step: int, relative: float, dofs: int) -> int:
-        """The steps from the level ``step`` just accepted (its η / max ‖u_h‖_E ``relative``, on a mesh of ``dofs``) to
-        the next estimate: twice the last wait (at most LONGEST_WAIT) when the estimate is predicted to stay within the
+        """The steps from the level ``step`` just accepted (its η / max ‖u_h‖_E ``relative``, on a mesh of
+        ``dofs``) to the next estimate: twice the last wait (at most LONGEST_WAIT) when the estimate is predicted to stay within the
         tolerance until then, else the most steps it is predicted to stay within it (at least 1). The prediction
         extrapolates linearly from the level accepted before on the same mesh; without one, the estimate stays
         within the tolerance when it is at most half of it."""

@@ -45,7 +45,10 @@ def metis_owners(elements: np.ndarray, nodes: int, parts: int) -> np.ndarray:
     graph = node_graph(elements, nodes)
     held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
     try:
-        _, owners = pymetis.part_graph(parts, xadj=graph.indptr, adjncy=graph.indices)
+        if hasattr(pymetis, "CSRAdjacency"):  # newer pymetis: xadj/adjncy deprecated, to be removed in 2027
+            _, owners = pymetis.part_graph(parts, pymetis.CSRAdjacency(graph.indptr, graph.indices))
+        else:
+            _, owners = pymetis.part_graph(parts, xadj=graph.indptr, adjncy=graph.indices)
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, held)
     return np.asarray(owners, dtype=np.int64)

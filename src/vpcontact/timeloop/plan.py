@@ -159,19 +159,19 @@ def ranks_method(problem: Problem, ranks: int) -> tuple[str, str]:
 
 def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, steps: int, history: bool,
                     field_steps: int, multigrid: str = "pyamg") -> tuple[dict, dict, FactorWork | None]:
-    """The methods' predicted costs (:func:`~vpcontact.solvers.cost.predict`) for ``solver.method = method``, twice:
-    at this machine kind's reference rates (:meth:`~vpcontact.solvers.cost.MachineRates.reference`), by which
-    "auto" chooses (the same case gets the same method on every run, whatever else the machine is doing, and
-    whichever fields it writes: the solves of the ``field_steps`` written are left out), and at the rates probed
-    now, which ``vpcontact check`` and summary.json report. The direct factor's work is counted
-    by PARDISO's analysis where a direct method may run: when it is asked for, or, for "auto", when the count could
-    change the choice: the condensed method's dense algebra fits and its cost by the laws of
-    :func:`~vpcontact.solvers.cost.factor_work` is within COUNT_WITHIN of the iterative method's, and not
-    COUNT_WITHIN times below every other method's. An analysis of a factor that cannot win is not made (at 2M dofs
-    it would take a minute), nor one of a factor that wins anyway: in 2D, where the laws are within 3% of the
-    count, it took 0.2 s of a 0.8 s run at 33k dofs, as long as the factorization's own analysis. Third, the direct factor's work the predictions rest on (None: not weighed). The
-    iterative method is predicted with the ``multigrid`` backend it would run (:data:`~vpcontact.solvers.cost.
-    MULTIGRID_SPEEDS`)."""
+    """The methods' predicted costs (:func:`~vpcontact.solvers.cost.predict`) for ``solver.method = method``, twice: at
+    this machine kind's reference rates (:meth:`~vpcontact.solvers.cost.MachineRates.reference`), by which "auto"
+    chooses (the same case gets the same method on every run, whatever else the machine is doing, and whichever
+    fields it writes: the solves of the ``field_steps`` written are left out), and at the rates probed now, which
+    ``vpcontact check`` and summary.json report. The direct factor's work is counted by PARDISO's analysis where a
+    direct method may run: when it is asked for, or, for "auto", when the count could change the choice: the
+    condensed method's dense algebra fits and its cost by the laws of :func:`~vpcontact.solvers.cost.factor_work` is
+    within COUNT_WITHIN of the iterative method's, and not COUNT_WITHIN times below every other method's. An
+    analysis of a factor that cannot win is not made (at 2M dofs it would take a minute), nor one of a factor that
+    wins anyway: in 2D, where the laws are within 3% of the count, it took 0.2 s of a 0.8 s run at 33k dofs, as long
+    as the factorization's own analysis. Third, the direct factor's work the predictions rest on (None: not
+    weighed). The iterative method is predicted with the ``multigrid`` backend it would run
+    (:data:`~vpcontact.solvers.cost.MULTIGRID_SPEEDS`)."""
     reference, probed, resident = MachineRates.reference(A), MachineRates.probe(A), resident_memory()
 
     def costs(factor, rates, written=0):
