@@ -14,6 +14,7 @@ from test_adapt_during_run import pad_mesh, vtu_displacement
 from vpcontact import build_problem
 from vpcontact.case.translate import output_options
 from vpcontact.results.norms import energy_norm
+from vpcontact.timeloop.companion import Companion
 from vpcontact.timeloop.loop import TimeLoop
 
 
@@ -118,6 +119,53 @@ def test_adaptive_steps_keep_the_estimate_in_time_within_its_share_and_pay_where
     assert np.all(history["t"].to_numpy()[np.r_[steps[1:] != steps[:-1], True]] == 0.5 * np.arange(1, 9))
     uniform = vpcontact.solve(ball(len(history), T=4.0, load=RAMP_AND_HOLD, viscoplastic=True, beta=1.0)).history
     assert (eta_k / eta_h).max() < (uniform["time_estimate"] / uniform["error_estimate"]).max()
+
+
+def failing_once(monkeypatch, call: int) -> list:
+    """The companion's Newton iteration fails at its ``call``-th solve (one time); returns the (t, h) of the attempt
+    of each of its solves."""
+    calls = []
+    solve = Companion._solve
+
+    def maybe_failing(self, solver, attempt, *args):
+        calls.append((attempt.t, attempt.h))
+        return None if len(calls) == call else solve(self, solver, attempt, *args)
+
+    monkeypatch.setattr(Companion, "_solve", maybe_failing)
+    return calls
+
+
+def test_a_companion_whose_newton_iteration_fails_restarts_from_the_run_and_leaves_the_run_as_it_is(monkeypatch):
+    """Where the companion's step fails, that level has no estimate in time (NaN) and the companion restarts from
+    the run's level: the estimates after it measure what the steps after it add; the run is the same bit for bit
+    (the companion never feeds back into a run of fixed steps)."""
+    case = ball(8, viscoplastic=True)
+    plain = vpcontact.solve(case)
+    calls = failing_once(monkeypatch, 4)
+    failed = vpcontact.solve(case)
+    assert failed.status == "complete" and len(calls) == 8
+    mine, theirs = failed.history, plain.history
+    assert np.isnan(mine["time_estimate"].iloc[3]) and np.isnan(mine["time_estimate_step"].iloc[3])
+    assert np.isfinite(mine["time_estimate"].drop(index=3)).all()
+    np.testing.assert_array_equal(mine["time_estimate"].iloc[:3], theirs["time_estimate"].iloc[:3])
+    # restarted at the run's level 4: level 5's estimate is what step 5 adds, no more than the undisturbed one
+    assert 0.0 < mine["time_estimate"].iloc[4] == mine["time_estimate_step"].iloc[4]
+    assert mine["time_estimate"].iloc[4] < theirs["time_estimate"].iloc[4]
+    others = [c for c in theirs.columns if not c.startswith("time_estimate") and c not in ("wall_s", "elapsed_s")]
+    for column in others:
+        np.testing.assert_array_equal(mine[column].to_numpy(), theirs[column].to_numpy(), err_msg=column)
+
+
+def test_an_adaptive_step_whose_companion_fails_is_halved_and_completes(monkeypatch):
+    """time.adaptive: a step whose companion fails has no estimate to accept it by, so it is done again in halves."""
+    calls = failing_once(monkeypatch, 3)
+    result = vpcontact.solve(ball(8, adaptive={"max_halvings": 4}))
+    history = result.history
+    assert result.status == "complete" and history["step"].iloc[-1] == 8 and history["t"].iloc[-1] == 1.1
+    assert np.isfinite(history["time_estimate"]).all()
+    t, h = calls[2]
+    ending_there = history[np.isclose(history["t"], t, rtol=0.0, atol=1e-12)]
+    assert len(ending_there) == 1 and ending_there["k"].iloc[0] < h  # reached in halves, not in the attempt that failed
 
 
 def test_an_adaptive_run_stopped_and_resumed_is_the_run_that_never_stopped():
