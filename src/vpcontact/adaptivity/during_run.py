@@ -147,10 +147,10 @@ class _Watcher:
 
     def _next_wait(self, step: int, relative: float, dofs: int) -> int:
         """The steps from the level ``step`` just accepted (its η / max ‖u_h‖_E ``relative``, on a mesh of
-        ``dofs``) to the next estimate: twice the last wait (at most LONGEST_WAIT) when the estimate is predicted to stay within the
-        tolerance until then, else the most steps it is predicted to stay within it (at least 1). The prediction
-        extrapolates linearly from the level accepted before on the same mesh; without one, the estimate stays
-        within the tolerance when it is at most half of it."""
+        ``dofs``) to the next estimate: twice the last wait (at most LONGEST_WAIT) when the estimate is predicted to
+        stay within the tolerance until then, else the most steps it is predicted to stay within it (at least 1). The
+        prediction extrapolates linearly from the level accepted before on the same mesh; without one, the estimate
+        stays within the tolerance when it is at most half of it."""
         tolerance, longer = self.settings.tolerance, min(2 * self.wait, LONGEST_WAIT)
         last, self.last = self.last, (step, relative, dofs)
         if last is None or last[2] != dofs or last[0] >= step:
