@@ -8,6 +8,7 @@ import tomli_w
 import vpcontact
 from vpcontact.cli import main
 from vpcontact.solvers import amg, choice, cost, petsc_gamg
+from conftest import rectangle_case
 from test_3d import ball_case
 
 
@@ -131,3 +132,30 @@ def test_the_iterative_method_is_predicted_at_the_speed_of_the_multigrid_that_wo
     overhead = cost.Prices.of(A, N, rates, None).overhead(steps, cost.NEWTON_PER_STEP * steps)
     assert after.loop_s - overhead == pytest.approx(speed.cg_iteration * speed.cg_iterations
                                                     * (before.loop_s - overhead), rel=1e-12)
+
+
+def test_auto_counts_the_factor_only_where_the_count_may_change_its_choice(monkeypatch):
+    """PARDISO's analysis (the count of the direct factor's work) is made for "auto" only where it may change the
+    choice: not on a 2D body where the condensed method is predicted far below the others with room to spare (the
+    factorization makes that analysis again), but where its factor would not fit with four times the laws' memory
+    (the laws' memory was 0.72 of the count's at 476k dofs), and always for an explicit direct method."""
+    pytest.importorskip("vpcontact.solvers.pardiso").library()
+    from vpcontact.timeloop import plan
+
+    case = rectangle_case()
+    case["mesh"]["h"] = 0.01  # 10k dofs
+    problem = vpcontact.build_problem(case)
+    A, N = plan.free_operators(problem)
+
+    def predicted(method):
+        return plan.predicted_costs(method, A, N, 2, 11, False, 1)
+
+    law = cost.factor_work(A, N, 2, count=False)
+    roomy, _, factor = predicted("auto")
+    assert factor == law and not factor.counted
+    assert 4 * roomy["condensed"].total_s <= min(roomy["iterative"].total_s, roomy["full"].total_s)
+    assert predicted("condensed")[2].counted and predicted("full")[2].counted
+    dense = roomy["condensed"].memory_bytes - roomy["full"].memory_bytes  # the condensed method's m × m algebra
+    monkeypatch.setattr(cost, "available_memory", lambda: int(dense + 2 * law.bytes))  # fits the laws, not 4×
+    counted = predicted("auto")[2]
+    assert counted.counted and counted.flops != law.flops

@@ -24,7 +24,7 @@ made.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -164,12 +164,10 @@ def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, s
     chooses (the same case gets the same method on every run, whatever else the machine is doing, and whichever
     fields it writes: the solves of the ``field_steps`` written are left out), and at the rates probed now, which
     ``vpcontact check`` and summary.json report. The direct factor's work is counted by PARDISO's analysis where a
-    direct method may run: when it is asked for, or, for "auto", when the count could change the choice: the
-    condensed method's dense algebra fits and its cost by the laws of :func:`~vpcontact.solvers.cost.factor_work` is
-    within COUNT_WITHIN of the iterative method's, and not COUNT_WITHIN times below every other method's. An
-    analysis of a factor that cannot win is not made (at 2M dofs it would take a minute), nor one of a factor that
-    wins anyway: in 2D, where the laws are within 3% of the count, it took 0.2 s of a 0.8 s run at 33k dofs, as long
-    as the factorization's own analysis. Third, the direct factor's work the predictions rest on (None: not
+    direct method may run: when it is asked for, or, for "auto", when the count could change the choice
+    (:func:`count_may_change_the_choice`, by the laws of :func:`~vpcontact.solvers.cost.factor_work`). An analysis
+    of a factor that cannot win is not made (at 2M dofs it would take a minute), nor one of a factor that wins
+    anyway: in 2D it took 0.2 s of a 0.8 s run at 33k dofs, as long as the factorization's own analysis. Third, the direct factor's work the predictions rest on (None: not
     weighed). The iterative method is predicted with the ``multigrid`` backend it would run
     (:data:`~vpcontact.solvers.cost.MULTIGRID_SPEEDS`)."""
     reference, probed, resident = MachineRates.reference(A), MachineRates.probe(A), resident_memory()
@@ -181,16 +179,27 @@ def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, s
     factor = None
     if method != "iterative":
         factor = factor_work(A, N, dim, count=False)
-        estimated = costs(factor, reference)
-        condensed = estimated["condensed"].total_s
-        others = min(cost.total_s for name, cost in estimated.items() if name != "condensed")
+        larger = replace(factor, bytes=COUNT_WITHIN * factor.bytes)
         if method != "auto" or (condensed_fits(N, A.shape[0])[0] and
-                                condensed <= COUNT_WITHIN * estimated["iterative"].total_s and
-                                COUNT_WITHIN * condensed > others):
+                                count_may_change_the_choice(costs(factor, reference), costs(larger, reference))):
             factor = factor_work(A, N, dim)
     return costs(factor, reference), costs(factor, probed, field_steps), factor
 
 
+def count_may_change_the_choice(estimated: dict, larger: dict) -> bool:
+    """Whether counting the direct factor (PARDISO's analysis) may change the choice of "auto", from the costs
+    ``estimated`` with the factor's work by the laws and those ``larger`` with COUNT_WITHIN times the laws' memory:
+    the condensed method is within COUNT_WITHIN of the iterative method's time (else it cannot win), and it is not
+    COUNT_WITHIN times below every other method's or it would not fit with that much more memory (in 2D the laws
+    are within 3% of the count's flops, but their memory was 0.72 of it at 476k dofs)."""
+    condensed = estimated["condensed"].total_s
+    if condensed > COUNT_WITHIN * estimated["iterative"].total_s:
+        return False
+    others = min(cost.total_s for name, cost in estimated.items() if name != "condensed")
+    return COUNT_WITHIN * condensed > others or not larger["condensed"].fits
+
+
 #: "auto" counts the direct factor's work (PARDISO's analysis) when the condensed method's cost by the laws is
-#: within this factor of the iterative method's and more than its inverse times every other method's.
+#: within this factor of the iterative method's, and more than its inverse times every other method's or not
+#: fitting with this factor times the laws' memory of the factor.
 COUNT_WITHIN = 4.0
