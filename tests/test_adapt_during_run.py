@@ -211,6 +211,20 @@ def test_a_refinement_in_the_middle_of_the_history_keeps_the_balance_and_conserv
 WIDTH, HEIGHT = 0.04, 0.02  # m: a 40 × 20 mm pad
 
 
+def pad_case(yield_stress: float, time: dict) -> dict:
+    """The gmsh pad of :func:`pad_mesh` ("pad.msh") in SI units: a Perzyna body (``yield_stress``, Pa) pressed down
+    30 µm and lifted by its top (u_y = −3e-5 sin(πt)) onto a hardening layer 0.1 mm thick with a rigid step under
+    x > 20 mm, on the time grid ``time``, its fields at every step."""
+    return {"mesh": {"file": "pad.msh"},
+            "material": {"E": 5e6, "nu": 0.45,
+                         "viscoplastic": {"law": "perzyna", "eta": 0.2, "yield_stress": yield_stress}},
+            "boundary": {"dirichlet": [{"part": "left", "components": ["x"]},
+                                       {"part": "top", "components": ["y"], "value": ["-3e-5*sin(pi*t)"]}]},
+            "contact": {"part": "bottom", "gap": "2e-3*max(x - 0.02, 0)", "g": 1e-4,
+                        "stiffness": {"law": "power", "c_v": 2e10, "alpha": 1e4, "beta": 1.0}},
+            "time": time, "output": {"field_steps": "all"}}
+
+
 def pad_mesh(path):
     """A pad meshed in gmsh and written to ``path`` as a user would: its sides named "bottom", "top", "left",
     "right", its surface "pad"."""
@@ -243,13 +257,7 @@ def test_a_gmsh_pad_pressed_released_and_lifted_adapts_during_its_run_from_the_c
     import tomli_w
 
     pad_mesh(tmp_path / "pad.msh")
-    case = {"mesh": {"file": "pad.msh"},
-            "material": {"E": 5e6, "nu": 0.45, "viscoplastic": {"law": "perzyna", "eta": 0.2, "yield_stress": 2e5}},
-            "boundary": {"dirichlet": [{"part": "left", "components": ["x"]},
-                                       {"part": "top", "components": ["y"], "value": ["-3e-5*sin(pi*t)"]}]},
-            "contact": {"part": "bottom", "gap": "2e-3*max(x - 0.02, 0)", "g": 1e-4,
-                        "stiffness": {"law": "power", "c_v": 2e10, "alpha": 1e4, "beta": 1.0}},
-            "time": {"T": 1.5, "steps": 15}, "output": {"field_steps": "all"},
+    case = {**pad_case(yield_stress=2e5, time={"T": 1.5, "steps": 15}),
             "adapt": {"mode": "run", "tolerance": 0.15}}
     (tmp_path / "pad.toml").write_text(tomli_w.dumps(case))
     out = tmp_path / "run"

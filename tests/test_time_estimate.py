@@ -10,7 +10,7 @@ import pytest
 
 import vpcontact
 from conftest import assert_refused, run_cli, snapshot_tree
-from test_adapt_during_run import pad_mesh, vtu_displacement
+from test_adapt_during_run import pad_case, pad_mesh, vtu_displacement
 from vpcontact import build_problem
 from vpcontact.case.translate import output_options
 from vpcontact.results.norms import energy_norm
@@ -252,13 +252,7 @@ def test_a_gmsh_pad_pressed_released_and_lifted_off_in_adaptive_steps_stays_with
     import tomli_w
 
     pad_mesh(tmp_path / "pad.msh")
-    case = {"mesh": {"file": "pad.msh"},
-            "material": {"E": 5e6, "nu": 0.45, "viscoplastic": {"law": "perzyna", "eta": 0.2, "yield_stress": 1e3}},
-            "boundary": {"dirichlet": [{"part": "left", "components": ["x"]},
-                                       {"part": "top", "components": ["y"], "value": ["-3e-5*sin(pi*t)"]}]},
-            "contact": {"part": "bottom", "gap": "2e-3*max(x - 0.02, 0)", "g": 1e-4,
-                        "stiffness": {"law": "power", "c_v": 2e10, "alpha": 1e4, "beta": 1.0}},
-            "time": {"T": 1.5, "steps": 6, "adaptive": True, "balance": 0.1}, "output": {"field_steps": "all"}}
+    case = pad_case(yield_stress=1e3, time={"T": 1.5, "steps": 6, "adaptive": True, "balance": 0.1})
     (tmp_path / "pad.toml").write_text(tomli_w.dumps(case))
     status, stdout, stderr = run_cli("run", "pad.toml", "--out", "run", cwd=tmp_path)
     assert status == 0, stderr
