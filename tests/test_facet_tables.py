@@ -6,7 +6,7 @@ import pytest
 import skfem
 
 from vpcontact import mesh as meshes
-from vpcontact.mesh.facets import facet_tables, with_facet_tables
+from vpcontact.mesh.facets import facet_tables, refinable, with_facet_tables
 
 
 def skfem_tables(m):
@@ -44,3 +44,24 @@ def test_a_mesh_made_here_has_them_built_once():
     fresh = skfem.MeshTet1(m.p, m.t)
     assert "_facets" not in vars(fresh)
     assert np.array_equal(with_facet_tables(fresh).boundary_facets(), m.boundary_facets())
+
+
+@pytest.mark.parametrize("make", [lambda: meshes.rectangle(1.0, 0.5, 0.1).mesh, lambda: meshes.quarter_ball(0.3).mesh])
+def test_a_refinable_mesh_refines_as_scikit_fem_does_and_builds_its_tables_here(make, monkeypatch):
+    """scikit-fem's refinement of a `refinable` mesh gives the same nodes and elements (a graded mesh: random elements
+    refined three times over), and scikit-fem builds no facet table of its own on the way (it did without)."""
+    own = []
+    build_entities = skfem.Mesh.build_entities
+    monkeypatch.setattr(skfem.Mesh, "build_entities", staticmethod(lambda *args: own.append(1) or build_entities(*args)))
+    m = make()
+    for seed in range(3):
+        marked = np.random.default_rng(seed).choice(m.t.shape[1], m.t.shape[1] // 8, replace=False)
+        before = len(own)
+        keyed = refinable(m).refined(marked)
+        assert len(own) == before
+        plain = type(m)(m.p, m.t).refined(marked)
+        assert np.array_equal(plain.p, keyed.p) and np.array_equal(plain.t, keyed.t)
+        assert len(own) > before or m.dim() == 3  # scikit-fem's bisection of tetrahedra uses no facet table
+        m = plain
+    for table, expected in zip(facet_tables(keyed.t, keyed.elem.refdom.facets, keyed.p.shape[1]), skfem_tables(plain)):
+        assert np.array_equal(table, expected)

@@ -8,7 +8,8 @@ import pytest
 
 from vpcontact import mesh as meshes
 from vpcontact.mesh.gmsh import write_mesh
-from vpcontact.mesh.refinement import refine
+from vpcontact.mesh.locate import Locator, find_columns
+from vpcontact.mesh.refinement import parents, refine
 from vpcontact.mesh.simplex import determinants
 
 
@@ -165,3 +166,29 @@ def test_a_projection_that_folds_an_element_is_refused():
     lifted = dataclasses.replace(mesh, curved_parts={"bottom": lambda x: x + np.array([[0.0], [0.4]])})
     with pytest.raises(CaseError, match=r"refining the mesh turns \d+ element\(s\) inside out near \(.*smaller mesh.h"):
         refine(lifted, np.flatnonzero(mesh.centroids[1] < 0.25))
+
+
+@pytest.mark.parametrize("make", [lambda: meshes.rectangle(1.0, 1.0, 0.1), lambda: meshes.block(1.0, 1.0, 1.0, 0.3)])
+def test_each_new_element_lies_in_its_parent(make):
+    """`parents` (old elements kept whole found by their vertices, the pieces located among the split elements only)
+    names, for every element, the old element containing its centroid (located among all of them), on a mesh graded
+    by refinements of a corner and of random elements."""
+    mesh = make()
+    for round_ in range(4):
+        old = mesh.mesh
+        corner = np.flatnonzero(old.p[:, old.t].mean(axis=1).sum(axis=0) < 0.3)
+        mesh = refine(mesh, np.union1d(corner, random_elements(mesh, 0.05, seed=round_)))
+        expected, _ = Locator(old.p, old.t).locate(mesh.mesh.p[:, mesh.mesh.t].mean(axis=1).T)
+        found = parents(old, mesh.mesh)
+        assert np.array_equal(found, expected)
+        whole = (mesh.mesh.t < old.p.shape[1]).all(axis=0)
+        assert 0 < whole.sum() < whole.size
+        assert np.array_equal(np.sort(old.t[:, found[whole]], axis=0), np.sort(mesh.mesh.t[:, whole], axis=0))
+
+
+def test_find_columns_matches_sets_in_any_order_and_reports_the_missing():
+    table = np.array([[0, 1, 2], [1, 2, 3], [2, 3, 4], [5, 6, 7]]).T
+    query = np.array([[3, 2, 1], [7, 5, 6], [0, 1, 3], [0, 2, 1], [4, 2, 3]]).T
+    assert find_columns(table, query).tolist() == [1, 3, -1, 0, 2]
+    assert find_columns(table, query[:, :0]).size == 0
+    assert find_columns(table[:, :0], query).tolist() == [-1] * 5

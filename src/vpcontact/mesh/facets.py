@@ -9,11 +9,15 @@ lexicographic one), and a single stable argsort of these keys gives all three ta
 neighbours, a facet is a run of one (on the boundary) or two (inside) of them, and in each run the element
 that comes first in scikit-fem's order comes first. The tables are scikit-fem's exactly (same numbering, same
 dtypes), so the rest of scikit-fem uses them as its own.
+
+scikit-fem's refinement (``refined``) builds the tables of a copy of the mesh it is given, which keeps none that
+were built before; `refinable` gives a mesh whose class builds its tables here whenever scikit-fem asks.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import skfem
 
 #: scikit-fem's attributes for the three tables (which it builds on first use).
 FACETS, ELEMENT_FACETS, FACET_ELEMENTS = "_facets", "_t2f", "_f2t"
@@ -55,3 +59,28 @@ def with_facet_tables(mesh):
     setattr(mesh, ELEMENT_FACETS, t2f)
     setattr(mesh, FACET_ELEMENTS, f2t)
     return mesh
+
+
+def _init_facets(mesh) -> None:
+    """scikit-fem's hook that builds a mesh's facet tables (``Mesh._init_facets``, private in scikit-fem 12: were it
+    no longer called, scikit-fem would build the same tables its own way), here by :func:`facet_tables`."""
+    if not keyed(mesh.p.shape[1], mesh.t.shape[0] - 1):
+        return super(type(mesh), mesh)._init_facets()
+    facets, t2f, f2t = facet_tables(mesh.t, mesh.elem.refdom.facets, mesh.p.shape[1])
+    setattr(mesh, FACETS, facets)
+    setattr(mesh, ELEMENT_FACETS, t2f)
+    setattr(mesh, FACET_ELEMENTS, f2t)
+
+
+#: For each scikit-fem simplex mesh class, its subclass whose facet tables are built by :func:`facet_tables`.
+_REFINABLE = {kind: type(f"Keyed{kind.__name__}", (kind,), {"_init_facets": _init_facets,
+                                                           "__doc__": f"{kind.__name__} with keyed facet tables."})
+              for kind in (skfem.MeshTri1, skfem.MeshTet1)}
+
+
+def refinable(mesh):
+    """The scikit-fem simplex ``mesh`` (the same nodes and elements) as a mesh whose refinements, and the copies
+    scikit-fem's refinement makes on the way, build their facet tables by :func:`facet_tables`: about 0.015 s a
+    refinement of 50k triangles instead of scikit-fem's 0.05 s. Only for refining: the refined mesh's class is the
+    subclass, which scikit-fem's writers do not know."""
+    return _REFINABLE[type(mesh)](mesh.p, mesh.t)

@@ -14,6 +14,7 @@ the parent facets of a refined mesh's boundary.
 from __future__ import annotations
 
 import itertools
+from functools import cached_property
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -45,15 +46,27 @@ class Locator:
         inverse, _ = affine_inverse(self.points, self.elements)  # explicit formulas: ~10 times LAPACK's batched inv
         self.origin = np.ascontiguousarray(self.points[:, self.elements[0]])  # (d, m)
         self.inverse = np.ascontiguousarray(inverse)  # (d, d, m)
-        centroids = self.points[:, self.elements].mean(axis=1).T
-        self.tree = cKDTree(centroids)
+
+    @cached_property
+    def centroids(self) -> np.ndarray:
+        """The elements' centroids (m, d)."""
+        return self.points[:, self.elements].mean(axis=1).T
+
+    @cached_property
+    def tree(self) -> cKDTree:
+        """The k-d tree of the elements' centroids (made when a point is first located: `barycentric` needs none)."""
+        return cKDTree(self.centroids)
+
+    @cached_property
+    def groups(self) -> list[tuple[np.ndarray, cKDTree, float]]:
+        """The elements grouped by reach (the largest distance from the centroid to a vertex) within a factor 2, each
+        group with its own tree and largest reach (see `_nearest`)."""
+        centroids = self.centroids
         vertices = self.points[:, self.elements].transpose(2, 1, 0)  # (m, d + 1, d)
-        # each element's reach: the largest distance from its centroid to one of its vertices; the
-        # elements grouped by reach within a factor 2, each group with its own tree (see `_nearest`)
         reach = np.linalg.norm(vertices - centroids[:, None, :], axis=2).max(axis=1)
         group = np.floor(np.log2(np.maximum(reach, np.finfo(float).tiny))).astype(np.int64)
-        self.groups = [(members, cKDTree(centroids[members]), float(reach[members].max()))
-                       for members in (np.flatnonzero(group == g) for g in np.unique(group))]
+        return [(members, cKDTree(centroids[members]), float(reach[members].max()))
+                for members in (np.flatnonzero(group == g) for g in np.unique(group))]
 
     def barycentric(self, x: np.ndarray, elements: np.ndarray) -> np.ndarray:
         """Barycentric coordinates ``(d + 1, *elements.shape)`` of points x (q, d) in elements (q,) or
@@ -146,10 +159,14 @@ def _distance_to_simplices(x: np.ndarray, vertices: np.ndarray) -> np.ndarray:
 
 def find_columns(table: np.ndarray, query: np.ndarray) -> np.ndarray:
     """For each column of `query` (k, q), the index of the column of `table` (k, r) with the same
-    numbers in any order, or -1 (the columns of `table` are distinct sets)."""
-    both = np.sort(np.hstack((table, query)), axis=0)
-    _, group = np.unique(both, axis=1, return_inverse=True)
-    group = group.ravel()
+    numbers in any order, or -1 (the columns of `table` are distinct sets). One lexicographic sort of the
+    columns' sorted numbers (``np.unique(..., axis=1)`` sorts them as rows of bytes: several times slower)."""
+    both = np.sort(np.hstack((table, query)).astype(np.int64), axis=0)
+    order = np.lexsort(both[::-1])  # the first row the primary key
+    ordered = both[:, order]
+    starts = np.r_[True, np.any(ordered[:, 1:] != ordered[:, :-1], axis=0)] if order.size else np.zeros(0, bool)
+    group = np.empty(order.size, dtype=np.int64)
+    group[order] = np.cumsum(starts) - 1
     column = np.full(group.max() + 1 if group.size else 0, -1, dtype=np.int64)
     column[group[:table.shape[1]]] = np.arange(table.shape[1])
     return column[group[table.shape[1]:]]

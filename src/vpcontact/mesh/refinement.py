@@ -4,8 +4,10 @@
 refinement of triangles, longest-edge bisection of tetrahedra; neighbours are refined as far as the mesh
 needs to stay conforming), then carries the model's data over:
 
-- every new element lies in one element of the old mesh, its parent (the old element containing its
-  centroid); it is in the regions of its parent;
+- every new element lies in one element of the old mesh, its parent; it is in the regions of its parent. A new
+  element whose vertices are all old nodes is an old element kept whole (a piece of a split element has a new
+  node, the midpoint of one of its edges), found by its vertices; the others are the old elements that were split
+  containing their centroids;
 - every new boundary facet lies in one boundary facet of the old mesh, its parent: the facet of the parent
   element (of the new facet's element) on which the new facet's centroid lies, the one opposite the vertex
   whose barycentric coordinate is 0 there; the new facet is in the parts of its parent;
@@ -34,7 +36,7 @@ import scipy.sparse as sp
 from ..errors import CaseError, point
 from .ball import quiet_bisection
 from .checks_arrays import SKFEM_MESH
-from .facets import with_facet_tables
+from .facets import refinable, with_facet_tables
 from .locate import Locator, find_columns
 from .mesh import Mesh, with_parts
 from .simplex import determinants
@@ -75,9 +77,9 @@ def refine_with_lineage(mesh: Mesh, marked) -> tuple[Mesh, Lineage]:
         return mesh, Lineage(np.arange(old.t.shape[1]), sp.identity(old.p.shape[1], format="csr"))
     kind = SKFEM_MESH[mesh.dim]
     with quiet_bisection():
-        fine = with_facet_tables(kind(old.p, old.t).refined(marked))
+        fine = with_facet_tables(refinable(kind(old.p, old.t)).refined(marked))
+    parent = parents(old, fine)
     locator = Locator(old.p, old.t)
-    parent, _ = locator.locate(fine.p[:, fine.t].mean(axis=1).T)
     boundary = fine.boundary_facets().astype(np.int64)
     parent_facet = _parent_facets(old, locator, fine, boundary, parent)
     parts = {name: boundary[np.isin(parent_facet, facets)] for name, facets in mesh.parts.items()}
@@ -88,6 +90,24 @@ def refine_with_lineage(mesh: Mesh, marked) -> tuple[Mesh, Lineage]:
     refined_mesh = Mesh(with_parts(refined, parts, built=fine), parts, mesh.exact_normals, mesh.file, regions,
                         mesh.curved_parts, mesh.curved_interfaces)
     return refined_mesh, lineage
+
+
+def parents(old, fine) -> np.ndarray:
+    """The element of the scikit-fem mesh ``old`` that each element of its nested refinement ``fine`` (whose first
+    nodes are old's) lies in. An element of ``fine`` whose vertices are all old nodes is an element of ``old`` kept
+    whole: found by its vertices. The others, pieces of the split elements, are located by their centroids among
+    the split elements only (those not kept whole), which near a singularity are few."""
+    t = np.asarray(fine.t)
+    parent = np.full(t.shape[1], -1, dtype=np.int64)
+    whole = np.flatnonzero((t < old.p.shape[1]).all(axis=0))
+    parent[whole] = find_columns(old.t, t[:, whole])
+    split = np.ones(old.t.shape[1], dtype=bool)
+    split[parent[whole][parent[whole] >= 0]] = False
+    pieces, candidates = np.flatnonzero(parent < 0), np.flatnonzero(split)
+    if pieces.size:
+        located, _ = Locator(old.p, old.t[:, candidates]).locate(fine.p[:, t[:, pieces]].mean(axis=1).T)
+        parent[pieces] = candidates[located]
+    return parent
 
 
 def _interpolation(locator: Locator, points: np.ndarray, old_nodes: int, parent: np.ndarray,
