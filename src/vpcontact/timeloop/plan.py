@@ -15,7 +15,7 @@ refusal before the first step is made here, each one line (CaseError), in this o
    (:func:`~vpcontact.solvers.choice.check_iterative_memory`).
 
 Each method's time and memory are predicted by the cost model (:mod:`vpcontact.solvers.cost`: this machine's rates
-probed now, the direct factor's work counted by PARDISO's analysis where the condensed or full method may run);
+probed now, the direct factor's work counted by PARDISO's analysis where the count may matter, else by laws);
 the method for ``solver.method = "auto"`` is the fastest predicted that fits
 (:func:`~vpcontact.solvers.choice.chosen_method`). Not planned: the step solver's set-up itself (the factorization
 of the stiffness, the condensed operator, the multigrid hierarchy), whose failures the solver reports as it is
@@ -163,13 +163,14 @@ def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, s
     this machine kind's reference rates (:meth:`~vpcontact.solvers.cost.MachineRates.reference`), by which "auto"
     chooses (the same case gets the same method on every run, whatever else the machine is doing, and whichever
     fields it writes: the solves of the ``field_steps`` written are left out), and at the rates probed now, which
-    ``vpcontact check`` and summary.json report. The direct factor's work is counted by PARDISO's analysis where a
-    direct method may run: when it is asked for, or, for "auto", when the count could change the choice
-    (:func:`count_may_change_the_choice`, by the laws of :func:`~vpcontact.solvers.cost.factor_work`). An analysis
-    of a factor that cannot win is not made (at 2M dofs it would take a minute), nor one of a factor that wins
-    anyway: in 2D it took 0.2 s of a 0.8 s run at 33k dofs, as long as the factorization's own analysis. Third, the direct factor's work the predictions rest on (None: not
-    weighed). The iterative method is predicted with the ``multigrid`` backend it would run
-    (:data:`~vpcontact.solvers.cost.MULTIGRID_SPEEDS`)."""
+    ``vpcontact check`` and summary.json report. The direct factor's work is counted by PARDISO's analysis only
+    where the count may matter (else the laws of :func:`~vpcontact.solvers.cost.factor_work` stand): for "auto",
+    where it could change the choice (:func:`count_may_change_the_choice`); for an explicit direct method, where the
+    method would not fit with COUNT_WITHIN times the laws' memory of the factor. An analysis of a factor that cannot
+    win is not made (at 2M dofs it would take a minute), nor one of a factor that wins anyway or is asked for with
+    memory to spare: the factorization makes the same analysis again (in 2D 0.2 s of a 0.8 s run at 33k dofs, 2.5 s
+    at 476k). Third, the direct factor's work the predictions rest on (None: not weighed). The iterative method is
+    predicted with the ``multigrid`` backend it would run (:data:`~vpcontact.solvers.cost.MULTIGRID_SPEEDS`)."""
     reference, probed, resident = MachineRates.reference(A), MachineRates.probe(A), resident_memory()
 
     def costs(factor, rates, written=0):
@@ -179,9 +180,11 @@ def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, s
     factor = None
     if method != "iterative":
         factor = factor_work(A, N, dim, count=False)
-        larger = replace(factor, bytes=COUNT_WITHIN * factor.bytes)
-        if method != "auto" or (condensed_fits(N, A.shape[0])[0] and
-                                count_may_change_the_choice(costs(factor, reference), costs(larger, reference))):
+        estimated = costs(factor, reference)
+        larger = costs(replace(factor, bytes=COUNT_WITHIN * factor.bytes), reference)
+        if method != "auto" and not larger[method].fits:
+            factor = factor_work(A, N, dim)  # the memory is short: the report of the method asked for counts it
+        elif method == "auto" and condensed_fits(N, A.shape[0])[0] and count_may_change_the_choice(estimated, larger):
             factor = factor_work(A, N, dim)
     return costs(factor, reference), costs(factor, probed, field_steps), factor
 
