@@ -80,7 +80,8 @@ _REFINABLE = {kind: type(f"Keyed{kind.__name__}", (kind,), {"_init_facets": _ini
 
 def refinable(mesh):
     """The scikit-fem simplex ``mesh`` (the same nodes and elements) as a mesh whose refinements, and the copies
-    scikit-fem's refinement makes on the way, build their facet tables by :func:`facet_tables`: about 0.015 s a
-    refinement of 50k triangles instead of scikit-fem's 0.05 s. Only for refining: the refined mesh's class is the
-    subclass, which scikit-fem's writers do not know."""
+    scikit-fem's refinement makes on the way, build their facet tables by :func:`facet_tables` (a refinement to 48k
+    triangles in 0.036 s instead of 0.055 s, to 183k in 0.12 s instead of 0.26 s; scikit-fem's bisection of tetrahedra
+    builds no table). Only for refining: the refined mesh's class is the subclass, which scikit-fem's writers do not
+    know."""
     return _REFINABLE[type(mesh)](mesh.p, mesh.t)
