@@ -52,24 +52,26 @@ def facet_tables(t: np.ndarray, local_facets: list[list[int]], nodes: int) -> tu
 def with_facet_tables(mesh):
     """The scikit-fem simplex ``mesh`` with its facet tables built (by :func:`facet_tables`), unless it has them
     or its facet keys would not fit in an int64 (then scikit-fem builds them when first used)."""
-    if FACETS in vars(mesh) or not keyed(mesh.p.shape[1], mesh.t.shape[0] - 1):
-        return mesh
+    if FACETS not in vars(mesh) and keyed(mesh.p.shape[1], mesh.t.shape[0] - 1):
+        _build_tables(mesh)
+    return mesh
+
+
+def _build_tables(mesh) -> None:
+    """Build and keep the three facet tables of the scikit-fem simplex ``mesh`` by :func:`facet_tables`."""
     facets, t2f, f2t = facet_tables(mesh.t, mesh.elem.refdom.facets, mesh.p.shape[1])
     setattr(mesh, FACETS, facets)
     setattr(mesh, ELEMENT_FACETS, t2f)
     setattr(mesh, FACET_ELEMENTS, f2t)
-    return mesh
 
 
 def _init_facets(mesh) -> None:
     """scikit-fem's hook that builds a mesh's facet tables (``Mesh._init_facets``, private in scikit-fem 12: were it
     no longer called, scikit-fem would build the same tables its own way), here by :func:`facet_tables`."""
-    if not keyed(mesh.p.shape[1], mesh.t.shape[0] - 1):
-        return super(type(mesh), mesh)._init_facets()
-    facets, t2f, f2t = facet_tables(mesh.t, mesh.elem.refdom.facets, mesh.p.shape[1])
-    setattr(mesh, FACETS, facets)
-    setattr(mesh, ELEMENT_FACETS, t2f)
-    setattr(mesh, FACET_ELEMENTS, f2t)
+    if keyed(mesh.p.shape[1], mesh.t.shape[0] - 1):
+        _build_tables(mesh)
+    else:
+        super(type(mesh), mesh)._init_facets()
 
 
 #: For each scikit-fem simplex mesh class, its subclass whose facet tables are built by :func:`facet_tables`.

@@ -169,7 +169,7 @@ def predicted_costs(method: str, A: sp.csr_matrix, N: sp.csr_matrix, dim: int, s
     method would not fit with COUNT_WITHIN times the laws' memory of the factor. An analysis of a factor that cannot
     win is not made (at 2M dofs it would take a minute), nor one of a factor that wins anyway or is asked for with
     memory to spare: the factorization makes the same analysis again (in 2D 0.2 s of a 0.8 s run at 33k dofs, 2.5 s
-    at 476k). Third, the direct factor's work the predictions rest on (None: not weighed). The iterative method is
+    at 526k). Third, the direct factor's work the predictions rest on (None: not weighed). The iterative method is
     predicted with the ``multigrid`` backend it would run (:data:`~vpcontact.solvers.cost.MULTIGRID_SPEEDS`)."""
     reference, probed, resident = MachineRates.reference(A), MachineRates.probe(A), resident_memory()
 
@@ -204,5 +204,6 @@ def count_may_change_the_choice(estimated: dict, larger: dict) -> bool:
 
 #: "auto" counts the direct factor's work (PARDISO's analysis) when the condensed method's cost by the laws is
 #: within this factor of the iterative method's, and more than its inverse times every other method's or not
-#: fitting with this factor times the laws' memory of the factor.
+#: fitting with this factor times the laws' memory of the factor; an explicit direct method, when it would not fit
+#: with this factor times the laws' memory.
 COUNT_WITHIN = 4.0
